@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs the Debian packages lsmbs builds and tests with, only those missing.
+# Idempotent, non-interactive, quiet when everything is present.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libsundials-dev libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev
+  nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
+  gnuplot-nox
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+echo "setup-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup-deps: done"

@@ -1,0 +1,61 @@
+#pragma once
+// Four-node plane-stress quadrilateral, total Lagrangian, St Venant–Kirchhoff material, in
+// absolute nodal coordinates (Géradin & Cardona): the unknowns are the current positions x_I
+// of the nodes, X_I their reference positions.
+//   F = Σ x_I ⊗ ∇_X N_I,  E = ½(FᵀF − I),  S = D E (plane stress),
+//   W = t ∫ ½ E:D:E dA,   f_int = ∂W/∂x,  K = ∂f_int/∂x (material + geometric).
+// Two integration variants:
+//  * kFull: 2×2 Gauss for everything (locks in bending on coarse meshes),
+//  * kSelectiveShear (default): normal strains with 2×2 Gauss, the shear term G (2E₁₂)² with
+//    one point. The split is exact for isotropic D (no normal–shear coupling), keeps objectivity
+//    (E is invariant under rigid rotation) and passes the patch test; it removes parasitic
+//    shear in bending (see docs/methods.md and the cantilever test).
+// Consistent mass M_IJ = ρ t ∫ N_I N_J dA (2×2 Gauss, exact for parallelograms).
+#include <array>
+
+#include "lsmbs/core/types.hpp"
+
+namespace lsmbs {
+
+enum class QuadIntegration { kFull, kSelectiveShear };
+
+struct QuadMaterial {
+  double E = 0, nu = 0, rho = 0, thickness = 0;
+};
+
+class QuadElement {
+ public:
+  using Vec8 = Eigen::Matrix<double, 8, 1>;
+  using Mat8 = Eigen::Matrix<double, 8, 8>;
+  using Mat4 = Eigen::Matrix<double, 4, 4>;
+
+  QuadElement() = default;
+  /// X: reference node positions, counter-clockwise. Throws if the element is inverted.
+  QuadElement(const std::array<Vec2, 4>& X, QuadIntegration integration);
+
+  /// Internal force of unit-E material scaled by `scale_E` (E_e = μ_e E0, eq. 3).
+  /// x: current positions (x1,y1,...,x4,y4). K may be null.
+  void internal_force(const Vec8& x, double E, double nu, double thickness, Vec8& f, Mat8* K) const;
+  double strain_energy(const Vec8& x, double E, double nu, double thickness) const;
+  /// ∫ N_I N_J dA (multiply by ρ t for the consistent mass of one direction).
+  const Mat4& unit_mass() const { return unit_mass_; }
+  /// ∫ N_I dA (for body loads and lumped quantities).
+  const Eigen::Vector4d& shape_integrals() const { return shape_int_; }
+  double area() const { return area_; }
+  /// Green–Lagrange strain (E11, E22, 2E12) and deformation gradient at the centre.
+  void centre_strain(const Vec8& x, Eigen::Vector3d& E_voigt, Mat2& F) const;
+
+ private:
+  struct Point {
+    Eigen::Matrix<double, 4, 2> G;  // ∇_X N_I
+    double w = 0;                   // weight × det J
+  };
+  std::array<Point, 4> gauss_{};
+  Point centre_{};
+  QuadIntegration integration_ = QuadIntegration::kSelectiveShear;
+  Mat4 unit_mass_ = Mat4::Zero();
+  Eigen::Vector4d shape_int_ = Eigen::Vector4d::Zero();
+  double area_ = 0;
+};
+
+}  // namespace lsmbs

@@ -1,0 +1,273 @@
+#include "lsmbs/integrators/generalized_alpha.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "lsmbs/integrators/initial_state.hpp"
+
+namespace lsmbs {
+
+AlphaCoefficients AlphaCoefficients::make(double rho, double h) {
+  AlphaCoefficients c;
+  c.rho_inf = rho;
+  c.alpha_m = (2 * rho - 1) / (rho + 1);
+  c.alpha_f = rho / (rho + 1);
+  c.gamma = 0.5 - c.alpha_m + c.alpha_f;
+  c.beta = 0.25 * (c.gamma + 0.5) * (c.gamma + 0.5);
+  c.h = h;
+  c.beta_p = (1 - c.alpha_m) / ((1 - c.alpha_f) * c.beta * h * h);
+  c.gamma_p = c.gamma / (c.beta * h);
+  return c;
+}
+
+std::string GeneralizedAlphaOptions::validate() const {
+  if (!(h > 0)) return "h: expected a positive time step";
+  if (!(t_end > 0)) return "t_end: expected a positive final time";
+  if (!(rho_inf >= 0 && rho_inf <= 1)) return "rho_inf: expected a value in [0, 1]";
+  if (!(tol_r > 0)) return "tol_r: expected a positive tolerance";
+  if (!(tol_phi > 0)) return "tol_phi: expected a positive tolerance";
+  if (max_iter < 1) return "max_iter: expected at least 1";
+  if (min_iter < 0 || min_iter > max_iter) return "min_iter: expected 0 <= min_iter <= max_iter";
+  if (max_halvings < 0 || max_halvings > 30) return "max_halvings: expected 0..30";
+  if (k < 0 || zeta < 0) return "k, zeta: expected non-negative values (0 = automatic)";
+  return {};
+}
+
+nlohmann::json GeneralizedAlphaOptions::to_json() const {
+  return {{"h", h}, {"t_end", t_end}, {"rho_inf", rho_inf}, {"tol_r", tol_r}, {"tol_phi", tol_phi},
+          {"force_floor", force_floor}, {"max_iter", max_iter}, {"min_iter", min_iter},
+          {"consistent_start", consistent_start}, {"project_initial", project_initial},
+          {"newton", newton == Newton::kFull ? "full" : "modified"}, {"max_halvings", max_halvings},
+          {"k", k}, {"zeta", zeta}};
+}
+
+nlohmann::json IntegratorSummary::to_json() const {
+  return {{"ok", ok}, {"aborted", aborted}, {"message", message}, {"t_reached", t_reached},
+          {"steps", steps}, {"newton_iterations", newton_iterations}, {"factorizations", factorizations},
+          {"residual_evaluations", residual_evaluations}, {"matrix_evaluations", matrix_evaluations},
+          {"halvings", halvings}, {"halving_times", halving_times}, {"k", k}, {"zeta", zeta},
+          {"residual_floor_N", force_floor},
+          {"wall_seconds", wall_seconds}};
+}
+
+double GeneralizedAlpha::automatic_scaling(const Model& model, const ModelParams& p, const State& s,
+                                           const AlphaCoefficients& c) {
+  std::vector<double> vals;
+  model.iteration_matrix(s, p, Coefficients{c.beta_p, c.gamma_p, 1.0}, 0.0, 0.0, vals);
+  const auto& pat = model.pattern();
+  double sum = 0;
+  int cnt = 0;
+  for (int j = 0; j < model.nq(); ++j) {
+    const int k = pat.find(j, j);
+    if (k >= 0 && vals[k] != 0) {
+      sum += std::abs(vals[k]);
+      ++cnt;
+    }
+  }
+  return cnt ? sum / cnt : 1.0;
+}
+
+namespace {
+
+struct Workspace {
+  State cur, prev;
+  Vec a_cur, a_prev;
+  Vec R, r_abs, dx;
+  std::vector<double> vals;
+};
+
+}  // namespace
+
+IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p, State s0,
+                                        std::vector<StepObserver*> observers, State* final_state) {
+  const auto t_start = std::chrono::steady_clock::now();
+  IntegratorSummary sum;
+  auto finish = [&](IntegratorSummary& s) -> IntegratorSummary& {
+    s.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    return s;
+  };
+  if (auto msg = opt_.validate(); !msg.empty()) {
+    sum.ok = false;
+    sum.message = "invalid integrator option " + msg;
+    return finish(sum);
+  }
+  const int nq = model.nq(), nc = model.nc(), n = model.n();
+  s0.v.conservativeResize(nq);
+  if (s0.a.size() != nq) s0.a.setZero(nq);
+  if (s0.lambda.size() != nc) s0.lambda.setZero(nc);
+
+  SparseLU lu;
+  lu.analyze(model.pattern());
+  const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
+
+  if (opt_.project_initial) {
+    if (auto st = project_initial_state(model, p, s0, lu, 1e-13 * model.length_scale()); !st.ok()) {
+      sum.ok = false;
+      sum.message = "t = " + std::to_string(s0.t) + ": " + st.message;
+      return finish(sum);
+    }
+  }
+  sum.k = opt_.k > 0 ? opt_.k : automatic_scaling(model, p, s0, c0);
+  sum.zeta = opt_.zeta > 0 ? opt_.zeta : sum.k;
+  const double k = sum.k, zeta = sum.zeta;
+
+  if (opt_.consistent_start) {
+    if (auto st = consistent_accelerations(model, p, k, s0, lu); !st.ok()) {
+      sum.ok = false;
+      sum.message = "t = " + std::to_string(s0.t) + ": " + st.message;
+      return finish(sum);
+    }
+  } else {
+    s0.a.setZero(nq);
+    s0.lambda.setZero(nc);
+  }
+
+  Workspace w;
+  w.cur = s0;
+  w.prev = s0;
+  w.a_cur = s0.a;  // a_0 = q̈_0
+  w.a_prev = w.a_cur;
+  w.R.resize(n);
+  w.r_abs.resize(nq);
+  w.dx.resize(n);
+  for (auto* o : observers) o->on_start(s0, w.a_cur, c0, k, zeta);
+
+  const double tol_phi = opt_.tol_phi * model.length_scale();
+  // Round-off floor of the residual: the constraint terms Φ_qᵀ(kλ + ζΦ) carry errors of order
+  // (k + ζ)·ε·L (positions of size L, ε machine precision); no Newton iteration gets below it.
+  const double round_off_floor = 100 * 2.2e-16 * (k + zeta) * model.length_scale();
+  sum.force_floor = std::max(opt_.force_floor, round_off_floor);
+  const long n_steps = std::lround(std::ceil((opt_.t_end - s0.t) / opt_.h - 1e-9));
+  long grid = 0;
+  double h_try = opt_.h;
+  int depth = 0;  // halvings active for the current grid interval
+  double t_grid_next = s0.t + opt_.h;
+
+  while (grid < n_steps) {
+    const double t_n = w.prev.t;
+    const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, h_try);
+    State& x = w.cur;
+    // ---- predictor (Algorithm 1): q̈_{n+1} = 0, λ_{n+1} = 0, a_{n+1} from (8)
+    x.t = t_n + h_try;
+    w.a_cur = (c.alpha_f * w.prev.a - c.alpha_m * w.a_prev) / (1 - c.alpha_m);
+    x.q = w.prev.q + h_try * w.prev.v + h_try * h_try * ((0.5 - c.beta) * w.a_prev + c.beta * w.a_cur);
+    x.v = w.prev.v + h_try * ((1 - c.gamma) * w.a_prev + c.gamma * w.a_cur);
+    x.a.setZero();
+    x.lambda.setZero();
+    // ---- Newton
+    bool converged = false, have_factor = false;
+    std::string why;
+    int it = 0;
+    double rn = 0, pn = 0, prev_rn = INFINITY;
+    const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
+    for (;; ++it) {
+      model.residual(x, p, k, zeta, w.R, &w.r_abs);
+      ++sum.residual_evaluations;
+      if (!w.R.allFinite()) {
+        why = "non-finite residual (NaN or Inf)";
+        break;
+      }
+      const double scale = w.r_abs.size() ? w.r_abs.maxCoeff() : 0.0;
+      rn = nq ? w.R.head(nq).lpNorm<Eigen::Infinity>() : 0.0;
+      pn = nc ? w.R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
+      if (rn <= std::max(opt_.tol_r * scale, sum.force_floor) && pn <= tol_phi && it >= opt_.min_iter) {
+        converged = true;
+        break;
+      }
+      if (it >= opt_.max_iter) {
+        why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations";
+        break;
+      }
+      const bool refactor = opt_.newton == GeneralizedAlphaOptions::Newton::kFull || !have_factor ||
+                            rn > 0.25 * prev_rn;
+      if (refactor) {
+        model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
+        ++sum.matrix_evaluations;
+        const Status st = lu.factor(w.vals);
+        ++sum.factorizations;
+        if (!st.ok()) {
+          why = "singular iteration matrix: the motion of " + model.describe_unknown(lu.singular_column()) +
+                " is not determined";
+          have_factor = false;
+          break;
+        }
+        have_factor = true;
+      }
+      prev_rn = rn;
+      w.dx = -w.R;
+      lu.solve(w.dx);
+      x.q += w.dx.head(nq);
+      x.v += c.gamma_p * w.dx.head(nq);
+      x.a += c.beta_p * w.dx.head(nq);
+      x.lambda += w.dx.tail(nc);
+      ++sum.newton_iterations;
+    }
+    if (!converged) {
+      if (depth < opt_.max_halvings && why.rfind("singular", 0) != 0) {
+        ++depth;
+        ++sum.halvings;
+        sum.halving_times.push_back(t_n);
+        h_try *= 0.5;
+        x = w.prev;
+        continue;
+      }
+      // worst residual / constraint entry
+      int worst = 0;
+      double wv = -1;
+      for (int i = 0; i < n; ++i) {
+        const double v = std::abs(w.R[i]) / (i < nq ? 1.0 : k);
+        if (std::isfinite(v) ? v > wv : true) {
+          wv = v;
+          worst = i;
+        }
+      }
+      std::ostringstream os;
+      os << "t = " << x.t << " (step " << sum.steps + 1 << ", h = " << h_try << "): " << why
+         << "; ‖r‖∞ = " << rn << " N, ‖Φ‖∞ = " << pn << "; worst: " << model.describe_unknown(worst);
+      sum.ok = false;
+      sum.message = os.str();
+      sum.t_reached = w.prev.t;
+      if (final_state) *final_state = w.prev;
+      return finish(sum);
+    }
+    // ---- accept: a_{n+1} += (1−α_f)/(1−α_m) q̈_{n+1}   (Algorithm 1, last line)
+    w.a_cur += (1 - c.alpha_f) / (1 - c.alpha_m) * x.a;
+    ++sum.steps;
+    const bool on_grid = std::abs(x.t - t_grid_next) <= 1e-9 * opt_.h;
+    if (on_grid) x.t = t_grid_next;  // remove round-off drift
+    StepInfo info;
+    info.step = static_cast<int>(sum.steps);
+    info.grid_point = on_grid;
+    info.prev = &w.prev;
+    info.prev_acc_like = &w.a_prev;
+    info.state = &x;
+    info.acc_like = &w.a_cur;
+    info.coef = c;
+    info.k = k;
+    info.zeta = zeta;
+    info.factor = &lu;
+    info.newton_iterations = it;
+    bool stop = false;
+    for (auto* o : observers) stop |= !o->on_step(info);
+    std::swap(w.prev, w.cur);
+    std::swap(w.a_prev, w.a_cur);
+    if (stop) {
+      sum.aborted = true;
+      break;
+    }
+    if (on_grid) {
+      ++grid;
+      t_grid_next = s0.t + (grid + 1) * opt_.h;
+      h_try = opt_.h;
+      depth = 0;
+    } else {
+      h_try = std::min(h_try, t_grid_next - w.prev.t);
+    }
+  }
+  sum.t_reached = w.prev.t;
+  if (final_state) *final_state = w.prev;
+  return finish(sum);
+}
+
+}  // namespace lsmbs

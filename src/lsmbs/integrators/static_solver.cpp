@@ -1,0 +1,67 @@
+#include "lsmbs/integrators/static_solver.hpp"
+
+#include <cmath>
+
+#include "lsmbs/linalg/sparse_lu.hpp"
+
+namespace lsmbs {
+
+StaticResult solve_static(const Model& model, const ModelParams& p, State& s, const StaticOptions& o) {
+  StaticResult res;
+  const int nq = model.nq(), nc = model.nc();
+  s.t = o.t;
+  s.v.setZero(nq);
+  s.a.setZero(nq);
+  if (s.lambda.size() != nc) s.lambda.setZero(nc);
+  SparseLU lu;
+  lu.analyze(model.pattern());
+  std::vector<double> vals;
+  const Coefficients cK{0, 0, 1};
+  double k = o.k;
+  if (!(k > 0)) {
+    model.iteration_matrix(s, p, cK, 0, 0, vals);
+    double sum = 0;
+    int cnt = 0;
+    for (int j = 0; j < nq; ++j)
+      if (int i = model.pattern().find(j, j); i >= 0 && vals[i] != 0) sum += std::abs(vals[i]), ++cnt;
+    k = cnt ? sum / cnt : 1.0;
+  }
+  Vec R, r_abs, dx;
+  auto norm = [&](const Vec& r) {
+    return std::max(r.head(nq).lpNorm<Eigen::Infinity>(), nc ? r.tail(nc).lpNorm<Eigen::Infinity>() : 0.0);
+  };
+  for (res.iterations = 0; res.iterations <= o.max_iter; ++res.iterations) {
+    model.residual(s, p, k, 0.0, R, &r_abs);
+    const double scale = std::max(r_abs.size() ? r_abs.maxCoeff() : 0.0, 1e-12);
+    res.residual_norm = R.head(nq).lpNorm<Eigen::Infinity>();
+    const double pn = nc ? R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
+    if (res.residual_norm <= o.tol_r * scale && pn <= o.tol_phi * model.length_scale()) {
+      res.ok = true;
+      return res;
+    }
+    if (res.iterations == o.max_iter) break;
+    model.iteration_matrix(s, p, cK, k, 0.0, vals);
+    if (auto st = lu.factor(vals); !st.ok()) {
+      res.message = "singular stiffness matrix: " + model.describe_unknown(lu.singular_column()) +
+                    " is not held by any constraint";
+      return res;
+    }
+    dx = -R;
+    lu.solve(dx);
+    // backtracking on ‖R‖
+    const double r0 = norm(R);
+    double step = 1;
+    const Vec q0 = s.q, l0 = s.lambda;
+    for (int ls = 0; ls < 10; ++ls) {
+      s.q = q0 + step * dx.head(nq);
+      s.lambda = l0 + step * dx.tail(nc);
+      model.residual(s, p, k, 0.0, R);
+      if (R.allFinite() && norm(R) < r0) break;
+      step *= 0.5;
+    }
+  }
+  res.message = "static Newton did not converge (‖r‖∞ = " + std::to_string(res.residual_norm) + " N)";
+  return res;
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,29 @@
+#pragma once
+// Static equilibrium: Newton on the same model without inertia (q̇ = q̈ = 0),
+//   [ K_t  kΦ_qᵀ ; kΦ_q  0 ] [Δq; Δλ] = −[ r(q, 0, 0, λ) ; kΦ ],
+// with backtracking on the residual norm. Used for verification (beam theory) and for
+// comparisons with quasi-static approaches.
+#include <string>
+
+#include "lsmbs/mbs/model.hpp"
+
+namespace lsmbs {
+
+struct StaticOptions {
+  double t = 0;          ///< time at which drivers and loads are evaluated
+  double tol_r = 1e-10;  ///< relative to the force scale of the residual's terms
+  double tol_phi = 1e-12;
+  int max_iter = 50;
+  double k = 0;          ///< 0: automatic (mean |diag K_t|)
+};
+
+struct StaticResult {
+  bool ok = false;
+  int iterations = 0;
+  double residual_norm = 0;
+  std::string message;
+};
+
+StaticResult solve_static(const Model& model, const ModelParams& p, State& s, const StaticOptions& o = {});
+
+}  // namespace lsmbs

@@ -1,0 +1,41 @@
+#pragma once
+// StepObserver — called after every converged time step with the converged state and the
+// factorization of the iteration matrix used in the step's last Newton iteration
+// (DESIGN.md §Core interfaces 5). Sensitivity methods (Algorithm 2) and output writers are
+// observers; they never see how the integrator or the model work inside.
+#include "lsmbs/linalg/sparse_lu.hpp"
+#include "lsmbs/mbs/model.hpp"
+
+namespace lsmbs {
+
+/// Generalized-α coefficients (eq. 11) and the Newton corrections (17)–(18) for step size h.
+struct AlphaCoefficients {
+  double rho_inf = 0.8, alpha_m = 0, alpha_f = 0, gamma = 0, beta = 0;
+  double h = 0, beta_p = 0, gamma_p = 0;  ///< β' = (1−α_m)/((1−α_f) β h²), γ' = γ/(β h)
+  static AlphaCoefficients make(double rho_inf, double h);
+};
+
+struct StepInfo {
+  int step = 0;              ///< number of converged steps so far (1 for the first)
+  bool grid_point = true;    ///< false for sub-steps created by step halving
+  const State* prev = nullptr;     ///< converged state at t_n
+  const Vec* prev_acc_like = nullptr;  ///< a_n
+  const State* state = nullptr;    ///< converged state at t_{n+1}
+  const Vec* acc_like = nullptr;   ///< a_{n+1}
+  AlphaCoefficients coef;
+  double k = 1, zeta = 0;
+  const SparseLU* factor = nullptr;  ///< LU of S_t (eq. 20) from the last Newton iteration
+  int newton_iterations = 0;
+};
+
+class StepObserver {
+ public:
+  virtual ~StepObserver() = default;
+  /// Called once with the consistent initial state (a = acceleration-like a_0).
+  virtual void on_start(const State& /*s0*/, const Vec& /*a0*/, const AlphaCoefficients&, double /*k*/,
+                        double /*zeta*/) {}
+  /// Return false to stop the integration (the run is then reported as aborted).
+  virtual bool on_step(const StepInfo& info) = 0;
+};
+
+}  // namespace lsmbs

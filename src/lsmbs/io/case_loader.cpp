@@ -1,0 +1,635 @@
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/io/json_reader.hpp"
+#include "lsmbs/io/sha256.hpp"
+
+namespace lsmbs {
+
+std::vector<std::string> Case::measure_columns() const {
+  std::vector<std::string> c;
+  for (const auto& m : measures)
+    for (auto& s : m->components()) c.push_back(s);
+  return c;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Loader {
+  Loader(Case& c, std::string dir) : cs(c), base_dir(std::move(dir)) {}
+  Case& cs;
+  std::string base_dir;
+  Model& model() { return *cs.model; }
+  std::set<std::string> names;  // bodies, joints, forces share one namespace
+
+  std::string resolve(const std::string& f) const {
+    return fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
+  }
+
+  void unique_name(const JsonReader& r, const std::string& name) {
+    if (!names.insert(name).second) r.fail("name", "duplicate name '" + name + "' (bodies, joints and forces need unique names)");
+  }
+
+  int param(const std::string& name, double value) { return model().add_parameter(name, value); }
+
+  // ---------------------------------------------------------------- time laws
+  std::shared_ptr<const TimeLaw> law(const JsonReader& r) {
+    const std::string type = r.one_of("type", {"trapezoid", "ramp", "table", "constant"});
+    std::shared_ptr<const TimeLaw> out;
+    try {
+      if (type == "trapezoid") {
+        out = std::make_shared<TrapezoidLaw>(r.number("from"), r.number("to"), r.positive("acceleration"),
+                                             r.positive("speed"), r.number("start", 0.0));
+      } else if (type == "ramp") {
+        out = std::make_shared<RampLaw>(r.number("from", 0.0), r.number("speed"), r.positive("ramp_time"),
+                                        r.number("start", 0.0));
+      } else if (type == "constant") {
+        out = std::make_shared<ConstantLaw>(r.number("value"));
+      } else {
+        out = std::make_shared<TabulatedLaw>(table(r));
+      }
+    } catch (const Error& e) {
+      if (!e.json_path().empty()) throw;
+      r.fail(e.what());
+    }
+    r.finish();
+    return out;
+  }
+
+  Table1D table(const JsonReader& r) {
+    const auto interp = r.one_of("interpolation", {"cubic", "linear"}, "cubic") == "cubic" ? Table1D::Interp::kCubic
+                                                                                         : Table1D::Interp::kLinear;
+    const double period = r.non_negative("period", 0.0);
+    const double xs = r.number("x_scale", 1.0), ys = r.number("y_scale", 1.0);
+    if (r.has("file")) {
+      const std::string f = resolve(r.string("file"));
+      return Table1D::read_csv(f, interp, period, xs, ys);
+    }
+    std::vector<double> x, y;
+    for (const auto& p : r.items("points", true)) {
+      if (!p.is_array() || p.size() != 2) p.fail("expected a pair [x, y]");
+      x.push_back(p.at(0).as_number() * xs);
+      y.push_back(p.at(1).as_number() * ys);
+    }
+    try {
+      return Table1D(x, y, interp, period);
+    } catch (const Error& e) {
+      r.fail("points", e.what());
+    }
+  }
+
+  // ---------------------------------------------------------------- points
+  PointRef point(const JsonReader& r) {
+    PointRef p;
+    if (r.is_string()) {
+      if (r.as_string() == "ground") r.fail("a ground point needs coordinates: {\"ground\": [x, y]}");
+      r.fail("expected a point object ({\"ground\": [x, y]}, {\"body\": name, \"at\": [x, y]}, {\"body\": name, \"node\": i})");
+    }
+    if (!r.is_object()) r.fail("expected a point object");
+    if (r.has("ground")) {
+      p.kind = PointRef::Kind::kGround;
+      p.local = r.vec2("ground");
+      r.finish();
+      return p;
+    }
+    const std::string body = r.string("body");
+    if (const RigidBody* rb = model().find_rigid(body)) {
+      p.kind = PointRef::Kind::kBody;
+      p.dof0 = rb->dof0;
+      if (r.has("at_global")) p.local = rotation(rb->angle0).transpose() * (r.vec2("at_global") - rb->position0);
+      else p.local = r.vec2("at", Vec2::Zero());
+    } else if (const FlexibleBody* fb = model().find_flexible(body)) {
+      p.kind = PointRef::Kind::kNode;
+      int node = -1;
+      if (r.has("node")) {
+        node = r.integer("node", 0);
+        if (node >= fb->mesh.num_nodes())
+          r.fail("node", "node index " + std::to_string(node) + " out of range (body '" + body + "' has " +
+                             std::to_string(fb->mesh.num_nodes()) + " nodes)");
+      } else if (r.has("nearest")) {
+        node = fb->mesh.nearest_node(r.vec2("nearest"));
+      } else {
+        r.fail("a point on a flexible body needs \"node\": index or \"nearest\": [x, y] (mesh frame)");
+      }
+      p.dof0 = fb->node_dof(node);
+    } else {
+      r.fail("body", "unknown body '" + body + "'");
+    }
+    r.finish();
+    return p;
+  }
+
+  Vec2 initial_position(const PointRef& p) const {
+    if (p.kind == PointRef::Kind::kGround) return p.local;
+    const Vec q = cs.model->initial_positions();
+    double b[3] = {q[p.dof0], q[p.dof0 + 1], p.kind == PointRef::Kind::kBody ? q[p.dof0 + 2] : 0};
+    return PointKinematics::position(p, b);
+  }
+
+  const RigidBody& rigid(const JsonReader& r, const std::string& key) {
+    const std::string n = r.string(key);
+    const RigidBody* b = model().find_rigid(n);
+    if (!b) {
+      if (model().find_flexible(n)) r.fail(key, "'" + n + "' is a flexible body; a rigid body is expected here");
+      r.fail(key, "unknown rigid body '" + n + "'");
+    }
+    return *b;
+  }
+
+  const FlexibleBody& flexible(const JsonReader& r, const std::string& key) {
+    const std::string n = r.string(key);
+    const FlexibleBody* b = model().find_flexible(n);
+    if (!b) r.fail(key, "unknown flexible body '" + n + "'");
+    return *b;
+  }
+
+  std::vector<int> node_set(const JsonReader& r, const std::string& key, const FlexibleBody& b) {
+    const std::string n = r.string(key);
+    auto it = b.mesh.node_sets.find(n);
+    if (it == b.mesh.node_sets.end()) {
+      std::string avail;
+      for (const auto& [k, v] : b.mesh.node_sets) avail += (avail.empty() ? "" : ", ") + k;
+      r.fail(key, "body '" + b.name + "' has no node set '" + n + "' (available: " + avail + ")");
+    }
+    return it->second;
+  }
+
+  // ---------------------------------------------------------------- bodies
+  void rigid_body(const JsonReader& r, const std::string& name) {
+    RigidBody b;
+    b.name = name;
+    b.position0 = r.vec2("position", Vec2::Zero());
+    b.angle0 = r.number("angle", 0.0);
+    b.com_offset = r.vec2("com", Vec2::Zero());
+    b.mass_param = param(name + ".mass", r.non_negative("mass", 0.0));
+    b.inertia_param = param(name + ".inertia", r.non_negative("inertia", 0.0));
+    const Vec2 v0 = r.vec2("velocity", Vec2::Zero());
+    const double w0 = r.number("angular_velocity", 0.0);
+    r.finish();
+    const RigidBody& rb = model().add_rigid_body(b);
+    model().add_force(std::make_unique<RigidInertia>(rb.dof0, rb.mass_param, rb.inertia_param, rb.com_offset,
+                                                     "rigid body '" + name + "'"));
+    init_v.conservativeResize(model().nq());
+    init_v.segment<3>(rb.dof0) << v0.x(), v0.y(), w0;
+  }
+
+  void flexible_body(const JsonReader& r, const std::string& name) {
+    FlexibleBody b;
+    b.name = name;
+    const JsonReader m = r.child("mesh");
+    const std::string mt = m.one_of("type", {"rectangle", "gmsh"});
+    if (mt == "rectangle") {
+      const Vec2 o = m.vec2("origin", Vec2::Zero()), sz = m.vec2("size");
+      if (!(sz.x() > 0 && sz.y() > 0)) m.fail("size", "expected positive lengths");
+      const JsonReader el = m.child("elements");
+      if (!el.is_array() || el.size() != 2) el.fail("expected [nx, ny]");
+      const double nx = el.at(0).as_number(), ny = el.at(1).as_number();
+      if (nx < 1 || ny < 1 || nx != std::floor(nx) || ny != std::floor(ny) || nx * ny > 5e6)
+        el.fail("expected two positive integers [nx, ny]");
+      b.mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx), static_cast<int>(ny));
+    } else {
+      const std::string f = resolve(m.string("file"));
+      try {
+        b.mesh = Mesh2D::read_gmsh(f);
+      } catch (const Error& e) {
+        throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() + "/file)");
+      }
+      const double sc = m.positive("scale", 1.0);
+      for (auto& x : b.mesh.nodes) x *= sc;
+    }
+    m.finish();
+    if (auto pl = r.optional_child("placement")) {
+      b.origin = pl->vec2("origin", Vec2::Zero());
+      b.angle = pl->number("angle", 0.0);
+      pl->finish();
+    }
+    const JsonReader mat = r.child("material");
+    b.E_param = param(name + ".E", mat.positive("E"));
+    const double nu = mat.number("nu");
+    if (!(nu >= 0 && nu < 0.5)) mat.fail("nu", "expected Poisson's ratio in [0, 0.5)");
+    b.nu_param = param(name + ".nu", nu);
+    b.rho_param = param(name + ".rho", mat.positive("rho"));
+    mat.finish();
+    b.thickness_param = param(name + ".thickness", r.positive("thickness"));
+    b.integration = r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full"
+                        ? QuadIntegration::kFull
+                        : QuadIntegration::kSelectiveShear;
+    // Node sets by selector (mesh frame).
+    if (auto ns = r.optional_child("node_sets")) {
+      if (!ns->is_object()) ns->fail("expected an object {name: selector}");
+      for (const auto& key : ns->keys()) {
+        const JsonReader s = ns->child(key);
+        const double tol = s.number("tolerance", -1.0);
+        std::vector<int> sel;
+        if (s.has("line_x")) sel = b.mesh.nodes_on_line_x(s.number("line_x"), tol);
+        else if (s.has("line_y")) sel = b.mesh.nodes_on_line_y(s.number("line_y"), tol);
+        else if (s.has("circle")) {
+          const JsonReader c = s.child("circle");
+          sel = b.mesh.nodes_on_circle(c.vec2("center"), c.positive("radius"), tol);
+          c.finish();
+        } else if (s.has("box")) {
+          const JsonReader c = s.child("box");
+          sel = b.mesh.nodes_in_box(c.vec2("min"), c.vec2("max"));
+          c.finish();
+        } else if (s.has("nodes")) {
+          for (const auto& it : s.items("nodes")) {
+            const double v = it.as_number();
+            if (v < 0 || v >= b.mesh.num_nodes() || v != std::floor(v)) it.fail("expected a node index of the mesh");
+            sel.push_back(static_cast<int>(v));
+          }
+        } else {
+          s.fail("expected a selector: line_x, line_y, circle, box or nodes");
+        }
+        s.finish();
+        if (sel.empty()) s.fail("the selector selects no node of body '" + name + "'");
+        b.mesh.node_sets[key] = sel;
+      }
+    }
+    const Vec2 v0 = r.vec2("velocity", Vec2::Zero());
+    const double w0 = r.number("angular_velocity", 0.0);
+    r.finish();
+    const FlexibleBody& fb = model().add_flexible_body(std::move(b));
+    init_v.conservativeResize(model().nq());
+    for (int i = 0; i < fb.mesh.num_nodes(); ++i) {
+      const Vec2 x = fb.placed(i) - fb.origin;
+      init_v.segment<2>(fb.node_dof(i)) = v0 + w0 * Vec2(-x.y(), x.x());
+    }
+  }
+
+  // ---------------------------------------------------------------- joints and drivers
+  void joint(const JsonReader& r, int index) {
+    const std::string type =
+        r.one_of("type", {"revolute", "prismatic", "rigid_connection", "clamp", "rotation_driver", "translation_driver"});
+    const std::string name = r.string("name", type + "_" + std::to_string(index));
+    unique_name(r, name);
+    const size_t first = model().constraints().size();
+    auto add = [&](std::unique_ptr<ConstraintElement> c) {
+      c->set_name(name);
+      model().add_constraint(std::move(c));
+    };
+    if (type == "revolute") {
+      const PointRef a = point(r.child("a"));
+      PointRef b;
+      if (r.has("b")) {
+        const JsonReader rb = r.child("b");
+        if (rb.is_string() && rb.as_string() == "ground") b = {PointRef::Kind::kGround, -1, initial_position(a)};
+        else b = point(rb);
+      } else {
+        b = {PointRef::Kind::kGround, -1, initial_position(a)};
+      }
+      if (a.kind == PointRef::Kind::kGround && b.kind == PointRef::Kind::kGround) r.fail("both points are ground");
+      add(std::make_unique<PointCoincidence>(a, b));
+    } else if (type == "prismatic") {
+      const PointRef a = point(r.child("a"));
+      if (a.kind == PointRef::Kind::kGround) r.fail("a", "the sliding point must be on a body");
+      const Vec2 u = r.vec2("direction");
+      if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
+      const Vec2 x0 = r.vec2("through", initial_position(a));
+      const bool lock = r.boolean("lock_rotation", true);
+      double th0 = 0;
+      if (a.kind == PointRef::Kind::kBody) th0 = model().initial_positions()[a.dof0 + 2];
+      add(std::make_unique<Prismatic>(a, x0, u, lock, th0));
+    } else if (type == "rigid_connection") {
+      const RigidBody& rb = rigid(r, "rigid");
+      const FlexibleBody& fb = flexible(r, "flexible");
+      const auto nodes = node_set(r, "node_set", fb);
+      for (int nd : nodes) {
+        const Vec2 off = rotation(rb.angle0).transpose() * (fb.placed(nd) - rb.position0);
+        add(std::make_unique<PointCoincidence>(PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
+                                               PointRef{PointRef::Kind::kBody, rb.dof0, off}));
+      }
+    } else if (type == "clamp") {
+      const FlexibleBody& fb = flexible(r, "flexible");
+      for (int nd : node_set(r, "node_set", fb))
+        add(std::make_unique<PointCoincidence>(PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
+                                               PointRef{PointRef::Kind::kGround, -1, fb.placed(nd)}));
+    } else if (type == "rotation_driver") {
+      const RigidBody& b = rigid(r, "body");
+      int a_dof = -1;
+      const std::string rel = r.string("relative_to", "ground");
+      if (rel != "ground") {
+        const RigidBody* a = model().find_rigid(rel);
+        if (!a) r.fail("relative_to", "unknown rigid body '" + rel + "' (or \"ground\")");
+        if (a == &b) r.fail("relative_to", "a body cannot be driven relative to itself");
+        a_dof = a->dof0 + 2;
+      }
+      auto l = law(r.child("law"));
+      cs.drivers[name] = l;
+      driver_relative[name] = a_dof >= 0;
+      add(std::make_unique<AngleDriver>(a_dof, b.dof0 + 2, l));
+    } else {  // translation_driver
+      const PointRef a = point(r.child("point"));
+      const Vec2 u = r.vec2("direction");
+      if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
+      const Vec2 x0 = r.vec2("through", initial_position(a));
+      auto l = law(r.child("law"));
+      cs.drivers[name] = l;
+      driver_relative[name] = false;
+      add(std::make_unique<TranslationDriver>(a, x0, u, l));
+    }
+    r.finish();
+    // rows are numbered at finalize(); remember the element range of this joint
+    joint_elements[name] = {first, model().constraints().size()};
+  }
+
+  // ---------------------------------------------------------------- forces
+  void force(const JsonReader& r, int index) {
+    const std::string type = r.one_of("type", {"point_force", "spring_damper", "pressure", "point_mass"});
+    const std::string name = r.string("name", type + "_" + std::to_string(index));
+    unique_name(r, name);
+    if (type == "point_mass") {
+      const double m = r.non_negative("mass");
+      const PointRef p = point(r.child("point"));
+      if (p.kind == PointRef::Kind::kGround) r.fail("point", "a point mass must sit on a body");
+      const int mp = param(name + ".mass", m);
+      if (p.kind == PointRef::Kind::kNode) model().add_force(std::make_unique<NodeMass>(p.dof0, mp, "point mass '" + name + "'"));
+      else model().add_force(std::make_unique<RigidInertia>(p.dof0, mp, -1, p.local, "point mass '" + name + "'"));
+    } else if (type == "point_force") {
+      const PointRef p = point(r.child("point"));
+      if (p.kind == PointRef::Kind::kGround) r.fail("point", "a force must act on a body");
+      std::shared_ptr<const TimeLaw> fx, fy;
+      if (r.has("force")) {
+        const Vec2 f = r.vec2("force");
+        fx = std::make_shared<ConstantLaw>(f.x());
+        fy = std::make_shared<ConstantLaw>(f.y());
+      } else {
+        fx = r.has("fx") ? law(r.child("fx")) : std::make_shared<ConstantLaw>(0.0);
+        fy = r.has("fy") ? law(r.child("fy")) : std::make_shared<ConstantLaw>(0.0);
+      }
+      const int sp = param(name + ".scale", r.number("scale", 1.0));
+      model().add_force(std::make_unique<PointForce>(p, fx, fy, sp, "force '" + name + "'"));
+    } else if (type == "spring_damper") {
+      const PointRef a = point(r.child("a")), b = point(r.child("b"));
+      const double l_init = (initial_position(b) - initial_position(a)).norm();
+      const int kp = param(name + ".stiffness", r.non_negative("stiffness"));
+      const int cp = param(name + ".damping", r.non_negative("damping", 0.0));
+      const int lp = param(name + ".free_length", r.non_negative("free_length", l_init));
+      if (!(l_init > 0)) r.fail("the spring's end points coincide initially (direction undefined)");
+      model().add_force(std::make_unique<SpringDamper>(a, b, kp, cp, lp, "spring '" + name + "'"));
+    } else {  // pressure
+      const PointRef p = point(r.child("point"));
+      if (p.kind == PointRef::Kind::kGround) r.fail("point", "a pressure force must act on a body");
+      const Vec2 u = r.vec2("direction");
+      if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
+      const int ap = param(name + ".area", r.positive("area"));
+      Table1D t = table(r.child("table"));
+      int angle_dof = -1;
+      double offset = 0;
+      if (r.has("argument")) {
+        const JsonReader a = r.child("argument");
+        if (a.is_string()) {
+          if (a.as_string() != "time") a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
+        } else {
+          angle_dof = rigid(a, "angle_of").dof0 + 2;
+          offset = a.number("offset", 0.0);
+          a.finish();
+        }
+      }
+      if (angle_dof < 0) offset = r.number("time_offset", 0.0);
+      model().add_force(std::make_unique<PressureForce>(p, u, ap, std::move(t), angle_dof, offset, "pressure '" + name + "'"));
+    }
+    r.finish();
+  }
+
+  // ---------------------------------------------------------------- measures and responses
+  void measure(const JsonReader& r) {
+    const std::string type = r.one_of("type", {"position", "angle", "distance", "elongation", "path_deviation",
+                                               "constraint_force", "kinetic_energy", "strain_energy", "mass"});
+    const std::string name = r.string("name");
+    for (const auto& m : cs.measures)
+      if (m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
+    std::unique_ptr<Measure> m;
+    if (type == "position") m = std::make_unique<PositionMeasure>(name, point(r.child("point")));
+    else if (type == "angle") m = std::make_unique<AngleMeasure>(name, rigid(r, "body").dof0 + 2);
+    else if (type == "distance" || type == "elongation") {
+      const PointRef a = point(r.child("a")), b = point(r.child("b"));
+      const double ref = type == "elongation" ? (initial_position(b) - initial_position(a)).norm() : 0.0;
+      m = std::make_unique<DistanceMeasure>(name, a, b, ref);
+    } else if (type == "path_deviation") {
+      const PointRef p = point(r.child("point"));
+      const JsonReader pr = r.child("path");
+      pr.one_of("type", {"planar_chain"});
+      ChainPath path;
+      path.origin = pr.vec2("origin", Vec2::Zero());
+      for (const auto& l : pr.items("links", true)) {
+        const std::string d = l.string("driver");
+        if (!cs.drivers.count(d)) l.fail("driver", "unknown driver '" + d + "'");
+        path.links.push_back({cs.drivers[d], driver_relative[d], l.positive("length")});
+        l.finish();
+      }
+      pr.finish();
+      m = std::make_unique<PathDeviationMeasure>(name, p, std::move(path));
+    } else if (type == "constraint_force") {
+      const std::string j = r.string("joint");
+      if (!joint_elements.count(j)) r.fail("joint", "unknown joint '" + j + "'");
+      pending_forces.emplace_back(name, j);
+      r.finish();
+      cs.measures.push_back(nullptr);  // filled after finalize (rows known then)
+      return;
+    } else if (type == "kinetic_energy") m = std::make_unique<KineticEnergyMeasure>(name);
+    else if (type == "strain_energy") m = std::make_unique<StrainEnergyMeasure>(name);
+    else m = std::make_unique<FlexibleMassMeasure>(name, &flexible(r, "body"));
+    r.finish();
+    cs.measures.push_back(std::move(m));
+  }
+
+  void response(const JsonReader& r) {
+    ResponseSpec s;
+    s.name = r.string("name");
+    const std::string meas = r.string("measure");
+    int col = -1;
+    const auto cols = column_names();
+    for (size_t i = 0; i < cols.size(); ++i)
+      if (cols[i] == meas) col = static_cast<int>(i);
+    if (col < 0) r.fail("measure", "unknown measure column '" + meas + "'");
+    s.column = col;
+    const std::string agg = r.one_of("aggregate", {"average", "average_eq45", "max", "min", "final", "integral", "rms"});
+    using K = ResponseSpec::Kind;
+    s.kind = agg == "average" ? K::kAverage : agg == "average_eq45" ? K::kAverageEq45 : agg == "max" ? K::kMax
+           : agg == "min" ? K::kMin : agg == "final" ? K::kFinal : agg == "integral" ? K::kIntegral : K::kRms;
+    if (auto w = r.optional_child("window")) {
+      if (w->has("phase")) {
+        const std::string d = w->string("driver");
+        if (!cs.drivers.count(d)) w->fail("driver", "unknown driver '" + d + "'");
+        const std::string ph = w->string("phase");
+        bool found = false;
+        std::string avail;
+        for (const auto& p : cs.drivers[d]->phases()) {
+          avail += (avail.empty() ? "" : ", ") + p.name;
+          if (p.name == ph) {
+            s.t0 = p.t0, s.t1 = p.t1, found = true;
+          }
+        }
+        if (!found) w->fail("phase", "driver '" + d + "' has no phase '" + ph + "' (phases: " + (avail.empty() ? "none" : avail) + ")");
+        s.window_text = "phase '" + ph + "' of driver '" + d + "'";
+      } else {
+        s.t0 = w->number("t0", -1e300);
+        s.t1 = w->number("t1", 1e300);
+        if (s.t1 < s.t0) w->fail("t1", "expected t1 >= t0");
+        s.window_text = "[" + std::to_string(s.t0) + ", " + std::to_string(s.t1) + "] s";
+      }
+      w->finish();
+    } else {
+      s.window_text = "whole run";
+    }
+    r.finish();
+    for (const auto& o : cs.responses)
+      if (o.name == s.name) r.fail("name", "duplicate response name '" + s.name + "'");
+    cs.responses.push_back(s);
+  }
+
+  std::vector<std::string> column_names() const {
+    std::vector<std::string> c;
+    for (size_t i = 0; i < cs.measures.size(); ++i) {
+      if (cs.measures[i]) {
+        for (auto& s : cs.measures[i]->components()) c.push_back(s);
+      } else {  // constraint force placeholder: components known from the joint's equations
+        const auto& [nm, j] = pending_forces[pending_index(i)];
+        const auto [b, e] = joint_elements.at(j);
+        int m = 0;
+        for (size_t k = b; k < e; ++k) m += cs.model->constraints()[k]->size();
+        for (int k = 0; k < m; ++k) c.push_back(nm + "." + std::to_string(k));
+      }
+    }
+    return c;
+  }
+  size_t pending_index(size_t measure_index) const {
+    size_t n = 0;
+    for (size_t i = 0; i < measure_index; ++i)
+      if (!cs.measures[i]) ++n;
+    return n;
+  }
+
+  // ---------------------------------------------------------------- simulation options
+  void simulation(const JsonReader& r) {
+    auto& o = cs.simulation;
+    o.t_end = r.positive("t_end");
+    o.h = r.positive("h");
+    o.rho_inf = r.number("rho_inf", o.rho_inf);
+    o.tol_r = r.positive("tol_r", o.tol_r);
+    o.tol_phi = r.positive("tol_phi", o.tol_phi);
+    o.max_iter = r.integer("max_iter", o.max_iter, 1);
+    o.min_iter = r.integer("min_iter", o.min_iter, 0);
+    o.max_halvings = r.integer("max_halvings", o.max_halvings, 0);
+    o.consistent_start = r.boolean("consistent_start", o.consistent_start);
+    o.project_initial = r.boolean("project_initial", o.project_initial);
+    o.newton = r.one_of("newton", {"full", "modified"}, "full") == "full" ? GeneralizedAlphaOptions::Newton::kFull
+                                                                          : GeneralizedAlphaOptions::Newton::kModified;
+    o.k = r.non_negative("k", 0.0);
+    o.zeta = r.non_negative("zeta", 0.0);
+    if (auto msg = o.validate(); !msg.empty()) {
+      const auto colon = msg.find(':');
+      r.fail(msg.substr(0, colon), msg.substr(colon + 2));
+    }
+    if (o.t_end / o.h > 1e8) r.fail("h", "more than 1e8 steps requested");
+    r.finish();
+  }
+
+  Vec init_v;
+  std::map<std::string, bool> driver_relative;
+  std::map<std::string, std::pair<size_t, size_t>> joint_elements;
+  std::vector<std::pair<std::string, std::string>> pending_forces;
+};
+
+// Bodies that no constraint, mass or force touches would make the iteration matrix singular;
+// report them by name before running.
+void check_determined(const Case& cs, const JsonReader& root) {
+  const Model& m = *cs.model;
+  std::vector<char> touched(m.nq(), 0);
+  for (const auto& c : m.constraints())
+    for (int d : c->dofs()) touched[d] = 1;
+  for (const auto& b : m.rigid_bodies()) {
+    const double mass = m.params().scalars[b.mass_param], J = m.params().scalars[b.inertia_param];
+    const bool constrained = touched[b.dof0] || touched[b.dof0 + 1] || touched[b.dof0 + 2];
+    if (!constrained && mass == 0 && J == 0)
+      root.fail("bodies", "rigid body '" + b.name + "' has no mass and no joint: its motion is not determined");
+  }
+}
+
+}  // namespace
+
+Case load_case_json(const nlohmann::json& j, const std::string& file_label, const std::string& base_dir) {
+  Case cs;
+  cs.file = file_label;
+  cs.raw = j;
+  cs.model = std::make_unique<Model>();
+  Loader L(cs, base_dir);
+  const JsonReader root(j, file_label);
+  if (!root.is_object()) root.fail("expected a JSON object at the top level");
+  cs.name = root.string("name", fs::path(file_label).stem().string());
+  if (root.has("gravity")) cs.model->params().gravity = root.vec2("gravity");
+  const auto bodies = root.items("bodies", true);
+  if (bodies.empty()) root.fail("bodies", "expected at least one body");
+  for (const auto& b : bodies) {
+    const std::string name = b.string("name");
+    L.unique_name(b, name);
+    if (name == "ground") b.fail("name", "'ground' is reserved");
+    const std::string type = b.one_of("type", {"rigid", "flexible"});
+    if (type == "rigid") L.rigid_body(b, name);
+    else L.flexible_body(b, name);
+  }
+  int i = 0;
+  for (const auto& jt : root.items("joints")) L.joint(jt, i++);
+  i = 0;
+  for (const auto& f : root.items("forces")) L.force(f, i++);
+  L.simulation(root.child("simulation"));
+  if (auto out = root.optional_child("output")) {
+    cs.output.csv_stride = out->integer("csv_stride", 1, 1);
+    cs.output.vtu_stride = out->integer("vtu_stride", 0, 0);
+    for (const auto& m : out->items("measures")) L.measure(m);
+    for (const auto& r : out->items("responses")) L.response(r);
+    out->finish();
+  }
+  root.finish();
+  check_determined(cs, root);
+  cs.model->finalize();
+  // constraint-force measures: rows are known now
+  size_t pi = 0;
+  for (auto& m : cs.measures) {
+    if (m) continue;
+    const auto& [nm, jn] = L.pending_forces[pi++];
+    const auto [b, e] = L.joint_elements.at(jn);
+    std::vector<int> rows;
+    for (size_t k = b; k < e; ++k)
+      for (int r = 0; r < cs.model->constraints()[k]->size(); ++r) rows.push_back(cs.model->constraint_offset(static_cast<int>(k)) + r);
+    m = std::make_unique<ConstraintForceMeasure>(nm, rows);
+  }
+  for (const auto& [jn, range] : L.joint_elements) {
+    std::vector<int> rows;
+    for (size_t k = range.first; k < range.second; ++k)
+      for (int r = 0; r < cs.model->constraints()[k]->size(); ++r) rows.push_back(cs.model->constraint_offset(static_cast<int>(k)) + r);
+    cs.joint_rows[jn] = rows;
+  }
+  cs.initial.t = 0;
+  cs.initial.q = cs.model->initial_positions();
+  cs.initial.v = L.init_v;
+  cs.initial.v.conservativeResize(cs.model->nq());
+  cs.initial.a.setZero(cs.model->nq());
+  cs.initial.lambda.setZero(cs.model->nc());
+  return cs;
+}
+
+Case load_case(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path, "", "cannot open case file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string text = ss.str();
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(path, "byte " + std::to_string(e.byte), std::string("invalid JSON: ") + e.what());
+  }
+  Case cs = load_case_json(j, path, fs::path(path).parent_path().string());
+  cs.sha256 = sha256_hex(text);
+  return cs;
+}
+
+}  // namespace lsmbs

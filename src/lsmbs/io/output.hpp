@@ -1,0 +1,29 @@
+#pragma once
+// Output writers. Every file is written atomically (temporary file in the same folder, then
+// rename), so an interrupted run never leaves a half-written file that looks complete.
+//  * write_file_atomic: any text;
+//  * write_csv: a header and rows;
+//  * write_vtu: one flexible body at one instant (ParaView), with displacement, μ_e and the
+//    von Mises stress of the Cauchy stress at the element centre;
+//  * write_pvd: the time series of VTU files.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lsmbs/mbs/model.hpp"
+
+namespace lsmbs {
+
+void write_file_atomic(const std::string& path, const std::string& content);
+void write_json_atomic(const std::string& path, const nlohmann::json& j);
+void write_csv(const std::string& path, const std::vector<std::string>& header,
+               const std::vector<std::vector<double>>& rows);
+void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q, const ModelParams& p);
+void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
+
+/// Provenance block of every summary.json: version, git commit, case file and hash.
+nlohmann::json provenance(const std::string& command, const std::string& case_file, const std::string& case_sha256);
+
+}  // namespace lsmbs

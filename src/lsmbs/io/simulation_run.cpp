@@ -1,0 +1,137 @@
+#include "lsmbs/io/simulation_run.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/io/output.hpp"
+
+namespace lsmbs {
+
+std::vector<double> SimulationResult::column(const std::string& name) const {
+  for (size_t c = 0; c < columns.size(); ++c)
+    if (columns[c] == name) {
+      std::vector<double> v;
+      v.reserve(history.size());
+      for (const auto& row : history) v.push_back(row[c]);
+      return v;
+    }
+  throw Error("no measure column named '" + name + "'");
+}
+
+namespace {
+
+class Recorder : public StepObserver {
+ public:
+  Recorder(const Case& cs, SimulationResult& res, const RunOptions& ro) : cs_(cs), res_(res), ro_(ro) {
+    ncols_ = res.columns.size();
+  }
+  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double) override {
+    for (auto& m : cs_.measures)
+      if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
+    record(s0, 0);
+  }
+  bool on_step(const StepInfo& info) override {
+    if (!info.grid_point) return true;
+    ++grid_;
+    record(*info.state, grid_);
+    if (ro_.progress && grid_ % 20 == 0)
+      std::fprintf(stderr, "\r  t = %.5f s  step %ld  Newton %d   ", info.state->t, grid_, info.newton_iterations);
+    return true;
+  }
+  std::vector<std::pair<double, std::string>> vtu_entries;  // per body: flattened as body index order
+
+ private:
+  void record(const State& s, long step) {
+    std::vector<double> row(ncols_);
+    size_t c = 0;
+    for (const auto& m : cs_.measures) {
+      m->evaluate(*cs_.model, s, cs_.model->params(), row.data() + c);
+      c += m->components().size();
+    }
+    res_.times.push_back(s.t);
+    res_.history.push_back(std::move(row));
+    if (!ro_.out_dir.empty() && cs_.output.vtu_stride > 0 && step % cs_.output.vtu_stride == 0) {
+      for (const auto& b : cs_.model->flexible_bodies()) {
+        const std::string rel = "vtu/" + b->name + "_" + std::to_string(step) + ".vtu";
+        write_vtu(ro_.out_dir + "/" + rel, *b, s.q, cs_.model->params());
+        pvd_[b->name].emplace_back(s.t, rel);
+      }
+    }
+  }
+  const Case& cs_;
+  SimulationResult& res_;
+  const RunOptions& ro_;
+  size_t ncols_ = 0;
+  long grid_ = 0;
+
+ public:
+  std::map<std::string, std::vector<std::pair<double, std::string>>> pvd_;
+};
+
+}  // namespace
+
+SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
+  SimulationResult res;
+  res.columns = cs.measure_columns();
+  if (!ro.out_dir.empty()) {
+    std::filesystem::create_directories(ro.out_dir);
+    if (cs.output.vtu_stride > 0) std::filesystem::create_directories(ro.out_dir + "/vtu");
+  }
+  Recorder rec(cs, res, ro);
+  GeneralizedAlpha ga(cs.simulation);
+  res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec}, &res.final_state);
+  if (ro.progress) std::fprintf(stderr, "\n");
+
+  nlohmann::json responses = nlohmann::json::object(), windows = nlohmann::json::object();
+  for (const auto& r : cs.responses) {
+    std::vector<double> v;
+    v.reserve(res.history.size());
+    for (const auto& row : res.history) v.push_back(row[r.column]);
+    int n = 0;
+    const double val = aggregate(r, res.times, v, &n);
+    res.responses[r.name] = val;
+    res.response_counts[r.name] = n;
+    responses[r.name] = std::isfinite(val) ? nlohmann::json(val) : nlohmann::json(nullptr);
+    windows[r.name] = {{"measure", res.columns[r.column]}, {"aggregate", ResponseSpec::kind_name(r.kind)},
+                       {"window", r.window_text}, {"t0", r.t0 > -1e299 ? nlohmann::json(r.t0) : nlohmann::json(nullptr)},
+                       {"t1", r.t1 < 1e299 ? nlohmann::json(r.t1) : nlohmann::json(nullptr)}, {"steps", n}};
+  }
+  const Model& m = *cs.model;
+  nlohmann::json bodies = nlohmann::json::array();
+  for (const auto& b : m.flexible_bodies())
+    bodies.push_back({{"name", b->name}, {"nodes", b->mesh.num_nodes()}, {"elements", b->mesh.num_elements()},
+                      {"mass", b->mass(m.params())}});
+  nlohmann::json& S = res.summary;
+  S = provenance(ro.command_line.empty() ? "simulate" : ro.command_line, cs.file, cs.sha256);
+  S["case_name"] = cs.name;
+  S["status"] = res.integrator.ok ? "complete" : "partial";
+  if (!res.integrator.ok) S["failure"] = res.integrator.message;
+  S["options"] = {{"integrator", "generalized-alpha"}, {"generalized_alpha", cs.simulation.to_json()},
+                  {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};
+  S["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"unknowns", m.n()}, {"nonzeros", m.pattern().nnz()},
+                {"rigid_bodies", m.rigid_bodies().size()}, {"flexible_bodies", bodies}};
+  S["counts"] = res.integrator.to_json();
+  S["wall_seconds"] = res.integrator.wall_seconds;
+  S["responses"] = responses;
+  S["response_definitions"] = windows;
+
+  if (!ro.out_dir.empty()) {
+    std::vector<std::string> header = {"t"};
+    header.insert(header.end(), res.columns.begin(), res.columns.end());
+    std::vector<std::vector<double>> rows;
+    for (size_t i = 0; i < res.history.size(); i += cs.output.csv_stride) {
+      std::vector<double> r = {res.times[i]};
+      r.insert(r.end(), res.history[i].begin(), res.history[i].end());
+      rows.push_back(std::move(r));
+    }
+    write_csv(ro.out_dir + "/history.csv", header, rows);
+    for (const auto& [body, entries] : rec.pvd_) write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
+    S["files"] = {{"history", "history.csv"}};
+    write_json_atomic(ro.out_dir + "/summary.json", S);
+  }
+  return res;
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,59 @@
+#pragma once
+// SparseLU — KLU (SuiteSparse) behind a small C++ interface (DESIGN.md §Core interfaces 3):
+// analyze(pattern) once per model, factor(values) per Newton iteration (klu_refactor reusing
+// the pivot sequence when it stays well conditioned, a full klu_factor otherwise), and
+// solve() on a block of right-hand sides in one call (sensitivity back-solves).
+#include <memory>
+#include <span>
+#include <string>
+
+#include "lsmbs/core/status.hpp"
+#include "lsmbs/core/types.hpp"
+#include "lsmbs/linalg/sparsity.hpp"
+
+namespace lsmbs {
+
+class SparseLU {
+ public:
+  SparseLU();
+  ~SparseLU();
+  SparseLU(const SparseLU&) = delete;
+  SparseLU& operator=(const SparseLU&) = delete;
+
+  /// Symbolic analysis (ordering); the pattern must outlive the factorization.
+  void analyze(const CscPattern& pattern);
+  /// Numeric factorization of values laid out on the analyzed pattern.
+  /// On a singular matrix returns kSingular with the offending column in singular_column().
+  Status factor(std::span<const double> values);
+  /// Solves A X = B in place; B is column-major n × nrhs.
+  void solve(std::span<double> b, int nrhs = 1) const;
+  void solve(Vec& b) const { solve(std::span<double>(b.data(), b.size()), 1); }
+  /// Solves for every column of B (n × nrhs, column-major) in one call.
+  void solve(Mat& b) const { solve(std::span<double>(b.data(), b.size()), static_cast<int>(b.cols())); }
+  /// Solves Aᵀ X = B in place.
+  void solve_transpose(std::span<double> b, int nrhs = 1) const;
+
+  bool factored() const;
+  /// Forgets the pivot sequence: the next factor() does a full klu_factor (used when the
+  /// matrix changes character, e.g. from the initialization system to the iteration matrix).
+  void reset_pivoting();
+  int singular_column() const { return singular_col_; }
+  /// Reciprocal condition estimate of the last factorization (cheap, KLU's klu_rcond).
+  double rcond() const;
+
+  struct Counters {
+    long symbolic = 0, full_factorizations = 0, refactorizations = 0, solves = 0, rhs = 0;
+  };
+  const Counters& counters() const { return counters_; }
+
+  /// Threshold on klu_rcond under which a refactorization is redone with fresh pivoting.
+  double refactor_rcond_threshold = 1e-12;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  mutable Counters counters_;
+  int singular_col_ = -1;
+};
+
+}  // namespace lsmbs

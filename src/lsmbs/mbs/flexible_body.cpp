@@ -1,0 +1,56 @@
+#include "lsmbs/mbs/flexible_body.hpp"
+
+namespace lsmbs {
+
+double FlexibleBody::mass(const ModelParams& p) const {
+  double m = 0;
+  const Vec& mu = p.fields[field];
+  for (size_t e = 0; e < elements.size(); ++e) m += mu[e] * elements[e].area();
+  return m * p.scalars[rho_param] * p.scalars[thickness_param];
+}
+
+QuadForce::QuadForce(const FlexibleBody* body, int element) : body_(body), e_(element) {
+  const auto& q = body->mesh.quads[element];
+  for (int i = 0; i < 4; ++i) {
+    dofs_[2 * i] = body->node_dof(q[i]);
+    dofs_[2 * i + 1] = body->node_dof(q[i]) + 1;
+  }
+}
+
+std::string QuadForce::describe() const {
+  return "body '" + body_->name + "', element " + std::to_string(e_);
+}
+
+void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
+                         LocalMat* S) const {
+  const QuadElement& el = body_->elements[e_];
+  const double mu = p.fields[body_->field][e_];
+  const double t = p.scalars[body_->thickness_param];
+  const double rho = mu * p.scalars[body_->rho_param];
+  const double E = mu * p.scalars[body_->E_param], nu = p.scalars[body_->nu_param];
+  QuadElement::Vec8 x = s.q.head<8>(), f;
+  QuadElement::Mat8 K;
+  el.internal_force(x, E, nu, t, f, S ? &K : nullptr);
+  const auto& M0 = el.unit_mass();
+  const auto& N0 = el.shape_integrals();
+  const double mt = rho * t;
+  for (int i = 0; i < 4; ++i) {
+    double ax = 0, ay = 0;
+    for (int j = 0; j < 4; ++j) {
+      ax += M0(i, j) * s.a[2 * j];
+      ay += M0(i, j) * s.a[2 * j + 1];
+    }
+    r[2 * i] += mt * ax + f[2 * i] - mt * N0[i] * p.gravity.x();
+    r[2 * i + 1] += mt * ay + f[2 * i + 1] - mt * N0[i] * p.gravity.y();
+  }
+  if (!S) return;
+  S->topLeftCorner<8, 8>() += c->cq * K;
+  if (c->ca != 0)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        (*S)(2 * i, 2 * j) += c->ca * mt * M0(i, j);
+        (*S)(2 * i + 1, 2 * j + 1) += c->ca * mt * M0(i, j);
+      }
+}
+
+}  // namespace lsmbs

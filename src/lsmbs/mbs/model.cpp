@@ -1,0 +1,327 @@
+#include "lsmbs/mbs/model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "lsmbs/core/error.hpp"
+
+namespace lsmbs {
+
+int Model::add_parameter(const std::string& name, double value) {
+  if (parameter_index(name) >= 0) throw Error("duplicate parameter name '" + name + "'");
+  param_names_.push_back(name);
+  params_.scalars.push_back(value);
+  return static_cast<int>(param_names_.size()) - 1;
+}
+
+int Model::parameter_index(const std::string& name) const {
+  for (size_t i = 0; i < param_names_.size(); ++i)
+    if (param_names_[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+int Model::add_field(Vec values) {
+  params_.fields.push_back(std::move(values));
+  return static_cast<int>(params_.fields.size()) - 1;
+}
+
+int Model::add_dofs(int n, const std::string& owner) {
+  if (finalized_) throw std::logic_error("Model::add_dofs after finalize");
+  const int first = nq_;
+  nq_ += n;
+  dof_owner_.resize(nq_, owner);
+  q_init_.conservativeResize(nq_);
+  q_init_.tail(n).setZero();
+  return first;
+}
+
+RigidBody& Model::add_rigid_body(RigidBody b) {
+  b.dof0 = add_dofs(3, "rigid body '" + b.name + "'");
+  q_init_.segment<3>(b.dof0) << b.position0.x(), b.position0.y(), b.angle0;
+  rigid_.push_back(std::move(b));
+  return rigid_.back();
+}
+
+FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
+  auto body = std::make_unique<FlexibleBody>(std::move(b));
+  body->dof0 = add_dofs(2 * body->mesh.num_nodes(), "flexible body '" + body->name + "'");
+  for (int i = 0; i < body->mesh.num_nodes(); ++i) q_init_.segment<2>(body->node_dof(i)) = body->placed(i);
+  body->elements.clear();
+  body->elements.reserve(body->mesh.num_elements());
+  for (int e = 0; e < body->mesh.num_elements(); ++e) {
+    const auto& q = body->mesh.quads[e];
+    try {
+      body->elements.emplace_back(std::array<Vec2, 4>{body->mesh.nodes[q[0]], body->mesh.nodes[q[1]],
+                                                      body->mesh.nodes[q[2]], body->mesh.nodes[q[3]]},
+                                  body->integration);
+    } catch (const Error& err) {
+      throw Error("flexible body '" + body->name + "', element " + std::to_string(e) + ": " + err.what());
+    }
+  }
+  if (body->field < 0) body->field = add_field(Vec::Ones(body->mesh.num_elements()));
+  flex_.push_back(std::move(body));
+  FlexibleBody* fb = flex_.back().get();
+  for (int e = 0; e < fb->mesh.num_elements(); ++e) add_force(std::make_unique<QuadForce>(fb, e));
+  length_scale_ = std::max(length_scale_ == 1 ? 0.0 : length_scale_, fb->mesh.size());
+  return *fb;
+}
+
+void Model::add_force(std::unique_ptr<ForceElement> f) {
+  if (finalized_) throw std::logic_error("Model::add_force after finalize");
+  if (f->dofs().size() > static_cast<size_t>(kMaxLocalDofs)) throw std::logic_error("force element too large");
+  forces_.push_back(std::move(f));
+}
+
+void Model::add_constraint(std::unique_ptr<ConstraintElement> c) {
+  if (finalized_) throw std::logic_error("Model::add_constraint after finalize");
+  if (c->dofs().size() > static_cast<size_t>(kMaxLocalDofs) || c->size() > kMaxLocalEqs)
+    throw std::logic_error("constraint element too large");
+  cons_.push_back(std::move(c));
+}
+
+const RigidBody* Model::find_rigid(const std::string& name) const {
+  for (const auto& b : rigid_)
+    if (b.name == name) return &b;
+  return nullptr;
+}
+
+const FlexibleBody* Model::find_flexible(const std::string& name) const {
+  for (const auto& b : flex_)
+    if (b->name == name) return b.get();
+  return nullptr;
+}
+
+void Model::finalize() {
+  if (finalized_) return;
+  nc_ = 0;
+  eq_offset_.clear();
+  for (const auto& c : cons_) {
+    eq_offset_.push_back(nc_);
+    nc_ += c->size();
+  }
+  SparsityBuilder sb(n());
+  for (const auto& f : forces_) force_block_.push_back(sb.add_block(f->dofs(), f->dofs()));
+  for (size_t i = 0; i < cons_.size(); ++i) {
+    std::vector<int> rows(cons_[i]->size());
+    for (int k = 0; k < cons_[i]->size(); ++k) rows[k] = nq_ + eq_offset_[i] + k;
+    con_block_qq_.push_back(sb.add_block(cons_[i]->dofs(), cons_[i]->dofs()));
+    con_block_ql_.push_back(sb.add_block(cons_[i]->dofs(), rows));
+    con_block_lq_.push_back(sb.add_block(rows, cons_[i]->dofs()));
+    con_rows_.push_back(std::move(rows));
+  }
+  sb.add_diagonal();
+  asm_ = BlockAssembler(sb.finalize());
+  // Length scale: spread of the initial positions of all points.
+  if (nq_ > 0) {
+    Vec2 lo = Vec2::Constant(1e300), hi = Vec2::Constant(-1e300);
+    for (const auto& b : rigid_) {
+      lo = lo.cwiseMin(b.position0);
+      hi = hi.cwiseMax(b.position0);
+    }
+    for (const auto& b : flex_)
+      for (int i = 0; i < b->mesh.num_nodes(); ++i) {
+        lo = lo.cwiseMin(b->placed(i));
+        hi = hi.cwiseMax(b->placed(i));
+      }
+    const double d = (hi - lo).norm();
+    length_scale_ = d > 0 && std::isfinite(d) ? d : 1.0;
+  }
+  finalized_ = true;
+}
+
+std::string Model::describe_unknown(int i) const {
+  if (i < 0) return "unknown";
+  if (i < nq_) {
+    for (const auto& b : flex_)
+      if (i >= b->dof0 && i < b->dof0 + 2 * b->mesh.num_nodes()) {
+        const int node = (i - b->dof0) / 2;
+        return "flexible body '" + b->name + "', node " + std::to_string(node) +
+               ((i - b->dof0) % 2 ? " (y)" : " (x)");
+      }
+    for (const auto& b : rigid_)
+      if (i >= b.dof0 && i < b.dof0 + 3)
+        return "rigid body '" + b.name + "' (" + std::string(i - b.dof0 == 0 ? "x" : i - b.dof0 == 1 ? "y" : "θ") + ")";
+    return dof_owner_[i];
+  }
+  const int row = i - nq_;
+  for (size_t c = 0; c < cons_.size(); ++c)
+    if (row >= eq_offset_[c] && row < eq_offset_[c] + cons_[c]->size())
+      return "constraint '" + cons_[c]->name() + "' (equation " + std::to_string(row - eq_offset_[c]) + ")";
+  return "constraint row " + std::to_string(row);
+}
+
+namespace {
+inline void gather(const Vec& g, std::span<const int> dofs, LocalVec& out) {
+  out.resize(static_cast<Eigen::Index>(dofs.size()));
+  for (size_t i = 0; i < dofs.size(); ++i) out[i] = g[dofs[i]];
+}
+}  // namespace
+
+void Model::residual(const State& s, const ModelParams& p, double k, double zeta, Vec& R,
+                     Vec* absr) const {
+  R.setZero(n());
+  if (absr) absr->setZero(nq_);
+  LocalState ls;
+  ls.t = s.t;
+  LocalVec r;
+  for (const auto& f : forces_) {
+    const auto d = f->dofs();
+    gather(s.q, d, ls.q);
+    gather(s.v, d, ls.v);
+    gather(s.a, d, ls.a);
+    r.setZero(static_cast<Eigen::Index>(d.size()));
+    f->evaluate(ls, p, r, nullptr, nullptr);
+    for (size_t i = 0; i < d.size(); ++i) {
+      R[d[i]] += r[i];
+      if (absr) (*absr)[d[i]] += std::abs(r[i]);
+    }
+  }
+  LocalEqVec phi, mult;
+  LocalJac J;
+  LocalVec ql;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    gather(s.q, d, ql);
+    cons_[c]->evaluate(s.t, ql, p, phi, &J);
+    const int m = cons_[c]->size();
+    mult.resize(m);
+    for (int i = 0; i < m; ++i) {
+      mult[i] = k * s.lambda[eq_offset_[c] + i] + zeta * phi[i];
+      R[nq_ + eq_offset_[c] + i] = k * phi[i];
+    }
+    for (size_t j = 0; j < d.size(); ++j) {
+      double v = 0;
+      for (int i = 0; i < m; ++i) v += J(i, j) * mult[i];
+      R[d[j]] += v;
+      if (absr) (*absr)[d[j]] += std::abs(v);
+    }
+  }
+}
+
+void Model::iteration_matrix(const State& s, const ModelParams& p, const Coefficients& c, double k,
+                             double zeta, std::vector<double>& values) const {
+  values.assign(asm_.pattern().nnz(), 0.0);
+  std::span<double> vals(values);
+  LocalState ls;
+  ls.t = s.t;
+  LocalVec r;
+  LocalMat S;
+  for (size_t e = 0; e < forces_.size(); ++e) {
+    const auto d = forces_[e]->dofs();
+    const auto nd = static_cast<Eigen::Index>(d.size());
+    gather(s.q, d, ls.q);
+    gather(s.v, d, ls.v);
+    gather(s.a, d, ls.a);
+    r.setZero(nd);
+    S.setZero(nd, nd);
+    forces_[e]->evaluate(ls, p, r, &c, &S);
+    asm_.add(vals, force_block_[e], S);
+  }
+  LocalEqVec phi, mult;
+  LocalJac J;
+  LocalVec ql;
+  LocalMat H;
+  for (size_t ci = 0; ci < cons_.size(); ++ci) {
+    const auto d = cons_[ci]->dofs();
+    gather(s.q, d, ql);
+    cons_[ci]->evaluate(s.t, ql, p, phi, &J);
+    const int m = cons_[ci]->size();
+    mult.resize(m);
+    for (int i = 0; i < m; ++i) mult[i] = k * s.lambda[eq_offset_[ci] + i] + zeta * phi[i];
+    if (c.cq != 0) {
+      cons_[ci]->hessian(s.t, ql, mult, H);
+      H.noalias() += zeta * J.transpose() * J;
+      asm_.add(vals, con_block_qq_[ci], H, c.cq);
+    }
+    asm_.add(vals, con_block_ql_[ci], J.transpose(), k);
+    asm_.add(vals, con_block_lq_[ci], J, k);
+  }
+}
+
+void Model::constraints(double t, const Vec& q, const ModelParams& p, Vec& phi) const {
+  phi.setZero(nc_);
+  LocalEqVec ph;
+  LocalVec ql;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    gather(q, cons_[c]->dofs(), ql);
+    cons_[c]->evaluate(t, ql, p, ph, nullptr);
+    phi.segment(eq_offset_[c], cons_[c]->size()) = ph;
+  }
+}
+
+SpMat Model::constraint_jacobian(double t, const Vec& q, const ModelParams& p) const {
+  std::vector<Eigen::Triplet<double>> trip;
+  LocalEqVec ph;
+  LocalJac J;
+  LocalVec ql;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    gather(q, d, ql);
+    cons_[c]->evaluate(t, ql, p, ph, &J);
+    for (int i = 0; i < cons_[c]->size(); ++i)
+      for (size_t j = 0; j < d.size(); ++j)
+        if (J(i, j) != 0) trip.emplace_back(eq_offset_[c] + i, d[j], J(i, j));
+  }
+  SpMat m(nc_, nq_);
+  m.setFromTriplets(trip.begin(), trip.end());
+  return m;
+}
+
+void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& p, Vec& phi_t,
+                                  Vec& gamma) const {
+  phi_t.setZero(nc_);
+  gamma.setZero(nc_);
+  LocalEqVec pt, ptt, w;
+  LocalVec ql, vl;
+  LocalMat H;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    const int m = cons_[c]->size();
+    gather(q, d, ql);
+    gather(v, d, vl);
+    cons_[c]->time_derivatives(t, pt, ptt);
+    for (int i = 0; i < m; ++i) {
+      w.setZero(m);
+      w[i] = 1;
+      cons_[c]->hessian(t, ql, w, H);
+      phi_t[eq_offset_[c] + i] = pt[i];
+      gamma[eq_offset_[c] + i] = vl.dot(H * vl) + ptt[i];
+    }
+  }
+}
+
+double Model::kinetic_energy(const State& s, const ModelParams& p) const {
+  LocalState ls;
+  ls.t = s.t;
+  LocalVec r;
+  LocalMat S;
+  const Coefficients mass_only{1, 0, 0};
+  double T = 0;
+  for (const auto& f : forces_) {
+    const auto d = f->dofs();
+    const auto nd = static_cast<Eigen::Index>(d.size());
+    gather(s.q, d, ls.q);
+    gather(s.v, d, ls.v);
+    ls.a.setZero(nd);
+    r.setZero(nd);
+    S.setZero(nd, nd);
+    f->evaluate(ls, p, r, &mass_only, &S);
+    T += 0.5 * ls.v.dot(S * ls.v);
+  }
+  return T;
+}
+
+double Model::strain_energy(const Vec& q, const ModelParams& p) const {
+  double W = 0;
+  for (const auto& b : flex_) {
+    const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param], E0 = p.scalars[b->E_param];
+    for (int e = 0; e < b->mesh.num_elements(); ++e) {
+      QuadElement::Vec8 x;
+      for (int i = 0; i < 4; ++i) x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
+      W += b->elements[e].strain_energy(x, p.fields[b->field][e] * E0, nu, t);
+    }
+  }
+  return W;
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,124 @@
+#pragma once
+// Model — a planar flexible multibody system as pure functions of (t, q, q̇, q̈, λ, params)
+// (DESIGN.md §Core interfaces 2). It numbers the DOFs, owns the force and constraint
+// elements, and assembles into a sparsity pattern computed once in finalize():
+//
+//   residual   R = [ r ; kΦ ],  r = M q̈ − g + Φ_qᵀ (kλ + ζΦ)                        (eq. 7)
+//   iteration  S = [ c_a M + c_v C_t + c_q K_t   kΦ_qᵀ ; kΦ_q  0 ]                   (eq. 20)
+//              with K_t including ζ Φ_qᵀΦ_q + Σ_i (kλ+ζΦ)_i ∂²Φ_i/∂q² (exact tangent).
+//
+// The unknown vector of the Newton iteration is [q; λ] (n = nq + nc); λ is the scaled
+// multiplier, the physical constraint force is kλ.
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "lsmbs/linalg/sparsity.hpp"
+#include "lsmbs/mbs/constraints.hpp"
+#include "lsmbs/mbs/elements.hpp"
+#include "lsmbs/mbs/flexible_body.hpp"
+#include "lsmbs/mbs/forces.hpp"
+
+namespace lsmbs {
+
+struct RigidBody {
+  std::string name;
+  int dof0 = -1;
+  int mass_param = -1, inertia_param = -1;
+  Vec2 com_offset = Vec2::Zero();
+  Vec2 position0 = Vec2::Zero();  ///< reference point at t = 0
+  double angle0 = 0;
+};
+
+/// A state at one time: positions, velocities, accelerations q̈ and scaled multipliers λ.
+struct State {
+  double t = 0;
+  Vec q, v, a, lambda;
+};
+
+class Model {
+ public:
+  Model() = default;
+  Model(const Model&) = delete;
+  Model& operator=(const Model&) = delete;
+
+  // ------------------------------------------------------------ construction
+  /// Registers a named scalar parameter; names are unique.
+  int add_parameter(const std::string& name, double value);
+  int parameter_index(const std::string& name) const;  ///< −1 if unknown
+  const std::vector<std::string>& parameter_names() const { return param_names_; }
+  int add_field(Vec values);
+  int add_dofs(int n, const std::string& owner);
+  RigidBody& add_rigid_body(RigidBody b);
+  FlexibleBody& add_flexible_body(FlexibleBody b);  ///< allocates DOFs, builds element geometry
+  void add_force(std::unique_ptr<ForceElement> f);
+  void add_constraint(std::unique_ptr<ConstraintElement> c);
+  /// Builds the sparsity pattern; no elements may be added afterwards.
+  void finalize();
+  bool finalized() const { return finalized_; }
+
+  // ------------------------------------------------------------ sizes and access
+  int nq() const { return nq_; }
+  int nc() const { return nc_; }
+  int n() const { return nq_ + nc_; }
+  const ModelParams& params() const { return params_; }
+  ModelParams& params() { return params_; }
+  const std::vector<RigidBody>& rigid_bodies() const { return rigid_; }
+  const std::vector<std::unique_ptr<FlexibleBody>>& flexible_bodies() const { return flex_; }
+  const RigidBody* find_rigid(const std::string& name) const;
+  const FlexibleBody* find_flexible(const std::string& name) const;
+  const std::vector<std::unique_ptr<ForceElement>>& forces() const { return forces_; }
+  const std::vector<std::unique_ptr<ConstraintElement>>& constraints() const { return cons_; }
+  int constraint_offset(int c) const { return eq_offset_[c]; }
+  const BlockAssembler& assembler() const { return asm_; }
+  const CscPattern& pattern() const { return asm_.pattern(); }
+  /// Initial positions (placement of all bodies at t = 0) and zero velocities.
+  Vec initial_positions() const { return q_init_; }
+  /// Human-readable owner of a DOF or of a constraint row (for failure messages).
+  std::string describe_unknown(int i) const;
+  /// Length scale of the model (largest body size / joint distance), for tolerances.
+  double length_scale() const { return length_scale_; }
+
+  // ------------------------------------------------------------ evaluation (pure)
+  /// R = [r; kΦ] (size n). If r_abs is given (size nq, caller-owned workspace), it receives
+  /// Σ|terms| per row of r: a force scale for relative convergence tests.
+  void residual(const State& s, const ModelParams& p, double k, double zeta, Vec& R,
+                Vec* r_abs = nullptr) const;
+  /// Values of S(c) on pattern() (size nnz), see the header comment.
+  void iteration_matrix(const State& s, const ModelParams& p, const Coefficients& c, double k,
+                        double zeta, std::vector<double>& values) const;
+  /// Φ(q, t) (size nc).
+  void constraints(double t, const Vec& q, const ModelParams& p, Vec& phi) const;
+  /// Φ_q as a sparse nc × nq matrix (initialization, tests).
+  SpMat constraint_jacobian(double t, const Vec& q, const ModelParams& p) const;
+  /// Φ_t (velocity level: Φ_q q̇ + Φ_t = 0) and the acceleration bias γ with
+  /// Φ̈ = Φ_q q̈ + γ,  γ_i = q̇ᵀ ∂²Φ_i/∂q² q̇ + Φ_i,tt.
+  void constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& p, Vec& phi_t,
+                             Vec& gamma) const;
+  /// Kinetic energy ½ q̇ᵀ M q̇ (M from the force elements).
+  double kinetic_energy(const State& s, const ModelParams& p) const;
+  /// Strain energy of all flexible bodies.
+  double strain_energy(const Vec& q, const ModelParams& p) const;
+
+ private:
+  template <class F>
+  void for_each_force(const State& s, F&& f) const;
+
+  std::vector<std::string> param_names_;
+  ModelParams params_;
+  std::vector<std::string> dof_owner_;
+  std::vector<RigidBody> rigid_;
+  std::vector<std::unique_ptr<FlexibleBody>> flex_;
+  std::vector<std::unique_ptr<ForceElement>> forces_;
+  std::vector<std::unique_ptr<ConstraintElement>> cons_;
+  std::vector<int> eq_offset_, force_block_, con_block_qq_, con_block_ql_, con_block_lq_;
+  std::vector<std::vector<int>> con_rows_;
+  BlockAssembler asm_;
+  Vec q_init_;
+  int nq_ = 0, nc_ = 0;
+  double length_scale_ = 1;
+  bool finalized_ = false;
+};
+
+}  // namespace lsmbs

@@ -1,0 +1,147 @@
+#pragma once
+// Measures — named per-step quantities f_n(q, q̇, q̈, λ, p) recorded as time histories and
+// aggregated into responses: a point's position, a body angle, the distance or elongation
+// between two points (deformed minus undeformed distance, positive in tension, §5.2), the
+// deviation of a point from a prescribed path (eq. 44), a constraint force, energies, the mass
+// of a flexible body. (Partial derivatives come with the sensitivity issue.)
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lsmbs/mbs/model.hpp"
+
+namespace lsmbs {
+
+class Measure {
+ public:
+  virtual ~Measure() = default;
+  explicit Measure(std::string name) : name_(std::move(name)) {}
+  const std::string& name() const { return name_; }
+  /// Column names of the components (e.g. "tip.x", "tip.y"); a scalar measure has one.
+  virtual std::vector<std::string> components() const { return {name_}; }
+  virtual void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const = 0;
+
+ private:
+  std::string name_;
+};
+
+/// Position of a material point.
+class PositionMeasure : public Measure {
+ public:
+  PositionMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
+  std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+
+ private:
+  PointRef pt_;
+};
+
+/// Angle of a rigid body.
+class AngleMeasure : public Measure {
+ public:
+  AngleMeasure(std::string name, int theta_dof) : Measure(std::move(name)), dof_(theta_dof) {}
+  void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override { *out = s.q[dof_]; }
+
+ private:
+  int dof_;
+};
+
+/// Distance |p_B − p_A| minus `reference` (0 for a distance; the undeformed distance for an
+/// elongation).
+class DistanceMeasure : public Measure {
+ public:
+  DistanceMeasure(std::string name, PointRef a, PointRef b, double reference)
+      : Measure(std::move(name)), a_(a), b_(b), ref_(reference) {}
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+
+ private:
+  PointRef a_, b_;
+  double ref_;
+};
+
+/// Prescribed planar path of a serial chain driven by time laws: link i has absolute angle
+/// φ_i = s_i(t) (absolute driver) or φ_{i−1} + s_i(t) (relative driver); the path point is
+/// origin + Σ L_i (cos φ_i, sin φ_i) — the rigid kinematics of the drivers (§6).
+struct ChainPath {
+  Vec2 origin = Vec2::Zero();
+  struct Link {
+    std::shared_ptr<const TimeLaw> law;
+    bool relative = false;
+    double length = 0;
+  };
+  std::vector<Link> links;
+  Vec2 at(double t) const;
+};
+
+/// ‖q_pres(t) − p(q)‖ (eq. 44).
+class PathDeviationMeasure : public Measure {
+ public:
+  PathDeviationMeasure(std::string name, PointRef pt, ChainPath path)
+      : Measure(std::move(name)), pt_(pt), path_(std::move(path)) {}
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+
+ private:
+  PointRef pt_;
+  ChainPath path_;
+};
+
+/// Constraint force kλ of one joint (all its equations).
+class ConstraintForceMeasure : public Measure {
+ public:
+  ConstraintForceMeasure(std::string name, std::vector<int> rows, double k_unused = 0)
+      : Measure(std::move(name)), rows_(std::move(rows)) { (void)k_unused; }
+  std::vector<std::string> components() const override;
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  /// The scaling k of the run (set by the integrator's observer before evaluation).
+  void set_scaling(double k) { k_ = k; }
+
+ private:
+  std::vector<int> rows_;
+  double k_ = 1;
+};
+
+class KineticEnergyMeasure : public Measure {
+ public:
+  using Measure::Measure;
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
+    *out = m.kinetic_energy(s, p);
+  }
+};
+
+class StrainEnergyMeasure : public Measure {
+ public:
+  using Measure::Measure;
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
+    *out = m.strain_energy(s.q, p);
+  }
+};
+
+class FlexibleMassMeasure : public Measure {
+ public:
+  FlexibleMassMeasure(std::string name, const FlexibleBody* b) : Measure(std::move(name)), body_(b) {}
+  void evaluate(const Model&, const State&, const ModelParams& p, double* out) const override {
+    *out = body_->mass(p);
+  }
+
+ private:
+  const FlexibleBody* body_;
+};
+
+/// Aggregation of one measure component over a time window of the grid steps (eq. 45 is the
+/// average; eq. 42's local formulation is the per-step maximum).
+struct ResponseSpec {
+  /// kAverageEq45 divides the sum by (count − 1), as eq. (45) is printed (n_cvf − n_cvi).
+  enum class Kind { kAverage, kAverageEq45, kMax, kMin, kFinal, kIntegral, kRms };
+  std::string name;
+  int column = 0;  ///< column in the history (0 = first measure component)
+  Kind kind = Kind::kAverage;
+  double t0 = -1e300, t1 = 1e300;
+  std::string window_text;  ///< how the window was given, for the summary
+  static const char* kind_name(Kind k);
+};
+
+/// Evaluates a response over (t, values) pairs of the grid.
+double aggregate(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
+                 int* count = nullptr);
+
+}  // namespace lsmbs

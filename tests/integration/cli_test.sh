@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# lsmbs simulate end to end: provenance in summary.json, exit codes 0 / 1 / 2, and nothing
+# written when the input is invalid.
+set -u
+exe="$1"; src="$2"
+tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+case_file="$src/data/slider_crank_rigid/slider_crank_rigid.json"
+"$exe" simulate "$case_file" -o "$tmp/ok" -q || fail "simulate returned $?"
+python3 - "$tmp/ok/summary.json" "$case_file" <<'PY' || fail "summary.json content"
+import hashlib, json, sys
+s = json.load(open(sys.argv[1]))
+sha = hashlib.sha256(open(sys.argv[2], 'rb').read()).hexdigest()
+assert s["case_sha256"] == sha, (s["case_sha256"], sha)
+assert s["status"] == "complete"
+assert s["git_commit"] and s["version"]
+assert s["options"]["generalized_alpha"]["h"] == 2.5e-4
+assert "max_piston_x" in s["responses"]
+print("summary.json ok")
+PY
+head -1 "$tmp/ok/history.csv" | grep -q "^t,piston.x,piston.y" || fail "history.csv header"
+
+# Same input, same numbers.
+"$exe" simulate "$case_file" -o "$tmp/again" -q || fail "second run"
+cmp -s "$tmp/ok/history.csv" "$tmp/again/history.csv" || fail "history.csv differs between identical runs"
+
+# Invalid input: exit 2, message with the JSON path, nothing written.
+python3 -c "
+import json,sys
+c=json.load(open('$case_file')); c['bodies'][0]['mass']=-1; json.dump(c,open('$tmp/bad.json','w'))"
+"$exe" simulate "$tmp/bad.json" -o "$tmp/bad_out" 2> "$tmp/err.txt"; rc=$?
+[ $rc -eq 2 ] || fail "invalid input returned $rc, expected 2"
+grep -q "/bodies/0/mass: expected a non-negative number" "$tmp/err.txt" || fail "message: $(cat "$tmp/err.txt")"
+[ ! -e "$tmp/bad_out" ] || fail "output written for invalid input"
+
+# Numerical failure: exit 1, partial results flagged.
+python3 -c "
+import json
+c=json.load(open('$case_file')); c['simulation'].update(max_iter=1, max_halvings=0); json.dump(c,open('$tmp/fail.json','w'))"
+"$exe" simulate "$tmp/fail.json" -o "$tmp/fail_out" -q 2> "$tmp/err2.txt"; rc=$?
+[ $rc -eq 1 ] || fail "numerical failure returned $rc, expected 1"
+grep -q "Newton did not converge" "$tmp/err2.txt" || fail "failure message: $(cat "$tmp/err2.txt")"
+python3 -c "import json; assert json.load(open('$tmp/fail_out/summary.json'))['status']=='partial'" || fail "partial flag"
+echo "cli: all checks passed"

@@ -1,0 +1,96 @@
+// Invalid case files fail with the file, the JSON path and what was expected.
+#include <gtest/gtest.h>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/io/sha256.hpp"
+#include "support/test_models.hpp"
+
+using namespace lsmbs;
+using json = nlohmann::json;
+
+namespace {
+
+json minimal() {
+  return R"({
+    "name": "pendulum",
+    "gravity": [0, -9.81],
+    "bodies": [{"name": "bob", "type": "rigid", "position": [1, 0], "mass": 1, "inertia": 0.1}],
+    "joints": [{"name": "pin", "type": "revolute", "a": {"body": "bob", "at": [-1, 0]}, "b": "ground"}],
+    "simulation": {"t_end": 0.1, "h": 0.01}
+  })"_json;
+}
+
+// Returns the error message of loading `j` (empty if it loads).
+std::string error_of(const json& j) {
+  try {
+    test::make_case(j);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(CaseLoader, MinimalCaseLoads) {
+  const Case cs = test::make_case(minimal());
+  EXPECT_EQ(cs.model->nq(), 3);
+  EXPECT_EQ(cs.model->nc(), 2);
+}
+
+struct BadInput {
+  const char* label;
+  const char* json_patch;  // RFC 6902 patch applied to minimal()
+  const char* expected;    // substring of the message
+};
+
+class CaseLoaderErrors : public ::testing::TestWithParam<BadInput> {};
+
+TEST_P(CaseLoaderErrors, MessageNamesThePathAndWhatWasExpected) {
+  const auto& p = GetParam();
+  const json j = minimal().patch(json::parse(p.json_patch));
+  const std::string msg = error_of(j);
+  ASSERT_FALSE(msg.empty()) << p.label << ": no error raised";
+  EXPECT_NE(msg.find("<test>"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(p.expected), std::string::npos) << p.label << ": " << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Table, CaseLoaderErrors,
+    ::testing::Values(
+        BadInput{"unknown key", R"([{"op":"add","path":"/bodies/0/thickess","value":1}])", "/bodies/0/thickess: unknown key"},
+        BadInput{"negative mass", R"([{"op":"replace","path":"/bodies/0/mass","value":-1}])", "/bodies/0/mass: expected a non-negative number"},
+        BadInput{"wrong type", R"([{"op":"replace","path":"/bodies/0/mass","value":"heavy"}])", "/bodies/0/mass: expected a number, got string"},
+        BadInput{"unknown body type", R"([{"op":"replace","path":"/bodies/0/type","value":"soft"}])", "/bodies/0/type: expected one of \"rigid\", \"flexible\""},
+        BadInput{"unknown body in joint", R"([{"op":"replace","path":"/joints/0/a/body","value":"bobb"}])", "/joints/0/a/body: unknown body 'bobb'"},
+        BadInput{"missing time step", R"([{"op":"remove","path":"/simulation/h"}])", "/simulation: missing required key 'h'"},
+        BadInput{"zero time step", R"([{"op":"replace","path":"/simulation/h","value":0}])", "/simulation/h: expected a positive number"},
+        BadInput{"rho_inf out of range", R"([{"op":"add","path":"/simulation/rho_inf","value":1.5}])", "/simulation/rho_inf: expected a value in [0, 1]"},
+        BadInput{"duplicate names", R"([{"op":"replace","path":"/joints/0/name","value":"bob"}])", "/joints/0/name: duplicate name 'bob'"},
+        BadInput{"point not an object", R"([{"op":"replace","path":"/joints/0/a","value":3}])", "/joints/0/a: expected a point object"},
+        BadInput{"vector of wrong size", R"([{"op":"replace","path":"/bodies/0/position","value":[1,2,3]}])", "/bodies/0/position: expected an array of two numbers"},
+        BadInput{"unconstrained massless body", R"([{"op":"replace","path":"/bodies/0/mass","value":0},{"op":"replace","path":"/bodies/0/inertia","value":0},{"op":"remove","path":"/joints/0"}])",
+                 "rigid body 'bob' has no mass and no joint"},
+        BadInput{"no bodies", R"([{"op":"replace","path":"/bodies","value":[]}])", "/bodies: expected at least one body"},
+        BadInput{"unknown joint type", R"([{"op":"replace","path":"/joints/0/type","value":"hinge"}])", "/joints/0/type: expected one of"},
+        BadInput{"negative thickness", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":-0.001}}])",
+                 "/bodies/1/thickness: expected a positive number"},
+        BadInput{"empty node set", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001,"node_sets":{"far":{"line_x":5}}}}])",
+                 "/bodies/1/node_sets/far: the selector selects no node"},
+        BadInput{"unknown node set", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/joints/-","value":{"type":"clamp","flexible":"p","node_set":"middle"}}])",
+                 "/joints/1/node_set: body 'p' has no node set 'middle'"},
+        BadInput{"Poisson ratio", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.5,"rho":1000},"thickness":0.001}}])",
+                 "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"}),
+    [](const auto& info) {
+      std::string s = info.param.label;
+      for (char& c : s)
+        if (!isalnum(static_cast<unsigned char>(c))) c = '_';
+      return s;
+    });
+
+TEST(Sha256, MatchesTheFipsTestVectors) {
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6037cd7aa79b3b1a8fcaeb68bb7a9a30f6af");
+}
