@@ -1,7 +1,9 @@
 // Free flexible plate (no constraints) spinning and vibrating: with ρ∞ = 1 the total energy
 // T + W drifts less than 0.1 % over 1000 steps; with ρ∞ = 0.8 the energy of the elastic
 // (non-rigid) motion decays while linear and angular momentum are conserved — the
-// high-frequency content is damped, the rigid motion is not.
+// high-frequency content is damped, the rigid motion is not. Linear momentum is conserved to
+// round-off (the scheme is linear in the velocities); angular momentum only approximately (the
+// generalized-α scheme is not a variational integrator), to a relative drift below 1e-3.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -91,8 +93,9 @@ TEST(FreeFlexiblePlate, EnergyIsConservedWithRhoInfOne) {
   for (double e : r.total) drift = std::max(drift, std::abs(e / r.total.front() - 1));
   std::printf("rho_inf = 1: max energy drift over 1000 steps %.3e\n", drift);
   EXPECT_LT(drift, 1e-3);
+  std::printf("relative angular momentum drift %.3e\n", r.worst_L / std::abs(r.L0));
   EXPECT_LT(r.worst_P, 1e-12);
-  EXPECT_LT(r.worst_L, 1e-12);
+  EXPECT_LT(r.worst_L, 1e-3 * std::abs(r.L0));
 }
 
 TEST(FreeFlexiblePlate, HighFrequencyContentDecaysWithRhoInfPointEight) {
@@ -102,5 +105,5 @@ TEST(FreeFlexiblePlate, HighFrequencyContentDecaysWithRhoInfPointEight) {
   EXPECT_GT(keep1, 0.95);
   EXPECT_LT(keep8, 0.5 * keep1);
   EXPECT_LT(r8.worst_P, 1e-12) << "numerical damping must not touch linear momentum";
-  EXPECT_LT(r8.worst_L, 1e-10) << "nor angular momentum";
+  EXPECT_LT(r8.worst_L, 1e-3 * std::abs(r8.L0)) << "nor (to the scheme's accuracy) angular momentum";
 }

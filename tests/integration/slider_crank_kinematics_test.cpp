@@ -37,6 +37,10 @@ Errors run(double h) {
       const double x = R * std::cos(th) + s;
       const double xd = -R * thd * std::sin(th) * (1 + R * std::cos(th) / s);
       e.pos = std::max(e.pos, std::abs(i.state->q[dof] - x) / x);
+      // velocities: the smooth constant-speed phase after the 2.5 ms settling period of §5
+      // (the ramp law's acceleration jumps at t = 0 and t = 0.01 s excite O(h) transients
+      // that the numerical damping removes)
+      if (i.state->t < 0.0125) return true;
       e.vel = std::max(e.vel, std::abs(i.state->v[dof] - xd));
       e.vel_scale = std::max(e.vel_scale, std::abs(xd));
       return true;
@@ -63,6 +67,7 @@ TEST(RigidSliderCrank, PistonVelocityConvergesToTheClosedFormAtSecondOrder) {
   const double o1 = std::log2(a.vel / b.vel), o2 = std::log2(b.vel / c.vel);
   std::printf("velocity error / max speed: %.3e, %.3e, %.3e; orders %.2f %.2f\n", a.vel / a.vel_scale,
               b.vel / b.vel_scale, c.vel / c.vel_scale, o1, o2);
+  EXPECT_GT(o1, 1.8);
   EXPECT_GT(o2, 1.8);
   EXPECT_LT(c.vel / c.vel_scale, 1e-4);
 }

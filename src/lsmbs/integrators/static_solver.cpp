@@ -30,12 +30,14 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s, co
   auto norm = [&](const Vec& r) {
     return std::max(r.head(nq).lpNorm<Eigen::Infinity>(), nc ? r.tail(nc).lpNorm<Eigen::Infinity>() : 0.0);
   };
+  // Round-off floor of the constraint terms, as in the dynamic Newton iteration.
+  const double floor = std::max(1e-12, 100 * 2.2e-16 * k * model.length_scale());
   for (res.iterations = 0; res.iterations <= o.max_iter; ++res.iterations) {
     model.residual(s, p, k, 0.0, R, &r_abs);
-    const double scale = std::max(r_abs.size() ? r_abs.maxCoeff() : 0.0, 1e-12);
+    const double scale = r_abs.size() ? r_abs.maxCoeff() : 0.0;
     res.residual_norm = R.head(nq).lpNorm<Eigen::Infinity>();
     const double pn = nc ? R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
-    if (res.residual_norm <= o.tol_r * scale && pn <= o.tol_phi * model.length_scale()) {
+    if (res.residual_norm <= std::max(o.tol_r * scale, floor) && pn <= o.tol_phi * model.length_scale()) {
       res.ok = true;
       return res;
     }
