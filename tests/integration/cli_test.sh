@@ -42,4 +42,21 @@ c=json.load(open('$case_file')); c['simulation'].update(max_iter=1, max_halvings
 [ $rc -eq 1 ] || fail "numerical failure returned $rc, expected 1"
 grep -q "Newton did not converge" "$tmp/err2.txt" || fail "failure message: $(cat "$tmp/err2.txt")"
 python3 -c "import json; assert json.load(open('$tmp/fail_out/summary.json'))['status']=='partial'" || fail "partial flag"
+# Flexible body: VTU files and a PVD series that ParaView can read (well-formed XML).
+python3 -c "
+import json
+c=json.load(open('$src/data/robot_arm/robot_arm.json')); c['simulation']['t_end']=0.05; c['output']['vtu_stride']=5
+json.dump(c,open('$tmp/arm.json','w'))"
+"$exe" simulate "$tmp/arm.json" -o "$tmp/arm" -q || fail "robot arm short run"
+python3 - "$tmp/arm" <<'PY' || fail "VTU/PVD"
+import sys, os, xml.etree.ElementTree as ET
+out = sys.argv[1]
+pvd = ET.parse(os.path.join(out, "plate.pvd")).getroot()
+files = [d.get("file") for d in pvd.iter("DataSet")]
+assert len(files) == 3, files  # steps 0, 5, 10
+for f in files:
+    piece = ET.parse(os.path.join(out, f)).getroot().find(".//Piece")
+    assert piece.get("NumberOfPoints") == "1331" and piece.get("NumberOfCells") == "1200"
+print("vtu ok")
+PY
 echo "cli: all checks passed"

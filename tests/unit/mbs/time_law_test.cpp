@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "lsmbs/mbs/time_law.hpp"
 
@@ -51,4 +52,16 @@ TEST(Table1D, CubicSplineReproducesLinearDataAndIsPeriodic) {
   Table1D p({0, 1, 2}, {0, 5, 0}, Table1D::Interp::kLinear, 2.0);
   EXPECT_NEAR(p.value(2.5), p.value(0.5), 1e-14);
   EXPECT_NEAR(p.value(-1.5), p.value(0.5), 1e-14);
+}
+
+TEST(Table1D, ReadsCsvWithHeaderCommentsAndScales) {
+  const std::string p = testing::TempDir() + "law.csv";
+  {
+    std::FILE* f = std::fopen(p.c_str(), "w");
+    std::fputs("time_ms,angle_deg  # header\n0,0\n# a comment line\n10, 90\n20;180\n", f);
+    std::fclose(f);
+  }
+  const Table1D t = Table1D::read_csv(p, Table1D::Interp::kLinear, 0, 1e-3, M_PI / 180);
+  EXPECT_NEAR(t.value(0.015), 0.75 * M_PI, 1e-14);
+  EXPECT_NEAR(t.x_max(), 0.02, 1e-16);
 }
