@@ -59,4 +59,23 @@ for f in files:
     assert piece.get("NumberOfPoints") == "1331" and piece.get("NumberOfCells") == "1200"
 print("vtu ok")
 PY
+# Geometry: μ_e as VTU and PNG, summary with the mass; --set overrides a design variable.
+"$exe" geometry "$src/data/robot_arm/robot_arm_holes.json" -o "$tmp/geo" --set a1=0.03 --width 600 -q || fail "geometry"
+python3 - "$tmp/geo" <<'PY' || fail "geometry outputs"
+import sys, os, json, struct, zlib
+out = sys.argv[1]
+s = json.load(open(os.path.join(out, "summary.json")))
+b = s["bodies"][0]
+assert s["design"]["a1"] == 0.03 and 0.18 < b["mass"] < 0.2025, b["mass"]
+png = open(os.path.join(out, "plate.png"), "rb").read()
+assert png[:8] == b"\x89PNG\r\n\x1a\n"
+w, h = struct.unpack(">II", png[16:24])
+idat = b"".join(png[i + 8:i + 8 + struct.unpack(">I", png[i:i + 4])[0]] for i in [png.index(b"IDAT") - 4])
+raw = zlib.decompress(idat)
+assert w == 600 and len(raw) == h * (w + 1), (w, h, len(raw))
+print("geometry ok")
+PY
+"$exe" geometry "$case_file" -o "$tmp/nogeo" 2> "$tmp/err3.txt"; rc=$?
+[ $rc -eq 2 ] || fail "geometry without design returned $rc"
+grep -q "no design section" "$tmp/err3.txt" || fail "message: $(cat "$tmp/err3.txt")"
 echo "cli: all checks passed"

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lsmbs/geometry/design.hpp"
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/mbs/model.hpp"
 #include "lsmbs/responses/measure.hpp"
@@ -34,6 +35,8 @@ struct Case {
   std::vector<ResponseSpec> responses;
   std::map<std::string, std::shared_ptr<const TimeLaw>> drivers;  ///< by driver name
   std::map<std::string, std::vector<int>> joint_rows;              ///< constraint rows by joint name
+  std::unique_ptr<Design> design;  ///< null when the case has no "design" section; when present,
+                                   ///< the model parameters hold the initial design
 
   /// Column names of the measure history (in the order measures are evaluated).
   std::vector<std::string> measure_columns() const;

@@ -531,6 +531,154 @@ struct Loader {
     r.finish();
   }
 
+  // ---------------------------------------------------------------- design
+  ParamBinding binding(const JsonReader& r, const std::string& key, const Design& d) {
+    ParamBinding b;
+    const JsonReader v = r.child(key);
+    auto var = [&](const JsonReader& at, const std::string& name) {
+      const int k = d.variable_index(name);
+      if (k < 0) at.fail("unknown design variable '" + name + "'");
+      return k;
+    };
+    if (v.raw().is_number()) {
+      b.offset = v.as_number();
+    } else if (v.is_string()) {
+      b.variable = var(v, v.as_string());
+      b.scale = 1;
+    } else if (v.is_object()) {
+      b.variable = var(v, v.string("variable"));
+      b.scale = v.number("scale", 1.0);
+      b.offset = v.number("offset", 0.0);
+      v.finish();
+    } else {
+      v.fail("expected a number, a design variable name, or {\"variable\", \"scale\", \"offset\"}");
+    }
+    return b;
+  }
+
+  LevelSetNode region(const JsonReader& r, const std::map<std::string, int>& features) {
+    LevelSetNode n;
+    if (r.is_string()) {
+      auto it = features.find(r.as_string());
+      if (it == features.end()) r.fail("unknown feature '" + r.as_string() + "'");
+      n.op = LevelSetNode::Op::kFeature;
+      n.feature = it->second;
+      return n;
+    }
+    if (!r.is_object()) r.fail("expected a feature name or {\"and\" | \"or\": [...]} or {\"not\": ...}");
+    if (r.has("not")) {
+      n.op = LevelSetNode::Op::kNot;
+      n.children.push_back(region(r.child("not"), features));
+    } else {
+      const bool is_and = r.has("and");
+      if (!is_and && !r.has("or")) r.fail("expected \"and\", \"or\" or \"not\"");
+      n.op = is_and ? LevelSetNode::Op::kAnd : LevelSetNode::Op::kOr;
+      const auto items = r.items(is_and ? "and" : "or", true);
+      if (items.empty()) r.fail(is_and ? "and" : "or", "expected at least one operand");
+      for (const auto& c : items) n.children.push_back(region(c, features));
+      n.ks = r.non_negative("ks", 0.0);
+    }
+    r.finish();
+    return n;
+  }
+
+  void design(const JsonReader& r) {
+    auto d = std::make_unique<Design>();
+    for (const auto& v : r.items("variables", true)) {
+      DesignVariable dv;
+      dv.name = v.string("name");
+      if (d->variable_index(dv.name) >= 0) v.fail("name", "duplicate design variable '" + dv.name + "'");
+      dv.lower = v.number("lower");
+      dv.upper = v.number("upper");
+      dv.initial = v.number("initial");
+      if (!(dv.upper > dv.lower)) v.fail("upper", "expected upper > lower");
+      if (dv.initial < dv.lower || dv.initial > dv.upper)
+        v.fail("initial", "initial value " + std::to_string(dv.initial) + " is outside its bounds [" +
+                              std::to_string(dv.lower) + ", " + std::to_string(dv.upper) + "]");
+      v.finish();
+      d->variables.push_back(dv);
+    }
+    if (d->variables.empty()) r.fail("variables", "expected at least one design variable");
+    for (const auto& g : r.items("geometry")) {
+      const FlexibleBody& fb = flexible(g, "body");
+      for (const auto& other : d->bodies)
+        if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
+      std::vector<Feature> feats;
+      std::map<std::string, int> by_name;
+      for (const auto& f : g.items("features", true)) {
+        const std::string name = f.string("name");
+        if (by_name.count(name)) f.fail("name", "duplicate feature name '" + name + "'");
+        bool ok = false;
+        const std::string ts = f.one_of("type", {"ellipse", "super_ellipse", "circle"});
+        const auto type = Feature::parse_type(ts, &ok);
+        std::vector<ParamBinding> ps;
+        for (const auto& pn : Feature::parameter_names(type)) {
+          if (pn == "angle" && !f.has("angle")) ps.push_back(ParamBinding{});
+          else ps.push_back(binding(f, pn, *d));
+        }
+        const bool hole = f.boolean("hole", true);
+        f.finish();
+        Feature feat(name, type, ps, hole);
+        // each parameter is monotone in its variable: its extremes are at the bounds
+        std::vector<double> lo, hi;
+        for (const auto& b : ps) {
+          const double a = b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].lower;
+          const double c = b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].upper;
+          lo.push_back(std::min(a, c));
+          hi.push_back(std::max(a, c));
+        }
+        for (const auto* th : {&lo, &hi})
+          if (auto msg = feat.check(*th); !msg.empty())
+            f.fail("feature '" + name + "' is degenerate within the design bounds: " + msg);
+        by_name[name] = static_cast<int>(feats.size());
+        feats.push_back(std::move(feat));
+      }
+      LevelSetNode root;
+      if (g.has("region")) {
+        root = region(g.child("region"), by_name);
+      } else {  // the paper's default: material where every hole feature is positive
+        root.op = LevelSetNode::Op::kAnd;
+        for (size_t i = 0; i < feats.size(); ++i) {
+          LevelSetNode leaf;
+          leaf.feature = static_cast<int>(i);
+          root.children.push_back(leaf);
+        }
+      }
+      MappingOptions mo;
+      mo.mu_min = g.number("mu_min", mo.mu_min);
+      if (!(mo.mu_min > 0 && mo.mu_min < 1)) g.fail("mu_min", "expected a value in (0, 1)");
+      mo.subgrid = g.integer("subgrid", mo.subgrid, 1);
+      if (mo.subgrid > 64) g.fail("subgrid", "expected at most 64 sub-cells per edge");
+      mo.band = g.positive("band", mo.band);
+      g.finish();
+      BodyDesign bd;
+      bd.body = &fb;
+      bd.map = std::make_unique<DesignMap>(fb.mesh, LevelSet(std::move(feats), std::move(root), d->size()), mo);
+      d->bodies.push_back(std::move(bd));
+    }
+    for (const auto& b : r.items("parameters")) {
+      ParameterBinding pb;
+      const std::string pname = b.string("parameter");
+      pb.parameter = model().parameter_index(pname);
+      if (pb.parameter < 0) {
+        std::string avail;
+        for (const auto& n : model().parameter_names()) avail += (avail.empty() ? "" : ", ") + n;
+        b.fail("parameter", "unknown model parameter '" + pname + "' (parameters: " + avail + ")");
+      }
+      const std::string vname = b.string("variable");
+      pb.variable = d->variable_index(vname);
+      if (pb.variable < 0) b.fail("variable", "unknown design variable '" + vname + "'");
+      pb.scale = b.number("scale", 1.0);
+      pb.offset = b.number("offset", 0.0);
+      b.finish();
+      for (const auto& o : d->bindings)
+        if (o.parameter == pb.parameter) b.fail("parameter", "parameter '" + pname + "' is bound twice");
+      d->bindings.push_back(pb);
+    }
+    r.finish();
+    cs.design = std::move(d);
+  }
+
   Vec init_v;
   std::map<std::string, bool> driver_relative;
   std::map<std::string, std::pair<size_t, size_t>> joint_elements;
@@ -578,6 +726,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   for (const auto& jt : root.items("joints")) L.joint(jt, i++);
   i = 0;
   for (const auto& f : root.items("forces")) L.force(f, i++);
+  if (auto d = root.optional_child("design")) L.design(*d);
   L.simulation(root.child("simulation"));
   if (auto out = root.optional_child("output")) {
     cs.output.csv_stride = out->integer("csv_stride", 1, 1);
@@ -606,6 +755,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
       for (int r = 0; r < cs.model->constraints()[k]->size(); ++r) rows.push_back(cs.model->constraint_offset(static_cast<int>(k)) + r);
     cs.joint_rows[jn] = rows;
   }
+  if (cs.design) cs.design->apply(cs.design->initial(), cs.model->params());
   cs.initial.t = 0;
   cs.initial.q = cs.model->initial_positions();
   cs.initial.v = L.init_v;

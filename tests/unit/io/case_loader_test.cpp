@@ -1,6 +1,8 @@
 // Invalid case files fail with the file, the JSON path and what was expected.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/sha256.hpp"
 #include "support/test_models.hpp"
@@ -87,6 +89,53 @@ INSTANTIATE_TEST_SUITE_P(
         if (!isalnum(static_cast<unsigned char>(c))) c = '_';
       return s;
     });
+
+namespace {
+json with_design() {
+  json j = minimal();
+  j["bodies"].push_back(R"({"name": "p", "type": "flexible", "mesh": {"type": "rectangle", "size": [0.1, 0.02], "elements": [10, 2]},
+                             "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "thickness": 0.001})"_json);
+  j["design"] = R"({"variables": [{"name": "r", "initial": 0.005, "lower": 0.001, "upper": 0.008}],
+                    "geometry": [{"body": "p", "features": [{"name": "hole", "type": "circle", "cx": 0.05, "cy": 0.01, "r": "r"}]}]})"_json;
+  return j;
+}
+}  // namespace
+
+TEST(CaseLoader, DesignSectionSetsTheInitialMaterialField) {
+  const Case cs = test::make_case(with_design());
+  ASSERT_TRUE(cs.design);
+  const auto& fb = *cs.model->find_flexible("p");
+  const double m = fb.mass(cs.model->params());
+  const double ref = 1000 * 0.001 * (0.1 * 0.02 - M_PI * 0.005 * 0.005 * (1 - 1e-3));
+  EXPECT_NEAR(m, ref, 0.01 * ref);  // coarse 10 mm mesh: the closed form to 1 %
+}
+
+TEST(CaseLoader, BadDesignBindingsNameTheJsonPath) {
+  struct Bad {
+    const char* patch;
+    const char* expected;
+  };
+  const Bad bad[] = {
+      {R"([{"op":"replace","path":"/design/geometry/0/features/0/r","value":"rr"}])", "/design/geometry/0/features/0/r: unknown design variable 'rr'"},
+      {R"([{"op":"replace","path":"/design/variables/0/initial","value":0.01}])", "/design/variables/0/initial: initial value 0.010000 is outside its bounds"},
+      {R"([{"op":"replace","path":"/design/variables/0/lower","value":-0.001}])", "feature 'hole' is degenerate within the design bounds: radius r must be non-negative"},
+      {R"([{"op":"replace","path":"/design/geometry/0/body","value":"bob"}])", "/design/geometry/0/body: unknown flexible body 'bob'"},
+      {R"([{"op":"add","path":"/design/geometry/0/region","value":{"and":["hole","slot"]}}])", "/design/geometry/0/region/and/1: unknown feature 'slot'"},
+      {R"([{"op":"add","path":"/design/parameters","value":[{"parameter":"bob.massive","variable":"r"}]}])", "/design/parameters/0/parameter: unknown model parameter 'bob.massive'"},
+  };
+  for (const auto& b : bad) {
+    const std::string msg = error_of(with_design().patch(json::parse(b.patch)));
+    EXPECT_NE(msg.find(b.expected), std::string::npos) << b.patch << "\n  got: " << msg;
+  }
+}
+
+TEST(CaseLoader, DesignVariableBoundToAModelParameter) {
+  json j = with_design();
+  j["design"]["variables"].push_back(R"({"name": "m", "initial": 2.5, "lower": 1, "upper": 5})"_json);
+  j["design"]["parameters"] = R"([{"parameter": "bob.mass", "variable": "m", "scale": 2, "offset": 0.1}])"_json;
+  const Case cs = test::make_case(j);
+  EXPECT_DOUBLE_EQ(cs.model->params().scalars[cs.model->parameter_index("bob.mass")], 5.1);
+}
 
 TEST(Sha256, MatchesTheFipsTestVectors) {
   EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");

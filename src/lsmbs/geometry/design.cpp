@@ -1,0 +1,43 @@
+#include "lsmbs/geometry/design.hpp"
+
+namespace lsmbs {
+
+Vec Design::initial() const {
+  Vec v(size());
+  for (int i = 0; i < size(); ++i) v[i] = variables[i].initial;
+  return v;
+}
+Vec Design::lower() const {
+  Vec v(size());
+  for (int i = 0; i < size(); ++i) v[i] = variables[i].lower;
+  return v;
+}
+Vec Design::upper() const {
+  Vec v(size());
+  for (int i = 0; i < size(); ++i) v[i] = variables[i].upper;
+  return v;
+}
+
+int Design::variable_index(const std::string& name) const {
+  for (int i = 0; i < size(); ++i)
+    if (variables[i].name == name) return i;
+  return -1;
+}
+
+void Design::apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu) const {
+  if (dmu) dmu->resize(bodies.size());
+  for (size_t b = 0; b < bodies.size(); ++b)
+    bodies[b].map->map(p, params.fields[bodies[b].body->field], dmu ? &(*dmu)[b] : nullptr);
+  for (const auto& bd : bindings) params.scalars[bd.parameter] = bd.offset + bd.scale * p[bd.variable];
+}
+
+double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params, Vec& grad) {
+  const double rt = params.scalars[b.body->rho_param] * params.scalars[b.body->thickness_param];
+  const auto& A = b.map->element_areas();
+  grad.setZero(dmu.cols());
+  for (int k = 0; k < dmu.outerSize(); ++k)
+    for (SpMat::InnerIterator it(dmu, k); it; ++it) grad[it.col()] += rt * A[it.row()] * it.value();
+  return b.body->mass(params);
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,95 @@
+#include "lsmbs/geometry/design_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lsmbs {
+
+// The logistic's tail beyond this many bands is below e^-30 ≈ 1e-13: elements farther from every
+// boundary are uniform to round-off, and distances there need no refinement.
+constexpr double kTailBands = 30;
+
+DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
+    : mesh_(&mesh), ls_(std::move(level_set)), opt_(opt) {
+  const int ne = mesh.num_elements();
+  area_.resize(ne);
+  radius_.resize(ne);
+  std::vector<double> h(ne);
+  for (int e = 0; e < ne; ++e) {
+    const auto& q = mesh.quads[e];
+    const Vec2 d1 = mesh.nodes[q[2]] - mesh.nodes[q[0]], d2 = mesh.nodes[q[3]] - mesh.nodes[q[1]];
+    area_[e] = 0.5 * (d1.x() * d2.y() - d1.y() * d2.x());
+    const Vec2 c = mesh.centroid(e);
+    double r = 0;
+    for (int k : q) r = std::max(r, (mesh.nodes[k] - c).norm());
+    radius_[e] = r;
+    h[e] = std::sqrt(area_[e]);
+  }
+  std::nth_element(h.begin(), h.begin() + ne / 2, h.end());
+  eps_ = opt_.band * h[ne / 2] / opt_.subgrid;
+  ls_.set_refine_within(kTailBands * eps_);
+}
+
+void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
+  const int ne = num_elements(), nv = ls_.num_variables();
+  const auto vals = ls_.values(p);
+  mu.resize(ne);
+  std::vector<Eigen::Triplet<double>> trip;
+  std::vector<double> grad(nv), acc(nv);
+  const double cut_dist = kTailBands * eps_;
+  const int n = opt_.subgrid;
+  last_cut_ = 0;
+  for (int e = 0; e < ne; ++e) {
+    const auto& q = mesh_->quads[e];
+    // classification
+    const Vec2 c = mesh_->centroid(e);
+    double dmin = std::abs(ls_.evaluate(c, vals, nullptr));
+    const double dc = ls_.evaluate(c, vals, nullptr);
+    bool uniform = true;
+    for (int k : q) {
+      const double d = ls_.evaluate(mesh_->nodes[k], vals, nullptr);
+      if ((d > 0) != (dc > 0)) uniform = false;
+      dmin = std::min(dmin, std::abs(d));
+    }
+    if (uniform && dmin > radius_[e] + cut_dist) {
+      mu[e] = dc > 0 ? 1.0 : opt_.mu_min;
+      continue;
+    }
+    ++last_cut_;
+    // sub-grid integration over the parent square, midpoint rule per sub-cell
+    const Vec2 X0 = mesh_->nodes[q[0]], X1 = mesh_->nodes[q[1]], X2 = mesh_->nodes[q[2]], X3 = mesh_->nodes[q[3]];
+    double H = 0, W = 0;
+    std::fill(acc.begin(), acc.end(), 0.0);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double xi = -1 + (2 * i + 1.0) / n, eta = -1 + (2 * j + 1.0) / n;
+        const double N0 = 0.25 * (1 - xi) * (1 - eta), N1 = 0.25 * (1 + xi) * (1 - eta),
+                     N2 = 0.25 * (1 + xi) * (1 + eta), N3 = 0.25 * (1 - xi) * (1 + eta);
+        const Vec2 x = N0 * X0 + N1 * X1 + N2 * X2 + N3 * X3;
+        const Vec2 dxi = 0.25 * ((1 - eta) * (X1 - X0) + (1 + eta) * (X2 - X3));
+        const Vec2 deta = 0.25 * ((1 - xi) * (X3 - X0) + (1 + xi) * (X2 - X1));
+        const double w = (dxi.x() * deta.y() - dxi.y() * deta.x()) * (4.0 / (n * n));
+        const double D = ls_.evaluate(x, vals, dmu_dp ? grad.data() : nullptr);
+        const double z = D / eps_;
+        // logistic H*(D) and its derivative, written to stay finite for large |z|
+        const double ez = std::exp(-std::abs(z));
+        const double h = z >= 0 ? 1 / (1 + ez) : ez / (1 + ez);
+        const double dh = ez / ((1 + ez) * (1 + ez)) / eps_;
+        H += w * h;
+        W += w;
+        if (dmu_dp)
+          for (int k = 0; k < nv; ++k) acc[k] += w * dh * grad[k];
+      }
+    const double s = (1 - opt_.mu_min) / W;
+    mu[e] = opt_.mu_min + s * H;
+    if (dmu_dp)
+      for (int k = 0; k < nv; ++k)
+        if (acc[k] != 0) trip.emplace_back(e, k, s * acc[k]);
+  }
+  if (dmu_dp) {
+    dmu_dp->resize(ne, nv);
+    dmu_dp->setFromTriplets(trip.begin(), trip.end());
+  }
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,125 @@
+#include "lsmbs/geometry/feature.hpp"
+
+#include <cmath>
+
+namespace lsmbs {
+
+Feature::Feature(std::string name, Type type, std::vector<ParamBinding> params, bool hole)
+    : name_(std::move(name)), type_(type), params_(std::move(params)), hole_(hole) {}
+
+const std::vector<std::string>& Feature::parameter_names(Type t) {
+  static const std::vector<std::string> ellipse = {"cx", "cy", "a", "b", "d", "angle"};
+  static const std::vector<std::string> super = {"cx", "cy", "a", "b", "xi", "eta", "angle"};
+  static const std::vector<std::string> circle = {"cx", "cy", "r"};
+  return t == Type::kEllipse ? ellipse : t == Type::kSuperEllipse ? super : circle;
+}
+
+Feature::Type Feature::parse_type(const std::string& s, bool* ok) {
+  *ok = true;
+  if (s == "ellipse") return Type::kEllipse;
+  if (s == "super_ellipse") return Type::kSuperEllipse;
+  if (s == "circle") return Type::kCircle;
+  *ok = false;
+  return Type::kCircle;
+}
+
+std::vector<double> Feature::values(const Vec& p) const {
+  std::vector<double> v;
+  for (const auto& b : params_) v.push_back(b.value(p));
+  return v;
+}
+
+std::string Feature::check(const std::vector<double>& th) const {
+  for (double v : th)
+    if (!std::isfinite(v)) return "a parameter is not finite";
+  switch (type_) {
+    case Type::kEllipse:
+      if (!(th[2] > 0) || !(th[3] > 0)) return "semi-axis scales a and b must be positive";
+      if (!(th[4] >= 0)) return "size d must be non-negative";
+      break;
+    case Type::kSuperEllipse:
+      if (!(th[2] > 0) || !(th[3] > 0)) return "semi-axes a and b must be positive";
+      if (!(th[4] >= 1) || !(th[5] >= 1)) return "exponents xi and eta must be >= 1";
+      break;
+    case Type::kCircle:
+      if (!(th[2] >= 0)) return "radius r must be non-negative";
+      break;
+  }
+  return {};
+}
+
+template <class T>
+void Feature::phi_grad(const T& px, const T& py, const T* th, T& phi, T& gx, T& gy) const {
+  using std::abs;
+  const T dx = px - th[0], dy = py - th[1];
+  T u = dx, v = dy;
+  T c(1.0), s(0.0);
+  const int angle_index = type_ == Type::kEllipse ? 5 : type_ == Type::kSuperEllipse ? 6 : -1;
+  if (angle_index >= 0) {
+    c = cos(th[angle_index]);
+    s = sin(th[angle_index]);
+    u = c * dx + s * dy;
+    v = c * dy - s * dx;
+  }
+  T gu, gv;  // gradient in the local frame
+  const double tiny = 1e-300;
+  switch (type_) {
+    case Type::kEllipse: {
+      const T a = th[2], b = th[3];
+      const T r = sqrt(u * u / (a * a) + v * v / (b * b) + T(tiny));
+      phi = r - th[4];
+      gu = u / (a * a * r);
+      gv = v / (b * b * r);
+      break;
+    }
+    case Type::kSuperEllipse: {
+      const T a = th[2], b = th[3], xi = th[4], eta = th[5];
+      const T au = abs(u / a), av = abs(v / b);
+      phi = pow(au, xi) + pow(av, eta) - T(1.0);
+      const double su = value(u) < 0 ? -1.0 : 1.0, sv = value(v) < 0 ? -1.0 : 1.0;
+      gu = xi * pow(au, xi - T(1.0)) / a * T(su);
+      gv = eta * pow(av, eta - T(1.0)) / b * T(sv);
+      break;
+    }
+    case Type::kCircle: {
+      const T r = sqrt(u * u + v * v + T(tiny));
+      phi = r - th[2];
+      gu = u / r;
+      gv = v / r;
+      break;
+    }
+  }
+  gx = c * gu - s * gv;  // back to the global frame: ∇_x = R(angle) ∇_u
+  gy = s * gu + c * gv;
+}
+
+template <class T>
+T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
+  const T x0(x.x()), y0(x.y());
+  T phi, gx, gy;
+  phi_grad(x0, y0, th, phi, gx, gy);
+  T g2 = gx * gx + gy * gy + T(1e-30);
+  T D = phi / sqrt(g2);
+  if (std::abs(value(D)) < refine_within) {
+    T px = x0, py = y0;
+    for (int k = 0; k < 3; ++k) {
+      px = px - phi * gx / g2;
+      py = py - phi * gy / g2;
+      phi_grad(px, py, th, phi, gx, gy);
+      g2 = gx * gx + gy * gy + T(1e-30);
+    }
+    const T g = sqrt(g2);
+    D = ((x0 - px) * gx + (y0 - py) * gy) / g - phi / g;  // − φ/|∇φ|: residual of the projection
+  }
+  return hole_ ? D : -D;
+}
+
+template double Feature::distance<double>(const Vec2&, const double*, double) const;
+template Dual Feature::distance<Dual>(const Vec2&, const Dual*, double) const;
+
+double Feature::phi(const Vec2& x, const std::vector<double>& th) const {
+  // sign and zero set of φ equal those of the normalized distance
+  return distance<double>(x, th.data());
+}
+
+}  // namespace lsmbs

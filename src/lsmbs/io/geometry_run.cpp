@@ -1,0 +1,67 @@
+#include "lsmbs/io/geometry_run.hpp"
+
+#include <chrono>
+#include <filesystem>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/io/output.hpp"
+#include "lsmbs/io/png.hpp"
+
+namespace lsmbs {
+
+nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o) {
+  if (!cs.design) throw Error(cs.file, "/design", "the case has no design section (nothing to map)");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Design& d = *cs.design;
+  ModelParams& params = cs.model->params();
+  for (const auto& b : d.bodies)
+    for (const auto& f : b.map->level_set().features())
+      if (auto msg = f.check(f.values(p)); !msg.empty())
+        throw Error(cs.file, "/design", "feature '" + f.name() + "' is degenerate at this design: " + msg);
+  std::vector<SpMat> dmu;
+  d.apply(p, params, &dmu);
+  if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
+  nlohmann::json bodies = nlohmann::json::array();
+  for (size_t b = 0; b < d.bodies.size(); ++b) {
+    const BodyDesign& bd = d.bodies[b];
+    Vec grad;
+    const double mass = Design::mass_gradient(bd, dmu[b], params, grad);
+    const Vec& mu = params.fields[bd.body->field];
+    const auto& A = bd.map->element_areas();
+    const double mu_min = bd.map->options().mu_min;
+    double solid = 0, voids = 0;
+    for (int e = 0; e < mu.size(); ++e) {
+      solid += A[e];
+      voids += A[e] * (1 - mu[e]) / (1 - mu_min);
+    }
+    nlohmann::json g = nlohmann::json::object();
+    for (int k = 0; k < d.size(); ++k) g[d.variables[k].name] = grad[k];
+    nlohmann::json jb = {{"body", bd.body->name}, {"mass", mass}, {"mass_gradient", g}, {"domain_area", solid},
+                         {"void_area", voids}, {"cut_elements", bd.map->last_cut_count()},
+                         {"elements", mu.size()}, {"epsilon", bd.map->epsilon()},
+                         {"mu_min", mu_min}, {"subgrid", bd.map->options().subgrid}, {"band", bd.map->options().band}};
+    if (!o.out_dir.empty()) {
+      const std::string base = o.out_dir + "/" + bd.body->name;
+      write_vtu(base + ".vtu", *bd.body, cs.initial.q, params);
+      int h = 0;
+      const auto px = render_element_field(bd.body->mesh, mu, mu_min, o.image_width, h);
+      write_png_gray(base + ".png", o.image_width, h, px);
+      jb["files"] = {{"vtu", bd.body->name + ".vtu"}, {"png", bd.body->name + ".png"}};
+    }
+    bodies.push_back(jb);
+  }
+  nlohmann::json vars = nlohmann::json::object();
+  for (int k = 0; k < d.size(); ++k) vars[d.variables[k].name] = p[k];
+  nlohmann::json S = provenance(o.command_line.empty() ? "geometry" : o.command_line, cs.file, cs.sha256);
+  S["case_name"] = cs.name;
+  S["status"] = "complete";
+  S["design"] = vars;
+  S["bodies"] = bodies;
+  S["responses"] = nlohmann::json::object();
+  for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
+  S["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!o.out_dir.empty()) write_json_atomic(o.out_dir + "/summary.json", S);
+  return S;
+}
+
+}  // namespace lsmbs

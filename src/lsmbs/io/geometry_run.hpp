@@ -1,0 +1,22 @@
+#pragma once
+// run_geometry — the `lsmbs geometry` job: maps the case's level-set design at p onto the
+// fixed meshes and writes, per designed body, μ_e as VTU and a PNG picture, plus summary.json
+// with the mass, ∂m/∂p, the void area and the number of cut elements.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lsmbs/io/case.hpp"
+
+namespace lsmbs {
+
+struct GeometryRunOptions {
+  std::string out_dir;
+  int image_width = 1600;
+  std::string command_line;
+};
+
+/// Returns the summary (also written to out_dir/summary.json when out_dir is set).
+nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o);
+
+}  // namespace lsmbs
