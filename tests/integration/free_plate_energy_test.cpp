@@ -55,7 +55,7 @@ struct EnergyRecorder : StepObserver {
     worst_P = std::max(worst_P, (P - P0).norm());
     worst_L = std::max(worst_L, std::abs(Lc + c.x() * P.y() - c.y() * P.x() - L0));
   }
-  void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double) override { measure(s); }
+  void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double, const SparseLU*) override { measure(s); }
   bool on_step(const StepInfo& i) override {
     measure(*i.state);
     return true;

@@ -99,8 +99,10 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
   T phi, gx, gy;
   phi_grad(x0, y0, th, phi, gx, gy);
   T g2 = gx * gx + gy * gy + T(1e-30);
-  T D = phi / sqrt(g2);
-  if (std::abs(value(D)) < refine_within) {
+  const T D0 = phi / sqrt(g2);
+  T D = D0;
+  const double ad = std::abs(value(D0));
+  if (ad < refine_within) {
     T px = x0, py = y0;
     for (int k = 0; k < 3; ++k) {
       px = px - phi * gx / g2;
@@ -109,7 +111,18 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
       g2 = gx * gx + gy * gy + T(1e-30);
     }
     const T g = sqrt(g2);
-    D = ((x0 - px) * gx + (y0 - py) * gy) / g - phi / g;  // − φ/|∇φ|: residual of the projection
+    const T Dr = ((x0 - px) * gx + (y0 - py) * gy) / g - phi / g;  // − φ/|∇φ|: residual of the projection
+    // C¹ blend from the refined distance (|D₀| ≤ refine_within/2) to D₀ (|D₀| ≥ refine_within),
+    // so that μ(p) has no jump where a point crosses the refinement radius
+    const double r1 = 0.5 * refine_within;
+    if (ad <= r1) {
+      D = Dr;
+    } else {
+      using std::abs;
+      const T z = (T(refine_within) - abs(D0)) / T(refine_within - r1);  // 1 → 0
+      const T w = z * z * (T(3.0) - T(2.0) * z);
+      D = w * Dr + (T(1.0) - w) * D0;
+    }
   }
   return hole_ ? D : -D;
 }

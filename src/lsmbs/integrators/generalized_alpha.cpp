@@ -39,6 +39,7 @@ nlohmann::json GeneralizedAlphaOptions::to_json() const {
           {"force_floor", force_floor}, {"max_iter", max_iter}, {"min_iter", min_iter},
           {"consistent_start", consistent_start}, {"project_initial", project_initial},
           {"newton", newton == Newton::kFull ? "full" : "modified"}, {"max_halvings", max_halvings},
+          {"sensitivity_matrix", refactor_converged ? "converged" : "last_iteration"},
           {"k", k}, {"zeta", zeta}};
 }
 
@@ -108,7 +109,8 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       return finish(sum);
     }
   }
-  sum.k = opt_.k > 0 ? opt_.k : automatic_scaling(model, p, s0, c0);
+  const double stiffness_scale = automatic_scaling(model, p, s0, c0);
+  sum.k = opt_.k > 0 ? opt_.k : stiffness_scale;
   sum.zeta = opt_.zeta > 0 ? opt_.zeta : sum.k;
   const double k = sum.k, zeta = sum.zeta;
 
@@ -131,12 +133,13 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   w.R.resize(n);
   w.r_abs.resize(nq);
   w.dx.resize(n);
-  for (auto* o : observers) o->on_start(s0, w.a_cur, c0, k, zeta);
+  for (auto* o : observers) o->on_start(s0, w.a_cur, c0, k, zeta, opt_.consistent_start ? &lu : nullptr);
+  lu.reset_pivoting();  // the first Newton iteration factorizes with fresh pivoting
 
   const double tol_phi = opt_.tol_phi * model.length_scale();
   // Round-off floor of the residual: the constraint terms Φ_qᵀ(kλ + ζΦ) carry errors of order
   // (k + ζ)·ε·L (positions of size L, ε machine precision); no Newton iteration gets below it.
-  const double round_off_floor = 100 * 2.2e-16 * (k + zeta) * model.length_scale();
+  const double round_off_floor = 10 * 2.2e-16 * (k + zeta) * model.length_scale();
   sum.force_floor = std::max(opt_.force_floor, round_off_floor);
   const long n_steps = std::lround(std::ceil((opt_.t_end - s0.t) / opt_.h - 1e-9));
   long grid = 0;
@@ -230,6 +233,18 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       sum.t_reached = w.prev.t;
       if (final_state) *final_state = w.prev;
       return finish(sum);
+    }
+    if (opt_.refactor_converged && !observers.empty()) {
+      model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
+      ++sum.matrix_evaluations;
+      ++sum.factorizations;
+      if (!lu.factor(w.vals).ok()) {
+        sum.ok = false;
+        sum.message = "t = " + std::to_string(x.t) + ": singular iteration matrix at the converged state";
+        sum.t_reached = w.prev.t;
+        if (final_state) *final_state = w.prev;
+        return finish(sum);
+      }
     }
     // ---- accept: a_{n+1} += (1−α_f)/(1−α_m) q̈_{n+1}   (Algorithm 1, last line)
     w.a_cur += (1 - c.alpha_f) / (1 - c.alpha_m) * x.a;

@@ -83,8 +83,7 @@ Status consistent_accelerations(const Model& model, const ModelParams& p, double
   if (!rhs.allFinite()) return Status::Fail(Status::Code::kNonFinite, "consistent initial accelerations are not finite");
   s.a = rhs.head(nq);
   s.lambda = rhs.tail(nc);
-  lu.reset_pivoting();
-  return Status::Ok();
+  return Status::Ok();  // the factorization of the start system stays in `lu` for the caller
 }
 
 }  // namespace lsmbs

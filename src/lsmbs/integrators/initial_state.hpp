@@ -23,6 +23,7 @@ struct ProjectionReport {
 Status project_initial_state(const Model& model, const ModelParams& p, State& s, SparseLU& lu,
                              double tol, ProjectionReport* report = nullptr);
 
+/// On success `lu` holds the factorization of [M kΦ_qᵀ; kΦ_q 0] (initial sensitivities reuse it).
 Status consistent_accelerations(const Model& model, const ModelParams& p, double k, State& s,
                                 SparseLU& lu);
 

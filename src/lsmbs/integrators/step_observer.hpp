@@ -31,9 +31,10 @@ struct StepInfo {
 class StepObserver {
  public:
   virtual ~StepObserver() = default;
-  /// Called once with the consistent initial state (a = acceleration-like a_0).
+  /// Called once with the initial state (a = acceleration-like a_0). `start_factor` is the LU of
+  /// the consistent-start system [M kΦ_qᵀ; kΦ_q 0] (null for the zero start of Algorithm 1).
   virtual void on_start(const State& /*s0*/, const Vec& /*a0*/, const AlphaCoefficients&, double /*k*/,
-                        double /*zeta*/) {}
+                        double /*zeta*/, const SparseLU* /*start_factor*/) {}
   /// Return false to stop the integration (the run is then reported as aborted).
   virtual bool on_step(const StepInfo& info) = 0;
 };

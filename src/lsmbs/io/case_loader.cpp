@@ -449,10 +449,13 @@ struct Loader {
       if (cols[i] == meas) col = static_cast<int>(i);
     if (col < 0) r.fail("measure", "unknown measure column '" + meas + "'");
     s.column = col;
-    const std::string agg = r.one_of("aggregate", {"average", "average_eq45", "max", "min", "final", "integral", "rms"});
+    const std::string agg =
+        r.one_of("aggregate", {"average", "average_eq45", "max", "min", "final", "integral", "rms", "per_step", "ks"});
     using K = ResponseSpec::Kind;
     s.kind = agg == "average" ? K::kAverage : agg == "average_eq45" ? K::kAverageEq45 : agg == "max" ? K::kMax
-           : agg == "min" ? K::kMin : agg == "final" ? K::kFinal : agg == "integral" ? K::kIntegral : K::kRms;
+           : agg == "min" ? K::kMin : agg == "final" ? K::kFinal : agg == "integral" ? K::kIntegral
+           : agg == "rms" ? K::kRms : agg == "per_step" ? K::kPerStep : K::kKS;
+    if (s.kind == K::kKS) s.ks = r.positive("ks");
     if (auto w = r.optional_child("window")) {
       if (w->has("phase")) {
         const std::string d = w->string("driver");
@@ -521,6 +524,8 @@ struct Loader {
     o.project_initial = r.boolean("project_initial", o.project_initial);
     o.newton = r.one_of("newton", {"full", "modified"}, "full") == "full" ? GeneralizedAlphaOptions::Newton::kFull
                                                                           : GeneralizedAlphaOptions::Newton::kModified;
+    o.refactor_converged =
+        r.one_of("sensitivity_matrix", {"last_iteration", "converged"}, "last_iteration") == "converged";
     o.k = r.non_negative("k", 0.0);
     o.zeta = r.non_negative("zeta", 0.0);
     if (auto msg = o.validate(); !msg.empty()) {

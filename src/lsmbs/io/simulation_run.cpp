@@ -27,7 +27,7 @@ class Recorder : public StepObserver {
   Recorder(const Case& cs, SimulationResult& res, const RunOptions& ro) : cs_(cs), res_(res), ro_(ro) {
     ncols_ = res.columns.size();
   }
-  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double) override {
+  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double, const SparseLU*) override {
     for (auto& m : cs_.measures)
       if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
     record(s0, 0);

@@ -43,6 +43,10 @@ class ForceElement {
                         const Coefficients* c, LocalMat* S) const = 0;
   /// Short description for messages ("body arm2, element 17").
   virtual std::string describe() const = 0;
+  /// Whether the element reads scalar parameter j (for element-local pseudo-loads).
+  virtual bool uses_parameter(int /*j*/) const { return false; }
+  /// Whether ∂r/∂q̈ (the mass matrix) depends on q (rigid bodies with an offset centre of mass).
+  virtual bool mass_depends_on_q() const { return false; }
 };
 
 class ConstraintElement {

@@ -30,7 +30,8 @@ void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r,
   const double E = mu * p.scalars[body_->E_param], nu = p.scalars[body_->nu_param];
   QuadElement::Vec8 x = s.q.head<8>(), f;
   QuadElement::Mat8 K;
-  el.internal_force(x, E, nu, t, f, S ? &K : nullptr);
+  const bool want_K = S && c->cq != 0;
+  el.internal_force(x, E, nu, t, f, want_K ? &K : nullptr);
   const auto& M0 = el.unit_mass();
   const auto& N0 = el.shape_integrals();
   const double mt = rho * t;
@@ -44,7 +45,7 @@ void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r,
     r[2 * i + 1] += mt * ay + f[2 * i + 1] - mt * N0[i] * p.gravity.y();
   }
   if (!S) return;
-  S->topLeftCorner<8, 8>() += c->cq * K;
+  if (want_K) S->topLeftCorner<8, 8>() += c->cq * K;
   if (c->ca != 0)
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) {

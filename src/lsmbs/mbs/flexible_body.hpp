@@ -21,6 +21,7 @@ struct FlexibleBody {
   int E_param = -1, nu_param = -1, rho_param = -1, thickness_param = -1;
   QuadIntegration integration = QuadIntegration::kSelectiveShear;
   std::vector<QuadElement> elements;  ///< built from the mesh in the design frame
+  int first_force = -1;               ///< index of element 0's QuadForce in Model::forces()
 
   int node_dof(int node) const { return dof0 + 2 * node; }
   /// Node position at t = 0 (placed mesh).
@@ -38,6 +39,9 @@ class QuadForce : public ForceElement {
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override;
+  bool uses_parameter(int j) const override {
+    return j == body_->E_param || j == body_->nu_param || j == body_->rho_param || j == body_->thickness_param;
+  }
 
  private:
   const FlexibleBody* body_;

@@ -24,6 +24,8 @@ class RigidInertia : public ForceElement {
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == m_ || j == J_; }
+  bool mass_depends_on_q() const override { return c_.squaredNorm() > 0; }
 
  private:
   std::array<int, 3> dofs_;
@@ -40,6 +42,7 @@ class NodeMass : public ForceElement {
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == m_; }
 
  private:
   std::array<int, 2> dofs_;
@@ -55,6 +58,7 @@ class SpringDamper : public ForceElement {
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == k_ || j == c_ || j == l0_; }
 
  private:
   PointRef a_, b_;
@@ -73,6 +77,7 @@ class PointForce : public ForceElement {
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == scale_; }
 
  private:
   PointRef a_;
@@ -93,6 +98,7 @@ class PressureForce : public ForceElement {
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == area_; }
   /// Pressure at the given state (for outputs).
   double pressure(double t, double angle) const;
 

@@ -61,6 +61,7 @@ FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
   if (body->field < 0) body->field = add_field(Vec::Ones(body->mesh.num_elements()));
   flex_.push_back(std::move(body));
   FlexibleBody* fb = flex_.back().get();
+  fb->first_force = static_cast<int>(forces_.size());
   for (int e = 0; e < fb->mesh.num_elements(); ++e) add_force(std::make_unique<QuadForce>(fb, e));
   length_scale_ = std::max(length_scale_ == 1 ? 0.0 : length_scale_, fb->mesh.size());
   return *fb;
@@ -322,6 +323,92 @@ double Model::strain_energy(const Vec& q, const ModelParams& p) const {
     }
   }
   return W;
+}
+
+}  // namespace lsmbs
+
+namespace lsmbs {
+
+void add_direction(ModelParams& params, const ParamDirection& d, double t) {
+  for (const auto& f : d.fields) params.fields[f.field][f.element] += t * f.value;
+  for (const auto& [j, v] : d.scalars) params.scalars[j] += t * v;
+}
+
+void Model::element_residual(int e, const State& s, const ModelParams& p, LocalVec& r) const {
+  const auto d = forces_[e]->dofs();
+  LocalState ls;
+  ls.t = s.t;
+  gather(s.q, d, ls.q);
+  gather(s.v, d, ls.v);
+  gather(s.a, d, ls.a);
+  r.setZero(static_cast<Eigen::Index>(d.size()));
+  forces_[e]->evaluate(ls, p, r, nullptr, nullptr);
+}
+
+void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd, const Mat& Vd, Mat& out) const {
+  const int nc = static_cast<int>(Qdd.cols());
+  out.setZero(nq_, nc);
+  LocalState ls;
+  ls.t = s.t;
+  LocalVec r;
+  LocalMat M, C;
+  const Coefficients cm{1, 0, 0}, cc{0, 1, 0};
+  for (const auto& f : forces_) {
+    const auto d = f->dofs();
+    const auto nd = static_cast<Eigen::Index>(d.size());
+    gather(s.q, d, ls.q);
+    gather(s.v, d, ls.v);
+    gather(s.a, d, ls.a);
+    r.setZero(nd);
+    M.setZero(nd, nd);
+    f->evaluate(ls, p, r, &cm, &M);
+    r.setZero(nd);
+    C.setZero(nd, nd);
+    f->evaluate(ls, p, r, &cc, &C);
+    const bool has_c = !C.isZero(0.0);
+    for (int k = 0; k < nc; ++k)
+      for (Eigen::Index i = 0; i < nd; ++i) {
+        double v = 0;
+        for (Eigen::Index j = 0; j < nd; ++j) {
+          v += M(i, j) * Qdd(d[j], k);
+          if (has_c) v += C(i, j) * Vd(d[j], k);
+        }
+        out(d[i], k) += v;
+      }
+  }
+}
+
+void Model::residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& dir,
+                                      ModelParams& scratch, Vec& out) const {
+  out.setZero(n());
+  LocalVec r, rp, rm;
+  // material fields: r_e linear in μ_e
+  for (const auto& f : dir.fields) {
+    const FlexibleBody* body = nullptr;
+    for (const auto& b : flex_)
+      if (b->field == f.field) body = b.get();
+    if (!body) continue;
+    const int e = body->first_force + f.element;
+    element_residual(e, s, p, r);
+    const double mu = p.fields[f.field][f.element];
+    const auto d = forces_[e]->dofs();
+    for (size_t i = 0; i < d.size(); ++i) out[d[i]] += f.value * r[i] / mu;
+  }
+  // scalar parameters: central difference on the elements that read them
+  for (const auto& [j, dv] : dir.scalars) {
+    const double v0 = p.scalars[j];
+    const double h = 1e-6 * std::max(std::abs(v0), 1e-12);
+    for (size_t e = 0; e < forces_.size(); ++e) {
+      if (!forces_[e]->uses_parameter(j)) continue;
+      scratch.scalars[j] = v0 + h;
+      element_residual(static_cast<int>(e), s, scratch, rp);
+      scratch.scalars[j] = v0 - h;
+      element_residual(static_cast<int>(e), s, scratch, rm);
+      scratch.scalars[j] = v0;
+      const auto d = forces_[e]->dofs();
+      for (size_t i = 0; i < d.size(); ++i) out[d[i]] += dv * (rp[i] - rm[i]) / (2 * h);
+    }
+  }
 }
 
 }  // namespace lsmbs

@@ -22,6 +22,21 @@
 
 namespace lsmbs {
 
+/// A direction in parameter space: dμ_e of material fields and d(value) of scalar parameters
+/// (e.g. ∂(ModelParams)/∂p_i of one design variable).
+struct ParamDirection {
+  struct FieldEntry {
+    int field, element;
+    double value;
+  };
+  std::vector<FieldEntry> fields;
+  std::vector<std::pair<int, double>> scalars;
+  bool empty() const { return fields.empty() && scalars.empty(); }
+};
+
+/// params += t · direction
+void add_direction(ModelParams& params, const ParamDirection& d, double t);
+
 struct RigidBody {
   std::string name;
   int dof0 = -1;
@@ -96,6 +111,20 @@ class Model {
   /// Φ̈ = Φ_q q̈ + γ,  γ_i = q̇ᵀ ∂²Φ_i/∂q² q̇ + Φ_i,tt.
   void constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& p, Vec& phi_t,
                              Vec& gamma) const;
+  /// out = M Qdd + C Vd (nq × ncols): M = ∂r/∂q̈, C = ∂r/∂q̇ applied to blocks of vectors, one
+  /// element at a time (pseudo-loads of the direct method, eq. 28).
+  void mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd, const Mat& Vd, Mat& out) const;
+  /// ∂R/∂p along a parameter direction at fixed state (size n; the constraint rows are zero:
+  /// constraints do not depend on design parameters). Only elements the direction touches are
+  /// evaluated. Material fields enter exactly (an element's residual is linear in μ_e, eq. 3:
+  /// ∂r_e/∂μ_e = r_e/μ_e); scalar parameters by a central difference with relative step 1e-6
+  /// (exact up to round-off for the parameters that enter linearly: masses, inertias,
+  /// stiffness, damping, E, ρ, thickness, area, force scale; O(1e-12) for ν and free length).
+  /// `scratch` is a copy of p that is modified temporarily and restored.
+  void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d, ModelParams& scratch,
+                                 Vec& out) const;
+  /// Residual contribution of one force element (local vector over its dofs()).
+  void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
   /// Kinetic energy ½ q̇ᵀ M q̇ (M from the force elements).
   double kinetic_energy(const State& s, const ModelParams& p) const;
   /// Strain energy of all flexible bodies.

@@ -19,6 +19,86 @@ void PositionMeasure::evaluate(const Model&, const State& s, const ModelParams&,
   out[1] = x.y();
 }
 
+namespace {
+// ∂p/∂q of a point, row `row` (0: x, 1: y) → sparse entries scaled by w.
+void point_row(const PointRef& p, const Vec& q, const Vec2& w, std::vector<std::pair<int, double>>& out) {
+  if (p.kind == PointRef::Kind::kGround) return;
+  out.emplace_back(p.dof0, w.x());
+  out.emplace_back(p.dof0 + 1, w.y());
+  if (p.kind == PointRef::Kind::kBody) out.emplace_back(p.dof0 + 2, w.dot(rotation_derivative(q[p.dof0 + 2]) * p.local));
+}
+}  // namespace
+
+void PositionMeasure::gradient(const Model&, const State& s, const ModelParams&, int c, MeasureGradient& g) const {
+  point_row(pt_, s.q, c == 0 ? Vec2(1, 0) : Vec2(0, 1), g.dq);
+}
+
+void DistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int, MeasureGradient& g) const {
+  const Vec2 d = point_position(b_, s.q) - point_position(a_, s.q);
+  const double l = d.norm();
+  if (!(l > 0)) return;
+  const Vec2 n = d / l;
+  point_row(b_, s.q, n, g.dq);
+  point_row(a_, s.q, -n, g.dq);
+}
+
+void PathDeviationMeasure::gradient(const Model&, const State& s, const ModelParams&, int, MeasureGradient& g) const {
+  const Vec2 e = path_.at(s.t) - point_position(pt_, s.q);
+  const double f = e.norm();
+  if (!(f > 0)) return;  // not differentiable at zero deviation; take the zero subgradient
+  point_row(pt_, s.q, -e / f, g.dq);
+}
+
+void KineticEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int, MeasureGradient& g) const {
+  // ∂T/∂q̇ = M q̇; ∂T/∂q = ½ q̇ᵀ (∂M/∂q) q̇, non-zero only where M depends on q (rigid bodies
+  // with an offset centre of mass: by central differences on the element's few DOFs).
+  Mat v(m.nq(), 1), z = Mat::Zero(m.nq(), 1), Mv;
+  v.col(0) = s.v;
+  m.mass_damping_product(s, p, v, z, Mv);
+  for (int i = 0; i < m.nq(); ++i)
+    if (Mv(i, 0) != 0) g.dv.emplace_back(i, Mv(i, 0));
+  for (size_t e = 0; e < m.forces().size(); ++e) {
+    const auto& f = m.forces()[e];
+    if (!f->mass_depends_on_q()) continue;
+    const auto d = f->dofs();
+    State x = s;
+    for (size_t j = 0; j < d.size(); ++j) {
+      const double h = 1e-7;
+      auto T_local = [&](double dq) {
+        x.q[d[j]] = s.q[d[j]] + dq;
+        LocalState ls;
+        ls.t = s.t;
+        ls.q.resize(d.size()), ls.v.resize(d.size()), ls.a.setZero(d.size());
+        for (size_t k = 0; k < d.size(); ++k) ls.q[k] = x.q[d[k]], ls.v[k] = s.v[d[k]];
+        LocalVec r = LocalVec::Zero(d.size());
+        LocalMat M = LocalMat::Zero(d.size(), d.size());
+        const Coefficients cm{1, 0, 0};
+        f->evaluate(ls, p, r, &cm, &M);
+        return 0.5 * ls.v.dot(M * ls.v);
+      };
+      const double dT = (T_local(h) - T_local(-h)) / (2 * h);
+      x.q[d[j]] = s.q[d[j]];
+      if (dT != 0) g.dq.emplace_back(d[j], dT);
+    }
+  }
+}
+
+void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int, MeasureGradient& g) const {
+  // ∂W/∂q = f_int of the flexible bodies
+  for (const auto& b : m.flexible_bodies()) {
+    const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param], E0 = p.scalars[b->E_param];
+    for (int e = 0; e < b->mesh.num_elements(); ++e) {
+      QuadElement::Vec8 x, f;
+      for (int i = 0; i < 4; ++i) x.segment<2>(2 * i) = s.q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
+      b->elements[e].internal_force(x, p.fields[b->field][e] * E0, nu, t, f, nullptr);
+      for (int i = 0; i < 4; ++i) {
+        g.dq.emplace_back(b->node_dof(b->mesh.quads[e][i]), f[2 * i]);
+        g.dq.emplace_back(b->node_dof(b->mesh.quads[e][i]) + 1, f[2 * i + 1]);
+      }
+    }
+  }
+}
+
 void DistanceMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
   *out = (point_position(b_, s.q) - point_position(a_, s.q)).norm() - ref_;
 }
@@ -56,11 +136,26 @@ const char* ResponseSpec::kind_name(Kind k) {
     case Kind::kFinal: return "final";
     case Kind::kIntegral: return "integral";
     case Kind::kRms: return "rms";
+    case Kind::kPerStep: return "per_step";
+    case Kind::kKS: return "ks";
   }
   return "?";
 }
 
 double aggregate(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v, int* count) {
+  if (r.kind == ResponseSpec::Kind::kPerStep || r.kind == ResponseSpec::Kind::kKS) {
+    // value only: reuse the gradient version with an empty gradient
+    std::vector<double> vals;
+    Mat g;
+    aggregate_with_gradient(r, t, v, Mat::Zero(static_cast<Eigen::Index>(v.size()), 0), vals, g);
+    if (count) {
+      ResponseSpec c = r;
+      c.kind = ResponseSpec::Kind::kMax;
+      aggregate(c, t, v, count);
+    }
+    if (vals.empty()) return NAN;
+    return r.kind == ResponseSpec::Kind::kKS ? vals[0] : *std::max_element(vals.begin(), vals.end());
+  }
   const double eps = 1e-9 * (t.size() > 1 ? std::abs(t[1] - t[0]) : 1.0);
   double acc = 0, best_max = -std::numeric_limits<double>::infinity(),
          best_min = std::numeric_limits<double>::infinity(), last = NAN;
@@ -94,8 +189,85 @@ double aggregate(const ResponseSpec& r, const std::vector<double>& t, const std:
     case ResponseSpec::Kind::kMax: return best_max;
     case ResponseSpec::Kind::kMin: return best_min;
     case ResponseSpec::Kind::kFinal: return last;
+    default: break;
   }
   return NAN;
+}
+
+void aggregate_with_gradient(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
+                             const Mat& G, std::vector<double>& values, Mat& grads, std::vector<double>* times) {
+  using K = ResponseSpec::Kind;
+  const double eps = 1e-9 * (t.size() > 1 ? std::abs(t[1] - t[0]) : 1.0);
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < t.size(); ++i)
+    if (t[i] >= r.t0 - eps && t[i] <= r.t1 + eps) idx.push_back(i);
+  const Eigen::Index nv = G.cols();
+  values.clear();
+  if (times) times->clear();
+  if (idx.empty()) {
+    grads.setZero(0, nv);
+    return;
+  }
+  const size_t n = idx.size();
+  if (r.kind == K::kPerStep) {
+    grads.resize(static_cast<Eigen::Index>(n), nv);
+    for (size_t k = 0; k < n; ++k) {
+      values.push_back(v[idx[k]]);
+      if (times) times->push_back(t[idx[k]]);
+      grads.row(static_cast<Eigen::Index>(k)) = G.row(static_cast<Eigen::Index>(idx[k]));
+    }
+    return;
+  }
+  grads.setZero(1, nv);
+  double val = 0;
+  switch (r.kind) {
+    case K::kAverage:
+    case K::kAverageEq45: {
+      const double div = r.kind == K::kAverage ? n : (n > 1 ? n - 1.0 : NAN);
+      for (size_t i : idx) val += v[i], grads.row(0) += G.row(static_cast<Eigen::Index>(i));
+      val /= div;
+      grads /= div;
+      break;
+    }
+    case K::kRms: {
+      for (size_t i : idx) val += v[i] * v[i];
+      val = std::sqrt(val / n);
+      if (val > 0)
+        for (size_t i : idx) grads.row(0) += v[i] / (n * val) * G.row(static_cast<Eigen::Index>(i));
+      break;
+    }
+    case K::kIntegral:
+      for (size_t k = 1; k < n; ++k) {
+        const double w = 0.5 * (t[idx[k]] - t[idx[k - 1]]);
+        val += w * (v[idx[k]] + v[idx[k - 1]]);
+        grads.row(0) += w * (G.row(static_cast<Eigen::Index>(idx[k])) + G.row(static_cast<Eigen::Index>(idx[k - 1])));
+      }
+      break;
+    case K::kMax:
+    case K::kMin: {
+      size_t best = idx[0];
+      for (size_t i : idx)
+        if (r.kind == K::kMax ? v[i] > v[best] : v[i] < v[best]) best = i;
+      val = v[best];
+      grads.row(0) = G.row(static_cast<Eigen::Index>(best));
+      break;
+    }
+    case K::kFinal:
+      val = v[idx.back()];
+      grads.row(0) = G.row(static_cast<Eigen::Index>(idx.back()));
+      break;
+    case K::kKS: {
+      double m = v[idx[0]];
+      for (size_t i : idx) m = std::max(m, v[i]);
+      double sum = 0;
+      for (size_t i : idx) sum += std::exp(r.ks * (v[i] - m));
+      val = m + std::log(sum) / r.ks;
+      for (size_t i : idx) grads.row(0) += std::exp(r.ks * (v[i] - m)) / sum * G.row(static_cast<Eigen::Index>(i));
+      break;
+    }
+    default: break;
+  }
+  values.push_back(val);
 }
 
 }  // namespace lsmbs

@@ -12,6 +12,12 @@
 
 namespace lsmbs {
 
+/// Sparse partial derivatives of one measure component: ∂f/∂q, ∂f/∂q̇, ∂f/∂q̈, ∂f/∂λ.
+struct MeasureGradient {
+  std::vector<std::pair<int, double>> dq, dv, da, dl;
+  void clear() { dq.clear(), dv.clear(), da.clear(), dl.clear(); }
+};
+
 class Measure {
  public:
   virtual ~Measure() = default;
@@ -20,6 +26,10 @@ class Measure {
   /// Column names of the components (e.g. "tip.x", "tip.y"); a scalar measure has one.
   virtual std::vector<std::string> components() const { return {name_}; }
   virtual void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const = 0;
+  /// Partial derivatives of component c with respect to the state (eq. 24).
+  virtual void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const = 0;
+  /// Whether the measure depends on model parameters explicitly (∂f/∂p of eq. 24).
+  virtual bool depends_on_params() const { return false; }
 
  private:
   std::string name_;
@@ -31,6 +41,7 @@ class PositionMeasure : public Measure {
   PositionMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
   std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
 
  private:
   PointRef pt_;
@@ -41,6 +52,9 @@ class AngleMeasure : public Measure {
  public:
   AngleMeasure(std::string name, int theta_dof) : Measure(std::move(name)), dof_(theta_dof) {}
   void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override { *out = s.q[dof_]; }
+  void gradient(const Model&, const State&, const ModelParams&, int, MeasureGradient& g) const override {
+    g.dq.emplace_back(dof_, 1.0);
+  }
 
  private:
   int dof_;
@@ -53,6 +67,7 @@ class DistanceMeasure : public Measure {
   DistanceMeasure(std::string name, PointRef a, PointRef b, double reference)
       : Measure(std::move(name)), a_(a), b_(b), ref_(reference) {}
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
 
  private:
   PointRef a_, b_;
@@ -79,6 +94,7 @@ class PathDeviationMeasure : public Measure {
   PathDeviationMeasure(std::string name, PointRef pt, ChainPath path)
       : Measure(std::move(name)), pt_(pt), path_(std::move(path)) {}
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
 
  private:
   PointRef pt_;
@@ -92,6 +108,9 @@ class ConstraintForceMeasure : public Measure {
       : Measure(std::move(name)), rows_(std::move(rows)) { (void)k_unused; }
   std::vector<std::string> components() const override;
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model&, const State&, const ModelParams&, int c, MeasureGradient& g) const override {
+    g.dl.emplace_back(rows_[c], k_);
+  }
   /// The scaling k of the run (set by the integrator's observer before evaluation).
   void set_scaling(double k) { k_ = k; }
 
@@ -106,6 +125,8 @@ class KineticEnergyMeasure : public Measure {
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
     *out = m.kinetic_energy(s, p);
   }
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  bool depends_on_params() const override { return true; }
 };
 
 class StrainEnergyMeasure : public Measure {
@@ -114,6 +135,8 @@ class StrainEnergyMeasure : public Measure {
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
     *out = m.strain_energy(s.q, p);
   }
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  bool depends_on_params() const override { return true; }
 };
 
 class FlexibleMassMeasure : public Measure {
@@ -122,6 +145,8 @@ class FlexibleMassMeasure : public Measure {
   void evaluate(const Model&, const State&, const ModelParams& p, double* out) const override {
     *out = body_->mass(p);
   }
+  void gradient(const Model&, const State&, const ModelParams&, int, MeasureGradient&) const override {}
+  bool depends_on_params() const override { return true; }
 
  private:
   const FlexibleBody* body_;
@@ -131,17 +156,27 @@ class FlexibleMassMeasure : public Measure {
 /// average; eq. 42's local formulation is the per-step maximum).
 struct ResponseSpec {
   /// kAverageEq45 divides the sum by (count − 1), as eq. (45) is printed (n_cvf − n_cvi).
-  enum class Kind { kAverage, kAverageEq45, kMax, kMin, kFinal, kIntegral, kRms };
+  /// kPerStep: one response per grid step of the window (the local formulation, eq. 42);
+  /// kKS: Kreisselmeier–Steinhauser upper bound of the maximum with parameter ks in 1/[f]:
+  /// KS = (1/ks) ln Σ exp(ks f_n), evaluated as m + (1/ks) ln Σ exp(ks (f_n − m)), m = max f_n.
+  enum class Kind { kAverage, kAverageEq45, kMax, kMin, kFinal, kIntegral, kRms, kPerStep, kKS };
   std::string name;
   int column = 0;  ///< column in the history (0 = first measure component)
   Kind kind = Kind::kAverage;
   double t0 = -1e300, t1 = 1e300;
+  double ks = 0;            ///< KS parameter [1/unit of the measure]
   std::string window_text;  ///< how the window was given, for the summary
   static const char* kind_name(Kind k);
 };
 
-/// Evaluates a response over (t, values) pairs of the grid.
+/// Evaluates a scalar response over (t, values) pairs of the grid (not kPerStep).
 double aggregate(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
                  int* count = nullptr);
+
+/// Values and gradients of a response from per-step values v_n and total derivatives G (row n:
+/// df_n/dp). A kPerStep response has one value per step in the window; the others one value.
+/// The max/min use the derivative at the extreme step (not differentiable where it switches).
+void aggregate_with_gradient(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
+                             const Mat& G, std::vector<double>& values, Mat& grads, std::vector<double>* times = nullptr);
 
 }  // namespace lsmbs

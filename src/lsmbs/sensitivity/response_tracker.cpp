@@ -1,0 +1,89 @@
+#include "lsmbs/sensitivity/response_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lsmbs {
+
+ResponseTracker::ResponseTracker(const Case& cs, std::vector<ParamDirection> directions)
+    : cs_(cs), dirs_(std::move(directions)), scratch_(cs.model->params()) {
+  // flattened measure columns → (measure, component)
+  std::vector<std::pair<const Measure*, int>> flat;
+  for (const auto& m : cs.measures)
+    for (int c = 0; c < static_cast<int>(m->components().size()); ++c) flat.emplace_back(m.get(), c);
+  for (const auto& r : cs.responses) {
+    int found = -1;
+    for (size_t k = 0; k < cols_.size(); ++k)
+      if (cols_[k].measure == flat[r.column].first && cols_[k].component == flat[r.column].second) found = static_cast<int>(k);
+    if (found < 0) {
+      cols_.push_back({flat[r.column].first, flat[r.column].second, {}, {}});
+      found = static_cast<int>(cols_.size()) - 1;
+    }
+    response_column_.push_back(found);
+  }
+}
+
+void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
+                             const Mat* dl) {
+  times_.push_back(s.t);
+  const int nv = static_cast<int>(dirs_.size());
+  MeasureGradient g;
+  for (auto& c : cols_) {
+    buf_.resize(c.measure->components().size());
+    c.measure->evaluate(*cs_.model, s, p, buf_.data());
+    c.values.push_back(buf_[c.component]);
+    if (!dq) continue;
+    Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(nv);
+    g.clear();
+    c.measure->gradient(*cs_.model, s, p, c.component, g);
+    for (const auto& [j, w] : g.dq) row += w * dq->row(j);
+    for (const auto& [j, w] : g.dv) row += w * dv->row(j);
+    for (const auto& [j, w] : g.da) row += w * da->row(j);
+    for (const auto& [j, w] : g.dl) row += w * dl->row(j);
+    if (c.measure->depends_on_params()) {
+      // explicit ∂f/∂p_i by a central difference along the parameter direction; the measures
+      // that depend on parameters (mass, energies) are linear in μ and in most parameters
+      for (int i = 0; i < nv; ++i) {
+        const auto& d = dirs_[i];
+        if (d.empty()) continue;
+        // step: 1e-3 of μ (the measures are linear in μ, so any step is exact and a large one
+        // avoids round-off) and 1e-6 relative for scalar parameters
+        double t = 1e300;
+        for (const auto& f : d.fields)
+          if (f.value != 0) t = std::min(t, 1e-3 / std::abs(f.value));
+        for (const auto& [j, v] : d.scalars)
+          if (v != 0) t = std::min(t, 1e-6 * std::max(std::abs(p.scalars[j]), 1e-300) / std::abs(v));
+        if (!(t < 1e300)) continue;
+        add_direction(scratch_, d, t);
+        c.measure->evaluate(*cs_.model, s, scratch_, buf_.data());
+        const double fp = buf_[c.component];
+        add_direction(scratch_, d, -2 * t);
+        c.measure->evaluate(*cs_.model, s, scratch_, buf_.data());
+        const double fm = buf_[c.component];
+        add_direction(scratch_, d, t);
+        row[i] += (fp - fm) / (2 * t);
+      }
+      scratch_ = p;  // remove round-off of the ± moves
+    }
+    c.grads.push_back(row);
+  }
+}
+
+std::vector<ResponseSensitivity> ResponseTracker::results() const {
+  std::vector<ResponseSensitivity> out;
+  const int nv = static_cast<int>(dirs_.size());
+  for (size_t r = 0; r < cs_.responses.size(); ++r) {
+    const auto& c = cols_[response_column_[r]];
+    Mat G(static_cast<Eigen::Index>(c.values.size()), nv);
+    for (size_t n = 0; n < c.grads.size(); ++n) G.row(static_cast<Eigen::Index>(n)) = c.grads[n];
+    if (c.grads.empty()) G.setZero(static_cast<Eigen::Index>(c.values.size()), nv);
+    ResponseSensitivity rs;
+    rs.name = cs_.responses[r].name;
+    aggregate_with_gradient(cs_.responses[r], times_, c.values, G, rs.values, rs.gradient,
+                            cs_.responses[r].kind == ResponseSpec::Kind::kPerStep ? &rs.times : nullptr);
+    out.push_back(std::move(rs));
+  }
+  return out;
+}
+
+}  // namespace lsmbs

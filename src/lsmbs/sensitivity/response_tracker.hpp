@@ -1,0 +1,37 @@
+#pragma once
+// ResponseTracker — evaluates the case's response measures at every grid step and, when
+// state derivatives are available, their total derivatives (eq. 24):
+//   df_n/dp_i = ∂f/∂q q_,i + ∂f/∂q̇ q̇_,i + ∂f/∂q̈ q̈_,i + ∂f/∂λ λ_,i + ∂f/∂p_i,
+// then aggregates them into the responses' values and gradients.
+#include <vector>
+
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/sensitivity/sensitivity.hpp"
+
+namespace lsmbs {
+
+class ResponseTracker {
+ public:
+  /// directions[i] = ∂(ModelParams)/∂p_i (for the explicit ∂f/∂p); empty for values only.
+  ResponseTracker(const Case& cs, std::vector<ParamDirection> directions);
+  /// Records the columns used by responses at a grid step; derivatives may be null.
+  void record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl);
+  std::vector<ResponseSensitivity> results() const;
+
+ private:
+  const Case& cs_;
+  std::vector<ParamDirection> dirs_;
+  struct Column {
+    const Measure* measure;
+    int component;
+    std::vector<double> values;
+    std::vector<Eigen::RowVectorXd> grads;
+  };
+  std::vector<Column> cols_;
+  std::vector<int> response_column_;
+  std::vector<double> times_;
+  ModelParams scratch_;
+  mutable std::vector<double> buf_;
+};
+
+}  // namespace lsmbs

@@ -1,0 +1,192 @@
+#include "lsmbs/sensitivity/sensitivity.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/sensitivity/direct_observer.hpp"
+#include "lsmbs/sensitivity/response_tracker.hpp"
+
+namespace lsmbs {
+
+namespace {
+using Method = SensitivityOptions::Method;
+const std::pair<const char*, Method> kNames[] = {{"semi-analytical", Method::kSemiAnalytical},
+                                                 {"semi-analytical-central", Method::kSemiAnalyticalCentral},
+                                                 {"direct-analytic", Method::kDirectAnalytic},
+                                                 {"fd-forward", Method::kFdForward},
+                                                 {"fd-central", Method::kFdCentral}};
+}  // namespace
+
+bool SensitivityOptions::parse(const std::string& s, Method& m) {
+  for (const auto& [n, v] : kNames)
+    if (s == n) {
+      m = v;
+      return true;
+    }
+  return false;
+}
+const char* SensitivityOptions::name(Method m) {
+  for (const auto& [n, v] : kNames)
+    if (v == m) return n;
+  return "?";
+}
+std::vector<std::string> SensitivityOptions::names() {
+  std::vector<std::string> r;
+  for (const auto& [n, v] : kNames) r.push_back(n);
+  return r;
+}
+
+double SensitivityOptions::step(const Design& d, const Vec& p, int i) const {
+  if (!relative) return delta;
+  return delta * std::max(std::abs(p[i]), 1e-2 * (d.variables[i].upper - d.variables[i].lower));
+}
+
+nlohmann::json SensitivityOptions::to_json() const {
+  return {{"method", name(method)}, {"delta", delta}, {"delta_mode", relative ? "relative" : "absolute"}};
+}
+
+nlohmann::json SensitivityCounts::to_json() const {
+  return {{"simulations", simulations},
+          {"steps", steps},
+          {"newton_iterations", newton_iterations},
+          {"factorizations", factorizations},
+          {"residual_evaluations", residual_evaluations},
+          {"pseudo_load_residuals", pseudo_load_residuals},
+          {"element_pseudo_loads", element_pseudo_loads},
+          {"mass_damping_products", mass_damping_products},
+          {"back_solves", back_solves},
+          {"back_solve_rhs", back_solve_rhs},
+          {"wall_seconds", wall_seconds},
+          {"primal_wall_seconds", primal_wall_seconds}};
+}
+
+namespace {
+
+void add_primal(SensitivityCounts& c, const IntegratorSummary& s) {
+  ++c.simulations;
+  c.steps += s.steps;
+  c.newton_iterations += s.newton_iterations;
+  c.factorizations += s.factorizations;
+  c.residual_evaluations += s.residual_evaluations;
+}
+
+// ∂(ModelParams)/∂p_i for every design variable.
+std::vector<ParamDirection> directions(const Design& d, const Vec& p, const ModelParams& params) {
+  ModelParams tmp = params;
+  std::vector<SpMat> dmu;
+  d.apply(p, tmp, &dmu);
+  std::vector<ParamDirection> dirs(d.size());
+  for (size_t b = 0; b < d.bodies.size(); ++b) {
+    const SpMat& J = dmu[b];
+    for (int k = 0; k < J.outerSize(); ++k)
+      for (SpMat::InnerIterator it(J, k); it; ++it)
+        dirs[it.col()].fields.push_back({d.bodies[b].body->field, static_cast<int>(it.row()), it.value()});
+  }
+  for (const auto& bd : d.bindings) dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
+  return dirs;
+}
+
+std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal) {
+  ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()));
+  struct Obs : StepObserver {
+    ResponseTracker& tr;
+    const ModelParams& p;
+    Obs(ResponseTracker& t, const ModelParams& pp) : tr(t), p(pp) {}
+    void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double, const SparseLU*) override {
+      tr.record(s, p, nullptr, nullptr, nullptr, nullptr);
+    }
+    bool on_step(const StepInfo& i) override {
+      if (i.grid_point) tr.record(*i.state, p, nullptr, nullptr, nullptr, nullptr);
+      return true;
+    }
+  } obs(tr, cs.model->params());
+  const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs});
+  add_primal(counts, s);
+  if (primal) *primal = s;
+  if (!s.ok) throw NumericalFailure("simulation failed during finite differences: " + s.message);
+  return tr.results();
+}
+
+}  // namespace
+
+SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const SensitivityOptions& o) {
+  if (!cs.design) throw Error(cs.file, "/design", "sensitivities need a design section (design variables)");
+  if (cs.responses.empty()) throw Error(cs.file, "/output/responses", "sensitivities need at least one response");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Design& d = *cs.design;
+  const int nv = d.size();
+  SensitivityResult res;
+  ModelParams& params = cs.model->params();
+  d.apply(p, params);
+
+  if (o.method == Method::kFdForward || o.method == Method::kFdCentral) {
+    try {
+      const auto base = run_values(cs, res.counts, &res.primal);
+      res.counts.primal_wall_seconds = res.primal.wall_seconds;
+      res.responses = base;
+      for (auto& r : res.responses) r.gradient.setZero(static_cast<Eigen::Index>(r.values.size()), nv);
+      for (int i = 0; i < nv; ++i) {
+        const double h = o.step(d, p, i);
+        Vec pp = p;
+        pp[i] += h;
+        d.apply(pp, params);
+        const auto plus = run_values(cs, res.counts, nullptr);
+        std::vector<ResponseSensitivity> minus;
+        if (o.method == Method::kFdCentral) {
+          Vec pm = p;
+          pm[i] -= h;
+          d.apply(pm, params);
+          minus = run_values(cs, res.counts, nullptr);
+        }
+        for (size_t r = 0; r < res.responses.size(); ++r) {
+          if (plus[r].values.size() != base[r].values.size())
+            throw NumericalFailure("response '" + base[r].name + "' changed its number of steps under perturbation");
+          for (size_t k = 0; k < base[r].values.size(); ++k)
+            res.responses[r].gradient(static_cast<Eigen::Index>(k), i) =
+                o.method == Method::kFdCentral ? (plus[r].values[k] - minus[r].values[k]) / (2 * h)
+                                               : (plus[r].values[k] - base[r].values[k]) / h;
+        }
+      }
+    } catch (const NumericalFailure& e) {
+      res.ok = false;
+      res.message = e.what();
+    }
+    d.apply(p, params);
+  } else {
+    auto dirs = directions(d, p, params);
+    ResponseTracker tracker(cs, dirs);
+    std::unique_ptr<PseudoLoad> load;
+    if (o.method == Method::kDirectAnalytic) {
+      load = std::make_unique<AnalyticPseudoLoad>(*cs.model, params, dirs);
+    } else {
+      // perturbed parameter sets μ(p ± Δp_i): computed once per design, never per step
+      const bool central = o.method == Method::kSemiAnalyticalCentral;
+      std::vector<ModelParams> plus(nv, params), minus(central ? nv : 0, params);
+      std::vector<double> delta(nv);
+      for (int i = 0; i < nv; ++i) {
+        delta[i] = o.step(d, p, i);
+        Vec pp = p;
+        pp[i] += delta[i];
+        d.apply(pp, plus[i]);
+        if (central) {
+          Vec pm = p;
+          pm[i] -= delta[i];
+          d.apply(pm, minus[i]);
+        }
+      }
+      load = std::make_unique<SemiAnalyticalPseudoLoad>(*cs.model, params, std::move(plus), std::move(minus),
+                                                        std::move(delta), central);
+    }
+    DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts);
+    res.primal = GeneralizedAlpha(cs.simulation).run(*cs.model, params, cs.initial, {&obs});
+    add_primal(res.counts, res.primal);
+    res.ok = res.primal.ok;
+    res.message = res.primal.message;
+    res.responses = tracker.results();
+  }
+  res.counts.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace lsmbs
