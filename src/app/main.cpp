@@ -98,7 +98,8 @@ int geometry(const std::string& case_file, const std::string& out, const std::ve
 }
 
 int sensitivity(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets,
-                const std::string& method, double delta, bool absolute, bool quiet, const std::string& cmdline) {
+                const std::string& method, double delta, bool absolute, const std::string& matrix, bool quiet,
+                const std::string& cmdline) {
   lsmbs::SensitivityOptions so;
   if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
     std::string all;
@@ -106,6 +107,8 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     throw lsmbs::Error("--method " + method + ": expected one of " + all);
   }
   if (!(delta > 0)) throw lsmbs::Error("--delta: expected a positive step");
+  if (!lsmbs::SensitivityOptions::parse_matrix(matrix, so.matrix))
+    throw lsmbs::Error("--matrix " + matrix + ": expected last, converged or refined");
   so.delta = delta;
   so.relative = !absolute;
   lsmbs::Case cs = lsmbs::load_case(case_file);
@@ -230,6 +233,10 @@ int main(int argc, char** argv) {
                   "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | fd-central")->capture_default_str();
   sen->add_option("--delta", delta, "perturbation Δp (semi-analytical) or finite-difference step")->capture_default_str();
   sen->add_flag("--absolute", absolute, "Δp absolute instead of relative to max(|p_i|, 1e-2 (upper - lower))");
+  std::string matrix = "last";
+  sen->add_option("--matrix", matrix,
+                  "matrix of the back-solves: last (last Newton iteration, the paper's), converged (refactorized), "
+                  "refined (last LU + iterative refinement)")->capture_default_str();
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
   sen->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
@@ -246,7 +253,7 @@ int main(int argc, char** argv) {
   try {
     if (*sim) return simulate(case_file, out, quiet, verbose, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
-    if (*sen) return sensitivity(case_file, out, sets, method, delta, absolute, quiet, joined_args(argc, argv));
+    if (*sen) return sensitivity(case_file, out, sets, method, delta, absolute, matrix, quiet, joined_args(argc, argv));
     std::cout << app.help();
     return 2;
   } catch (const lsmbs::Error& e) {

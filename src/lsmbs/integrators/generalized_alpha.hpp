@@ -34,7 +34,8 @@ struct GeneralizedAlphaOptions {
   int max_halvings = 6;   ///< step-halving retries of one step (h / 2^k)
   /// Factorization handed to step observers (Algorithm 2): the one of the step's last Newton
   /// iteration (the paper's choice, no extra cost), or S_t re-assembled and factorized at the
-  /// converged state (exact Jacobian; one more factorization per step).
+  /// converged state (exact Jacobian; one more factorization per step). Set by the
+  /// sensitivity methods (SensitivityOptions::matrix), not by case files.
   bool refactor_converged = false;
   double k = 0;           ///< constraint scaling of eq. (7); 0: automatic
   double zeta = 0;        ///< augmented-Lagrangian penalty of eq. (7); 0: automatic (= k)

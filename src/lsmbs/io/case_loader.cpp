@@ -524,8 +524,6 @@ struct Loader {
     o.project_initial = r.boolean("project_initial", o.project_initial);
     o.newton = r.one_of("newton", {"full", "modified"}, "full") == "full" ? GeneralizedAlphaOptions::Newton::kFull
                                                                           : GeneralizedAlphaOptions::Newton::kModified;
-    o.refactor_converged =
-        r.one_of("sensitivity_matrix", {"last_iteration", "converged"}, "last_iteration") == "converged";
     o.k = r.non_negative("k", 0.0);
     o.zeta = r.non_negative("zeta", 0.0);
     if (auto msg = o.validate(); !msg.empty()) {

@@ -65,6 +65,17 @@ void BlockAssembler::add_diagonal(std::span<double> values, int i, double v) con
   values[diag_slot_[i]] += v;
 }
 
+void BlockAssembler::multiply(std::span<const double> values, const Mat& X, Mat& Y) const {
+  const auto& p = r_.pattern;
+  Y.setZero(p.n, X.cols());
+  for (Eigen::Index k = 0; k < X.cols(); ++k)
+    for (int c = 0; c < p.n; ++c) {
+      const double xc = X(c, k);
+      if (xc == 0) continue;
+      for (int i = p.col_ptr[c]; i < p.col_ptr[c + 1]; ++i) Y(p.row_ind[i], k) += values[i] * xc;
+    }
+}
+
 SpMat BlockAssembler::to_sparse(std::span<const double> values) const {
   const auto& p = r_.pattern;
   SpMat m(p.n, p.n);

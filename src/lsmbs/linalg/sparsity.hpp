@@ -65,6 +65,8 @@ class BlockAssembler {
   }
   /// Adds to the diagonal entry of row i (must be in the pattern).
   void add_diagonal(std::span<double> values, int i, double v) const;
+  /// Y = A X for a block of columns, A given by values on the pattern.
+  void multiply(std::span<const double> values, const Mat& X, Mat& Y) const;
   /// Converts values to an Eigen sparse matrix (tests, small models, output).
   SpMat to_sparse(std::span<const double> values) const;
 

@@ -65,8 +65,10 @@ class SemiAnalyticalPseudoLoad : public PseudoLoad {
 
 class DirectSensitivityObserver : public StepObserver {
  public:
+  /// refinement_steps > 0: iterative refinement of the back-solves against S_t assembled at
+  /// the converged state (the factorization stays the last Newton iteration's).
   DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv, PseudoLoad& load, ResponseTracker& tracker,
-                            SensitivityCounts& counts);
+                            SensitivityCounts& counts, int refinement_steps = 0);
   void on_start(const State& s0, const Vec& a0, const AlphaCoefficients& c, double k, double zeta,
                 const SparseLU* start_factor) override;
   bool on_step(const StepInfo& info) override;
@@ -78,8 +80,11 @@ class DirectSensitivityObserver : public StepObserver {
   PseudoLoad& load_;
   ResponseTracker& tracker_;
   SensitivityCounts& counts_;
+  int refine_;
   Mat dq_, dv_, dqdd_, da_, dl_;  // at t_n
   Mat dvs_, dqdds_, das_, B_;     // workspace
+  Mat rhs_, SX_;
+  std::vector<double> svals_;
 };
 
 }  // namespace lsmbs

@@ -23,6 +23,11 @@ ResponseTracker::ResponseTracker(const Case& cs, std::vector<ParamDirection> dir
   }
 }
 
+void ResponseTracker::set_scaling(double k) {
+  for (const auto& m : cs_.measures)
+    if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
+}
+
 void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
                              const Mat* dl) {
   times_.push_back(s.t);

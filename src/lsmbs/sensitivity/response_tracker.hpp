@@ -17,6 +17,8 @@ class ResponseTracker {
   /// Records the columns used by responses at a grid step; derivatives may be null.
   void record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl);
   std::vector<ResponseSensitivity> results() const;
+  /// The run's constraint scaling k (constraint forces are kλ).
+  void set_scaling(double k);
 
  private:
   const Case& cs_;

@@ -37,13 +37,25 @@ std::vector<std::string> SensitivityOptions::names() {
   return r;
 }
 
+bool SensitivityOptions::parse_matrix(const std::string& s, Matrix& m) {
+  if (s == "last") m = Matrix::kLastIteration;
+  else if (s == "converged") m = Matrix::kConverged;
+  else if (s == "refined") m = Matrix::kRefined;
+  else return false;
+  return true;
+}
+const char* SensitivityOptions::matrix_name(Matrix m) {
+  return m == Matrix::kLastIteration ? "last" : m == Matrix::kConverged ? "converged" : "refined";
+}
+
 double SensitivityOptions::step(const Design& d, const Vec& p, int i) const {
   if (!relative) return delta;
   return delta * std::max(std::abs(p[i]), 1e-2 * (d.variables[i].upper - d.variables[i].lower));
 }
 
 nlohmann::json SensitivityOptions::to_json() const {
-  return {{"method", name(method)}, {"delta", delta}, {"delta_mode", relative ? "relative" : "absolute"}};
+  return {{"method", name(method)}, {"delta", delta}, {"delta_mode", relative ? "relative" : "absolute"},
+          {"matrix", matrix_name(matrix)}, {"refinement_steps", refinement_steps}};
 }
 
 nlohmann::json SensitivityCounts::to_json() const {
@@ -57,6 +69,7 @@ nlohmann::json SensitivityCounts::to_json() const {
           {"mass_damping_products", mass_damping_products},
           {"back_solves", back_solves},
           {"back_solve_rhs", back_solve_rhs},
+          {"sensitivity_matrix_assemblies", sensitivity_matrix_assemblies},
           {"wall_seconds", wall_seconds},
           {"primal_wall_seconds", primal_wall_seconds}};
 }
@@ -93,7 +106,8 @@ std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts,
     ResponseTracker& tr;
     const ModelParams& p;
     Obs(ResponseTracker& t, const ModelParams& pp) : tr(t), p(pp) {}
-    void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double, const SparseLU*) override {
+    void on_start(const State& s, const Vec&, const AlphaCoefficients&, double k, double, const SparseLU*) override {
+      tr.set_scaling(k);
       tr.record(s, p, nullptr, nullptr, nullptr, nullptr);
     }
     bool on_step(const StepInfo& i) override {
@@ -178,8 +192,11 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
       load = std::make_unique<SemiAnalyticalPseudoLoad>(*cs.model, params, std::move(plus), std::move(minus),
                                                         std::move(delta), central);
     }
-    DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts);
-    res.primal = GeneralizedAlpha(cs.simulation).run(*cs.model, params, cs.initial, {&obs});
+    DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts,
+                                  o.matrix == SensitivityOptions::Matrix::kRefined ? o.refinement_steps : 0);
+    GeneralizedAlphaOptions go = cs.simulation;
+    go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
+    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs});
     add_primal(res.counts, res.primal);
     res.ok = res.primal.ok;
     res.message = res.primal.message;

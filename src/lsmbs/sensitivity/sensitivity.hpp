@@ -25,6 +25,15 @@ struct SensitivityOptions {
   /// relative: Δp_i = delta · max(|p_i|, 1e-2 (upper_i − lower_i)); absolute: Δp_i = delta.
   double delta = 1e-6;
   bool relative = true;
+  /// Matrix of the back-solves (37): the LU of the step's last Newton iteration (the paper's
+  /// choice, free), a new factorization of S_t at the converged state (exact), or the last LU
+  /// with iterative refinement against S_t assembled at the converged state (exact to
+  /// `refinement_steps` corrections, no new factorization).
+  enum class Matrix { kLastIteration, kConverged, kRefined };
+  Matrix matrix = Matrix::kLastIteration;
+  int refinement_steps = 2;
+  static bool parse_matrix(const std::string& s, Matrix& m);
+  static const char* matrix_name(Matrix m);
 
   static bool parse(const std::string& name, Method& m);
   static const char* name(Method m);
@@ -47,6 +56,7 @@ struct SensitivityCounts {
   long element_pseudo_loads = 0;       ///< element-local ∂r/∂p evaluations (direct-analytic)
   long mass_damping_products = 0;      ///< M q̈* + C q̇* block products (direct-analytic)
   long back_solves = 0, back_solve_rhs = 0;
+  long sensitivity_matrix_assemblies = 0;  ///< S_t at the converged state (refined)
   double wall_seconds = 0, primal_wall_seconds = 0;
   nlohmann::json to_json() const;
 };
