@@ -98,8 +98,8 @@ int geometry(const std::string& case_file, const std::string& out, const std::ve
 }
 
 int sensitivity(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets,
-                const std::string& method, double delta, bool absolute, const std::string& matrix, bool quiet,
-                const std::string& cmdline) {
+                const std::string& method, double delta, bool absolute, const std::string& matrix, bool full_residual,
+                bool quiet, const std::string& cmdline) {
   lsmbs::SensitivityOptions so;
   if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
     std::string all;
@@ -111,6 +111,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     throw lsmbs::Error("--matrix " + matrix + ": expected last, converged or refined");
   so.delta = delta;
   so.relative = !absolute;
+  so.full_residual = full_residual;
   lsmbs::Case cs = lsmbs::load_case(case_file);
   if (!cs.design) throw lsmbs::Error(case_file, "/design", "sensitivities need a design section (design variables)");
   if (cs.responses.empty()) throw lsmbs::Error(case_file, "/output/responses", "sensitivities need at least one response");
@@ -234,6 +235,9 @@ int main(int argc, char** argv) {
   sen->add_option("--delta", delta, "perturbation Δp (semi-analytical) or finite-difference step")->capture_default_str();
   sen->add_flag("--absolute", absolute, "Δp absolute instead of relative to max(|p_i|, 1e-2 (upper - lower))");
   std::string matrix = "last";
+  bool full_residual = false;
+  sen->add_flag("--full-residual", full_residual,
+                "semi-analytical pseudo-loads from whole-residual evaluations (Algorithm 2 literally) instead of element-local ones");
   sen->add_option("--matrix", matrix,
                   "matrix of the back-solves: last (last Newton iteration, the paper's), converged (refactorized), "
                   "refined (last LU + iterative refinement)")->capture_default_str();
@@ -253,7 +257,8 @@ int main(int argc, char** argv) {
   try {
     if (*sim) return simulate(case_file, out, quiet, verbose, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
-    if (*sen) return sensitivity(case_file, out, sets, method, delta, absolute, matrix, quiet, joined_args(argc, argv));
+    if (*sen)
+      return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, quiet, joined_args(argc, argv));
     std::cout << app.help();
     return 2;
   } catch (const lsmbs::Error& e) {

@@ -6,7 +6,8 @@
 // are integrated on an n × n sub-grid of the element's parent domain with the exact level set
 // at the sub-cell centres. The logistic band ε = band × (sub-cell size) is a physical length, so
 // μ_e(p) is smooth and its derivative is non-zero exactly where a boundary passes:
-//   ∂μ_e/∂p = (1 − μ_min)/V_e Σ_s w_s H*'(D_s) ∂D_s/∂p   (sparse, cut elements only).
+//   ∂μ_e/∂p = (1 − μ_min)/V_e Σ_s w_s H*'(D_s) ∂D_s/∂p   (sparse: cut elements whose entry is
+//   above 1e-12 of the column's largest).
 // An element counts as uniform only if its corners and centre have the same sign and all lie
 // farther than its circumradius + 30 ε from the boundary — a tiny hole inside one element (the
 // p = 0.001 start of Table 1) is therefore still seen.

@@ -47,6 +47,20 @@ class ForceElement {
   virtual bool uses_parameter(int /*j*/) const { return false; }
   /// Whether ∂r/∂q̈ (the mass matrix) depends on q (rigid bodies with an offset centre of mass).
   virtual bool mass_depends_on_q() const { return false; }
+  /// Whether r is linear in (q̇, q̈) at fixed q (then r(q̇ + δq̇, q̈ + δq̈) − r = M δq̈ + C δq̇
+  /// exactly). False for rigid inertia (centripetal term quadratic in θ̇).
+  virtual bool linear_in_rates() const { return true; }
+  /// M = ∂r/∂q̈ and C = ∂r/∂q̇ (local). Default: two evaluate() calls; elements override it
+  /// when their mass is cheap (quads: constant).
+  virtual void mass_damping(const LocalState& s, const ModelParams& p, LocalMat& M, LocalMat& C) const {
+    const auto nd = static_cast<Eigen::Index>(dofs().size());
+    LocalVec r = LocalVec::Zero(nd);
+    M.setZero(nd, nd);
+    C.setZero(nd, nd);
+    const Coefficients cm{1, 0, 0}, cc{0, 1, 0};
+    evaluate(s, p, r, &cm, &M);
+    evaluate(s, p, r, &cc, &C);
+  }
 };
 
 class ConstraintElement {

@@ -54,4 +54,13 @@ void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r,
       }
 }
 
+void QuadForce::mass_damping(const LocalState&, const ModelParams& p, LocalMat& M, LocalMat& C) const {
+  const double mt = p.fields[body_->field][e_] * p.scalars[body_->rho_param] * p.scalars[body_->thickness_param];
+  const auto& M0 = body_->elements[e_].unit_mass();
+  M.setZero(8, 8);
+  C.setZero(8, 8);
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) M(2 * i, 2 * j) = M(2 * i + 1, 2 * j + 1) = mt * M0(i, j);
+}
+
 }  // namespace lsmbs

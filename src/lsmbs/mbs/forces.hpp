@@ -26,6 +26,7 @@ class RigidInertia : public ForceElement {
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == m_ || j == J_; }
   bool mass_depends_on_q() const override { return c_.squaredNorm() > 0; }
+  bool linear_in_rates() const override { return false; }
 
  private:
   std::array<int, 3> dofs_;

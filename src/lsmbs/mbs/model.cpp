@@ -350,21 +350,14 @@ void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat
   out.setZero(nq_, nc);
   LocalState ls;
   ls.t = s.t;
-  LocalVec r;
   LocalMat M, C;
-  const Coefficients cm{1, 0, 0}, cc{0, 1, 0};
   for (const auto& f : forces_) {
     const auto d = f->dofs();
     const auto nd = static_cast<Eigen::Index>(d.size());
     gather(s.q, d, ls.q);
     gather(s.v, d, ls.v);
     gather(s.a, d, ls.a);
-    r.setZero(nd);
-    M.setZero(nd, nd);
-    f->evaluate(ls, p, r, &cm, &M);
-    r.setZero(nd);
-    C.setZero(nd, nd);
-    f->evaluate(ls, p, r, &cc, &C);
+    f->mass_damping(ls, p, M, C);
     const bool has_c = !C.isZero(0.0);
     for (int k = 0; k < nc; ++k)
       for (Eigen::Index i = 0; i < nd; ++i) {
@@ -376,6 +369,37 @@ void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat
         out(d[i], k) += v;
       }
   }
+}
+
+void Model::element_mass_damping_product(int e, const State& s, const ModelParams& p, const Vec& qdd, const Vec& vd,
+                                         LocalVec& out) const {
+  const auto d = forces_[e]->dofs();
+  const auto nd = static_cast<Eigen::Index>(d.size());
+  LocalState ls;
+  ls.t = s.t;
+  gather(s.q, d, ls.q);
+  gather(s.v, d, ls.v);
+  gather(s.a, d, ls.a);
+  LocalMat M, C;
+  forces_[e]->mass_damping(ls, p, M, C);
+  LocalVec a, v;
+  gather(qdd, d, a);
+  gather(vd, d, v);
+  out = M.topLeftCorner(nd, nd) * a + C.topLeftCorner(nd, nd) * v;
+}
+
+std::vector<int> Model::forces_touched_by(const ParamDirection& dir) const {
+  std::vector<char> mark(forces_.size(), 0);
+  for (const auto& f : dir.fields)
+    for (const auto& b : flex_)
+      if (b->field == f.field) mark[b->first_force + f.element] = 1;
+  for (const auto& [j, v] : dir.scalars)
+    for (size_t e = 0; e < forces_.size(); ++e)
+      if (forces_[e]->uses_parameter(j)) mark[e] = 1;
+  std::vector<int> out;
+  for (size_t e = 0; e < forces_.size(); ++e)
+    if (mark[e]) out.push_back(static_cast<int>(e));
+  return out;
 }
 
 void Model::residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& dir,

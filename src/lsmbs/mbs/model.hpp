@@ -125,6 +125,11 @@ class Model {
                                  Vec& out) const;
   /// Residual contribution of one force element (local vector over its dofs()).
   void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
+  /// M_e q̈ + C_e q̇ of one force element for global vectors qdd, vd (local result).
+  void element_mass_damping_product(int force, const State& s, const ModelParams& p, const Vec& qdd, const Vec& vd,
+                                    LocalVec& out) const;
+  /// Force elements a parameter direction touches (sorted).
+  std::vector<int> forces_touched_by(const ParamDirection& dir) const;
   /// Kinetic energy ½ q̇ᵀ M q̇ (M from the force elements).
   double kinetic_energy(const State& s, const ModelParams& p) const;
   /// Strain energy of all flexible bodies.

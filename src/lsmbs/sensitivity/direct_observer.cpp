@@ -1,5 +1,7 @@
 #include "lsmbs/sensitivity/direct_observer.hpp"
 
+#include <algorithm>
+
 namespace lsmbs {
 
 AnalyticPseudoLoad::AnalyticPseudoLoad(const Model& m, const ModelParams& p, std::vector<ParamDirection> dirs)
@@ -23,33 +25,82 @@ void AnalyticPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& 
 }
 
 SemiAnalyticalPseudoLoad::SemiAnalyticalPseudoLoad(const Model& m, const ModelParams& p, std::vector<ModelParams> plus,
-                                                   std::vector<ModelParams> minus, std::vector<double> delta, bool central)
-    : m_(m), p_(p), plus_(std::move(plus)), minus_(std::move(minus)), delta_(std::move(delta)), central_(central) {}
+                                                   std::vector<ModelParams> minus, std::vector<double> delta, bool central,
+                                                   const std::vector<ParamDirection>& dirs, bool full_residual)
+    : m_(m), p_(p), plus_(std::move(plus)), minus_(std::move(minus)), delta_(std::move(delta)), central_(central),
+      full_(full_residual) {
+  std::vector<int> nonlinear;
+  for (size_t e = 0; e < m.forces().size(); ++e)
+    if (!m.forces()[e]->linear_in_rates()) nonlinear.push_back(static_cast<int>(e));
+  for (const auto& d : dirs) {
+    auto t = m.forces_touched_by(d);
+    t.insert(t.end(), nonlinear.begin(), nonlinear.end());
+    std::sort(t.begin(), t.end());
+    t.erase(std::unique(t.begin(), t.end()), t.end());
+    evaluated_.push_back(std::move(t));
+  }
+}
 
 void SemiAnalyticalPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta,
                                        Mat& B, SensitivityCounts& counts) {
   const int nv = static_cast<int>(delta_.size());
   B.setZero(m_.n(), nv);
-  if (!central_) {  // eq. (30): the actual residual at p is subtracted, not assumed zero
-    m_.residual(s, p_, k, zeta, R0_);
-    ++counts.pseudo_load_residuals;
+  if (full_) {
+    if (!central_) {  // eq. (30): the actual residual at p is subtracted, not assumed zero
+      m_.residual(s, p_, k, zeta, R0_);
+      ++counts.pseudo_load_residuals;
+    }
+    pert_ = s;
+    for (int i = 0; i < nv; ++i) {
+      const double d = delta_[i];
+      pert_.v = s.v + d * dv_star.col(i);  // eq. (32)
+      pert_.a = s.a + d * dqdd_star.col(i);
+      m_.residual(pert_, plus_[i], k, zeta, Rp_);
+      ++counts.pseudo_load_residuals;
+      if (central_) {
+        pert_.v = s.v - d * dv_star.col(i);
+        pert_.a = s.a - d * dqdd_star.col(i);
+        m_.residual(pert_, minus_[i], k, zeta, Rm_);
+        ++counts.pseudo_load_residuals;
+        B.col(i) = (Rp_ - Rm_) / (2 * d);
+      } else {
+        B.col(i) = (Rp_ - R0_) / d;
+      }
+    }
+    return;
   }
+  // element-local: exact M q̈* + C q̇* for the untouched rate-linear elements ...
+  m_.mass_damping_product(s, p_, dqdd_star, dv_star, MC_);
+  ++counts.mass_damping_products;
+  B.topRows(m_.nq()) = MC_;
+  // ... and perturbed element residuals for the others
+  LocalVec rp, rm, r0, mc;
   pert_ = s;
+  State minus = s;
   for (int i = 0; i < nv; ++i) {
     const double d = delta_[i];
-    pert_.v = s.v + d * dv_star.col(i);  // eq. (32)
-    pert_.a = s.a + d * dqdd_star.col(i);
-    m_.residual(pert_, plus_[i], k, zeta, Rp_);
-    ++counts.pseudo_load_residuals;
+    vi_ = dv_star.col(i);
+    ai_ = dqdd_star.col(i);
+    pert_.v = s.v + d * vi_;
+    pert_.a = s.a + d * ai_;
     if (central_) {
-      pert_.v = s.v - d * dv_star.col(i);
-      pert_.a = s.a - d * dqdd_star.col(i);
-      m_.residual(pert_, minus_[i], k, zeta, Rm_);
-      ++counts.pseudo_load_residuals;
-      B.col(i) = (Rp_ - Rm_) / (2 * d);
-    } else {
-      B.col(i) = (Rp_ - R0_) / d;
+      minus.v = s.v - d * vi_;
+      minus.a = s.a - d * ai_;
     }
+    for (int e : evaluated_[i]) {
+      m_.element_mass_damping_product(e, s, p_, ai_, vi_, mc);
+      m_.element_residual(e, pert_, plus_[i], rp);
+      if (central_) {
+        m_.element_residual(e, minus, minus_[i], rm);
+        rp = (rp - rm) / (2 * d);
+      } else {
+        m_.element_residual(e, s, p_, r0);
+        rp = (rp - r0) / d;
+      }
+      const auto dofs = m_.forces()[e]->dofs();
+      for (size_t j = 0; j < dofs.size(); ++j) B(dofs[j], i) += rp[j] - mc[j];
+    }
+    counts.element_pseudo_loads += static_cast<long>(evaluated_[i].size());
   }
 }
 

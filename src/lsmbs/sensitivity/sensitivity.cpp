@@ -55,7 +55,8 @@ double SensitivityOptions::step(const Design& d, const Vec& p, int i) const {
 
 nlohmann::json SensitivityOptions::to_json() const {
   return {{"method", name(method)}, {"delta", delta}, {"delta_mode", relative ? "relative" : "absolute"},
-          {"matrix", matrix_name(matrix)}, {"refinement_steps", refinement_steps}};
+          {"matrix", matrix_name(matrix)}, {"refinement_steps", refinement_steps},
+          {"pseudo_load", full_residual ? "full_residual" : "element_local"}};
 }
 
 nlohmann::json SensitivityCounts::to_json() const {
@@ -190,7 +191,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
         }
       }
       load = std::make_unique<SemiAnalyticalPseudoLoad>(*cs.model, params, std::move(plus), std::move(minus),
-                                                        std::move(delta), central);
+                                                        std::move(delta), central, dirs, o.full_residual);
     }
     DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts,
                                   o.matrix == SensitivityOptions::Matrix::kRefined ? o.refinement_steps : 0);

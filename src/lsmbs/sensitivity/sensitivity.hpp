@@ -32,6 +32,9 @@ struct SensitivityOptions {
   enum class Matrix { kLastIteration, kConverged, kRefined };
   Matrix matrix = Matrix::kLastIteration;
   int refinement_steps = 2;
+  /// Semi-analytical pseudo-loads evaluated on the whole residual (Algorithm 2 literally) instead
+  /// of element-locally (same result up to round-off, far cheaper; see direct_observer.hpp).
+  bool full_residual = false;
   static bool parse_matrix(const std::string& s, Matrix& m);
   static const char* matrix_name(Matrix m);
 
