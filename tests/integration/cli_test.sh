@@ -78,4 +78,22 @@ PY
 "$exe" geometry "$case_file" -o "$tmp/nogeo" 2> "$tmp/err3.txt"; rc=$?
 [ $rc -eq 2 ] || fail "geometry without design returned $rc"
 grep -q "no design section" "$tmp/err3.txt" || fail "message: $(cat "$tmp/err3.txt")"
+# Sensitivity: gradients in summary.json and gradients.csv; an unknown method is a usage error.
+spring="$src/data/slider_crank_rigid/slider_crank_spring.json"
+"$exe" sensitivity "$spring" --method direct-analytic --matrix refined -o "$tmp/sens" -q || fail "sensitivity"
+python3 - "$tmp/sens" <<'PY' || fail "sensitivity outputs"
+import sys, os, json, csv
+out = sys.argv[1]
+s = json.load(open(os.path.join(out, "summary.json")))
+g = s["gradients"]["final_crank_angle"]
+assert set(g) == {"k", "c"} and all(isinstance(v, float) for v in g.values()), g
+assert len(s["gradients"]["piston_x_per_step"]["k"]) == len(s["responses"]["piston_x_per_step"]) == 51
+assert s["options"]["sensitivity"]["method"] == "direct-analytic" and s["counts"]["back_solves"] > 0
+rows = list(csv.reader(l for l in open(os.path.join(out, "gradients.csv")) if not l.startswith("#")))
+assert rows[0][:4] == ["response", "index", "t", "value"] and rows[0][4:] == ["d/dk", "d/dc"]
+print("sensitivity ok")
+PY
+"$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
+[ $rc -eq 2 ] || fail "unknown method returned $rc"
+grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(cat "$tmp/err4.txt")"
 echo "cli: all checks passed"
