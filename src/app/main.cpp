@@ -3,6 +3,7 @@
 //   lsmbs simulate CASE.json -o OUT      generalized-α simulation (Algorithm 1 of the paper)
 //   lsmbs geometry CASE.json -o OUT      level-set design mapped on the mesh (μ_e VTU + PNG, mass)
 //   lsmbs sensitivity CASE.json --method NAME -o OUT   responses and design gradients (§4.3)
+//   lsmbs optimize CASE.json -o OUT [--resume]         fully coupled optimization (NLopt MMA)
 //   lsmbs --version
 //
 // Exit codes: 0 success; 1 numerical failure (message says when and why); 2 invalid input or
@@ -12,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include "lsmbs/core/error.hpp"
@@ -20,6 +22,9 @@
 #include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
+#include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/optimization/kkt.hpp"
+#include "lsmbs/optimization/optimizer.hpp"
 #include "lsmbs/io/simulation_run.hpp"
 
 namespace {
@@ -199,6 +204,86 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   return 0;
 }
 
+// Convergence plot (objective and maximum constraint violation per evaluation) with gnuplot,
+// when it is installed; returns false otherwise.
+bool plot_history(const std::string& out) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return false;
+  const std::string script = out + "/convergence.gp";
+  {
+    std::ofstream g(script);
+    g << "set terminal pngcairo size 900,500 noenhanced\nset output '" << out << "/convergence.png'\n"
+      << "set datafile separator ','\nset key autotitle columnhead\nset xlabel 'evaluation'\n"
+      << "set ylabel 'objective'\nset y2label 'max. relative constraint violation'\nset y2tics\nset grid\n"
+      << "plot '" << out << "/history.csv' using 1:2 with linespoints title 'objective', "
+      << "'' using 1:3 axes x1y2 with linespoints title 'max constraint violation'\n";
+  }
+  const bool ok = std::system(("gnuplot '" + script + "' >/dev/null 2>&1").c_str()) == 0;
+  std::filesystem::remove(script);
+  return ok;
+}
+
+int optimize(const std::string& case_file, const std::string& out, bool resume, bool quiet, const std::string& cmdline) {
+  lsmbs::Case cs = lsmbs::load_case(case_file);
+  const lsmbs::OptimizationSpec spec = lsmbs::parse_optimization(cs);  // validated before anything is written
+  std::filesystem::create_directories(out);
+  lsmbs::DesignProblem prob(cs, spec);
+  const auto& d = *cs.design;
+  lsmbs::OptimizeOptions o;
+  o.out_dir = out;
+  o.resume = resume;
+  if (!quiet) {
+    std::printf("lsmbs optimize: %d variables, %d constraints, optimizer %s, sensitivities %s\n", d.size(),
+                prob.num_constraints(), spec.optimizer.c_str(), lsmbs::SensitivityOptions::name(spec.sensitivity.method));
+    std::printf("%6s %16s %14s %10s\n", "eval", "objective", "max violation", "time [s]");
+  }
+  o.on_evaluation = [&](int k, const lsmbs::Evaluation& e) {
+    if (!quiet) std::printf("%6d %16.9g %14.4e %10.2f\n", k, e.objective, e.max_violation, e.wall_seconds);
+    std::fflush(stdout);
+  };
+  const auto res = lsmbs::optimize(prob, o);
+  // final design pictures and summary
+  lsmbs::GeometryRunOptions go;
+  go.out_dir = out + "/final_design";
+  const auto geo = lsmbs::run_geometry(cs, res.p, go);
+  const bool plotted = plot_history(out);
+  nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+  S["case_name"] = cs.name;
+  S["status"] = res.final.ok ? (res.interrupted ? "interrupted" : "complete") : "partial";
+  S["options"] = {{"optimization", spec.to_json()}, {"generalized_alpha", cs.simulation.to_json()}};
+  nlohmann::json p0 = nlohmann::json::object(), pf = nlohmann::json::object();
+  const lsmbs::Vec init = d.initial();
+  for (int i = 0; i < d.size(); ++i) p0[d.variables[i].name] = init[i], pf[d.variables[i].name] = res.p[i];
+  const auto& first = res.history.front();
+  S["initial"] = {{"design", p0}, {"objective", first.objective}, {"max_violation", first.max_violation}};
+  S["final"] = {{"design", pf}, {"objective", res.final.objective}, {"max_violation", res.final.max_violation},
+                {"constraints_max", res.final.constraints.empty() ? NAN
+                                    : *std::max_element(res.final.constraints.begin(), res.final.constraints.end())}};
+  S["responses"] = {{spec.objective, res.final.objective}};
+  S["nlopt"] = {{"code", res.nlopt_code}, {"status", res.nlopt_status}};
+  S["converged"] = res.converged;
+  const auto kkt = lsmbs::kkt_report(prob, res.final);
+  S["kkt"] = kkt.to_json();
+  S["counts"] = {{"evaluations", res.evaluations}, {"simulations_this_run", res.simulations},
+                 {"cache_hits", prob.cache_hits()}};
+  S["wall_seconds"] = res.wall_seconds;
+  S["final_design_mass"] = geo["bodies"];
+  S["files"] = {{"history", "history.csv"}, {"checkpoint", "checkpoint.json"}, {"final_design", "final_design/"},
+                {"convergence_plot", plotted ? nlohmann::json("convergence.png") : nlohmann::json(nullptr)}};
+  lsmbs::write_json_atomic(out + "/summary.json", S);
+  if (!quiet) {
+    std::printf("lsmbs optimize: %s after %ld evaluations (%ld simulations in this run), %.1f s\n",
+                res.nlopt_status.c_str(), res.evaluations, res.simulations, res.wall_seconds);
+    std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first.objective, res.final.objective,
+                res.final.max_violation);
+    std::printf("  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; stationarity %.2e, "
+                "bound-sign violation %.2e\n", kkt.active_constraints, kkt.free_variables, kkt.at_lower, kkt.at_upper,
+                kkt.stationarity, kkt.bound_sign_violation);
+    for (int i = 0; i < d.size(); ++i) std::printf("  %-10s %.6g -> %.6g\n", d.variables[i].name.c_str(), init[i], res.p[i]);
+    std::printf("  results in %s\n", out.c_str());
+  }
+  return res.final.ok ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -244,6 +329,15 @@ int main(int argc, char** argv) {
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
   sen->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
+  bool resume = false;
+  auto* opt = app.add_subcommand("optimize", "fully coupled optimization of the case's design (NLopt MMA/CCSAQ/SLSQP)");
+  opt->add_option("case", case_file, "case file (JSON) with design, responses and an optimization section")
+      ->required()->check(CLI::ExistingFile);
+  opt->add_option("-o,--output", out, "output folder (history.csv, checkpoint.json, final_design/, summary.json)")
+      ->capture_default_str();
+  opt->add_flag("--resume", resume, "continue an interrupted run from OUT/checkpoint.json");
+  opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -257,6 +351,7 @@ int main(int argc, char** argv) {
   try {
     if (*sim) return simulate(case_file, out, quiet, verbose, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
+    if (*opt) return optimize(case_file, out, resume, quiet, joined_args(argc, argv));
     if (*sen)
       return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, quiet, joined_args(argc, argv));
     std::cout << app.help();

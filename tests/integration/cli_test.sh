@@ -96,4 +96,30 @@ PY
 "$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
 [ $rc -eq 2 ] || fail "unknown method returned $rc"
 grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(cat "$tmp/err4.txt")"
+# Optimization killed at an arbitrary moment (SIGKILL) and resumed ends at the same design as an
+# uninterrupted run.
+python3 -c "
+import json
+c=json.load(open('$src/data/robot_arm/robot_arm_holes.json')); c['bodies'][2]['mesh']['elements']=[30,3]
+c['simulation']['h']=0.01; c['output']['vtu_stride']=0; c['optimization']['stop']['max_evaluations']=12
+json.dump(c,open('$tmp/opt.json','w'))"
+"$exe" optimize "$tmp/opt.json" -o "$tmp/opt_full" -q || fail "optimize"
+"$exe" optimize "$tmp/opt.json" -o "$tmp/opt_killed" -q & pid=$!
+for _ in $(seq 1 100); do  # wait for a few evaluations, then kill without warning
+  n=0
+  [ -f "$tmp/opt_killed/history.csv" ] && n=$(($(wc -l < "$tmp/opt_killed/history.csv") - 1))
+  [ "$n" -ge 4 ] && break
+  sleep 0.05
+done
+kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
+[ -f "$tmp/opt_killed/checkpoint.json" ] || fail "no checkpoint after the kill"
+"$exe" optimize "$tmp/opt.json" -o "$tmp/opt_killed" --resume -q || fail "resume"
+python3 - "$tmp/opt_full/summary.json" "$tmp/opt_killed/summary.json" <<'PY' || fail "resumed design differs"
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+assert a["final"]["design"] == b["final"]["design"], (a["final"]["design"], b["final"]["design"])
+assert a["final"]["objective"] == b["final"]["objective"]
+assert b["counts"]["simulations_this_run"] < a["counts"]["simulations_this_run"]
+print("kill/resume ok:", b["counts"])
+PY
 echo "cli: all checks passed"

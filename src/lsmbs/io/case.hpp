@@ -35,6 +35,7 @@ struct Case {
   std::vector<ResponseSpec> responses;
   std::map<std::string, std::shared_ptr<const TimeLaw>> drivers;  ///< by driver name
   std::map<std::string, std::vector<int>> joint_rows;              ///< constraint rows by joint name
+  nlohmann::json optimization;     ///< the "optimization" section (parsed by parse_optimization)
   std::unique_ptr<Design> design;  ///< null when the case has no "design" section; when present,
                                    ///< the model parameters hold the initial design
 

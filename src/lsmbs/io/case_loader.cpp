@@ -730,6 +730,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   i = 0;
   for (const auto& f : root.items("forces")) L.force(f, i++);
   if (auto d = root.optional_child("design")) L.design(*d);
+  if (auto o = root.optional_child("optimization")) cs.optimization = o->raw();
   L.simulation(root.child("simulation"));
   if (auto out = root.optional_child("output")) {
     cs.output.csv_stride = out->integer("csv_stride", 1, 1);

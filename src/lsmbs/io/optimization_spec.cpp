@@ -1,0 +1,56 @@
+#include "lsmbs/io/optimization_spec.hpp"
+
+#include "lsmbs/io/json_reader.hpp"
+
+namespace lsmbs {
+
+OptimizationSpec parse_optimization(const Case& cs) {
+  if (cs.optimization.is_null()) throw Error(cs.file, "/optimization", "the case has no optimization section");
+  if (!cs.design) throw Error(cs.file, "/design", "optimization needs a design section (design variables)");
+  const JsonReader r(cs.optimization, cs.file, "/optimization");
+  if (!r.is_object()) r.fail("expected an object");
+  OptimizationSpec s;
+  auto response = [&](const JsonReader& at, const std::string& key, bool scalar) {
+    const std::string n = at.string(key);
+    for (const auto& resp : cs.responses)
+      if (resp.name == n) {
+        if (scalar && resp.kind == ResponseSpec::Kind::kPerStep) at.fail(key, "the objective must be a scalar response");
+        return n;
+      }
+    at.fail(key, "unknown response '" + n + "' (define it in output.responses)");
+  };
+  s.objective = response(r, "objective", true);
+  for (const auto& c : r.items("constraints")) {
+    OptimizationSpec::Constraint k;
+    k.response = response(c, "response", false);
+    k.upper = c.number("upper");
+    if (k.upper == 0) c.fail("upper", "expected a non-zero bound (constraints are scaled by |bound|)");
+    c.finish();
+    s.constraints.push_back(k);
+  }
+  s.optimizer = r.one_of("optimizer", {"mma", "ccsaq", "slsqp"}, "mma");
+  if (auto so = r.optional_child("sensitivity")) {
+    const std::string m = so->string("method", "direct-analytic");
+    if (!SensitivityOptions::parse(m, s.sensitivity.method)) {
+      std::string all;
+      for (const auto& n : SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
+      so->fail("method", "expected one of " + all);
+    }
+    s.sensitivity.delta = so->positive("delta", s.sensitivity.delta);
+    s.sensitivity.relative = so->one_of("delta_mode", {"relative", "absolute"}, "relative") == "relative";
+    if (!SensitivityOptions::parse_matrix(so->string("matrix", "last"), s.sensitivity.matrix))
+      so->fail("matrix", "expected last, converged or refined");
+    so->finish();
+  }
+  if (auto st = r.optional_child("stop")) {
+    s.tol_objective = st->positive("relative_objective_change", s.tol_objective);
+    s.tol_constraint = st->non_negative("relative_constraint_violation", s.tol_constraint);
+    s.max_evaluations = st->integer("max_evaluations", s.max_evaluations, 1);
+    st->finish();
+  }
+  s.inner_max_evaluations = r.integer("inner_max_evaluations", 0, 0);
+  r.finish();
+  return s;
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,201 @@
+#include "lsmbs/optimization/optimizer.hpp"
+
+#include <nlopt.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/io/output.hpp"
+
+namespace lsmbs {
+
+namespace {
+
+
+struct Context {
+  DesignProblem& prob;
+  const OptimizeOptions& o;
+  nlopt_opt opt = nullptr;
+  Vec lower, range;
+  double f0 = 1;
+  std::vector<Evaluation> history;
+  long new_sims = 0;
+  bool interrupted = false;
+  std::string case_sha, spec_json;
+
+  Vec to_p(const double* x) const {
+    Vec p(lower.size());
+    for (Eigen::Index i = 0; i < p.size(); ++i) p[i] = lower[i] + x[i] * range[i];
+    return p;
+  }
+  const Evaluation& eval(const double* x) {
+    const Vec p = to_p(x);
+    const long before = prob.simulations();
+    const std::vector<double> key(p.data(), p.data() + p.size());
+    const bool known = prob.cache().count(key) > 0;
+    const Evaluation& e = prob.evaluate(p);
+    if (!known) {  // a new point (simulated now, or replayed from a checkpoint)
+      history.push_back(e);
+      if (prob.simulations() > before) {
+        ++new_sims;
+        checkpoint();
+      }
+      if (o.on_evaluation) o.on_evaluation(static_cast<int>(history.size()), e);
+      if (o.stop_after >= 0 && new_sims >= o.stop_after) {
+        interrupted = true;
+        nlopt_force_stop(opt);
+      }
+    }
+    if (!e.ok) nlopt_force_stop(opt);
+    return e;
+  }
+  void checkpoint() {
+    if (o.out_dir.empty()) return;
+    nlohmann::json ev = nlohmann::json::array();
+    for (const auto& h : history) ev.push_back(evaluation_to_json(h));
+    write_json_atomic(o.out_dir + "/checkpoint.json", {{"case_sha256", case_sha}, {"spec", spec_json}, {"evaluations", ev}});
+    write_history(o.out_dir + "/history.csv", prob, history);
+  }
+};
+
+double objective_cb(unsigned n, const double* x, double* grad, void* data) {
+  auto& c = *static_cast<Context*>(data);
+  const Evaluation& e = c.eval(x);
+  if (grad)
+    for (unsigned i = 0; i < n; ++i) grad[i] = e.objective_gradient[i] * c.range[i] / c.f0;
+  return e.objective / c.f0;
+}
+
+void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
+  auto& c = *static_cast<Context*>(data);
+  const Evaluation& e = c.eval(x);
+  for (unsigned j = 0; j < m; ++j) {
+    const double s = std::max(std::abs(e.upper[j]), 1e-300);
+    result[j] = (e.constraints[j] - e.upper[j]) / s;
+    if (grad)
+      for (unsigned i = 0; i < n; ++i) grad[j * n + i] = e.constraint_gradient(j, i) * c.range[i] / s;
+  }
+}
+
+const char* status_text(nlopt_result r) {
+  switch (r) {
+    case NLOPT_SUCCESS: return "success";
+    case NLOPT_STOPVAL_REACHED: return "stopval reached";
+    case NLOPT_FTOL_REACHED: return "relative objective change below tol_objective";
+    case NLOPT_XTOL_REACHED: return "relative design change below tolerance";
+    case NLOPT_MAXEVAL_REACHED: return "maximum number of evaluations reached";
+    case NLOPT_MAXTIME_REACHED: return "maximum time reached";
+    case NLOPT_FAILURE: return "NLopt failure";
+    case NLOPT_INVALID_ARGS: return "invalid arguments";
+    case NLOPT_OUT_OF_MEMORY: return "out of memory";
+    case NLOPT_ROUNDOFF_LIMITED: return "round-off limited";
+    case NLOPT_FORCED_STOP: return "stopped";
+    default: return "unknown";
+  }
+}
+
+}  // namespace
+
+void write_history(const std::string& path, const DesignProblem& problem, const std::vector<Evaluation>& h) {
+  const auto& d = *const_cast<DesignProblem&>(problem).case_data().design;
+  std::ostringstream os;
+  os.precision(12);
+  os << "evaluation,objective,max_constraint_violation,feasible,wall_seconds";
+  for (const auto& v : d.variables) os << "," << v.name;
+  os << "\n";
+  for (size_t k = 0; k < h.size(); ++k) {
+    os << k + 1 << "," << h[k].objective << "," << h[k].max_violation << ","
+       << (h[k].max_violation <= problem.spec().tol_constraint ? 1 : 0) << "," << h[k].wall_seconds;
+    for (Eigen::Index i = 0; i < h[k].p.size(); ++i) os << "," << h[k].p[i];
+    os << "\n";
+  }
+  write_file_atomic(path, os.str());
+}
+
+OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Case& cs = prob.case_data();
+  const Design& d = *cs.design;
+  const int n = d.size(), m = prob.num_constraints();
+  Context c{prob, o};
+  c.lower = d.lower();
+  c.range = d.upper() - d.lower();
+  c.case_sha = cs.sha256;
+  c.spec_json = prob.spec().to_json().dump();
+
+  if (o.resume) {
+    const std::string path = o.out_dir + "/checkpoint.json";
+    std::ifstream f(path);
+    if (!f) throw Error(path, "", "cannot resume: no checkpoint");
+    nlohmann::json j;
+    try {
+      f >> j;
+    } catch (const std::exception& e) {
+      throw Error(path, "", std::string("cannot resume: damaged checkpoint (") + e.what() + ")");
+    }
+    if (j.value("case_sha256", "") != cs.sha256)
+      throw Error(path, "/case_sha256", "cannot resume: the case file changed since the checkpoint was written");
+    if (j.value("spec", "") != c.spec_json)
+      throw Error(path, "/spec", "cannot resume: the optimization options changed since the checkpoint was written");
+    for (const auto& e : j.at("evaluations")) prob.seed(evaluation_from_json(e));
+  }
+
+  nlopt_algorithm alg = prob.spec().optimizer == "ccsaq" ? NLOPT_LD_CCSAQ
+                      : prob.spec().optimizer == "slsqp" ? NLOPT_LD_SLSQP
+                                                         : NLOPT_LD_MMA;
+  c.opt = nlopt_create(alg, n);
+  std::vector<double> lb(n, 0.0), ub(n, 1.0), x(n);
+  const Vec p0 = d.initial();
+  for (int i = 0; i < n; ++i) x[i] = (p0[i] - c.lower[i]) / c.range[i];
+  nlopt_set_lower_bounds(c.opt, lb.data());
+  nlopt_set_upper_bounds(c.opt, ub.data());
+  // objective scale from the initial design (evaluated first, also as NLopt's first point)
+  const Evaluation& e0 = c.eval(x.data());
+  OptimizeResult res;
+  if (!e0.ok) {
+    nlopt_destroy(c.opt);
+    throw NumericalFailure("the initial design could not be simulated: " + e0.message);
+  }
+  c.f0 = std::max(std::abs(e0.objective), 1e-300);
+  nlopt_set_min_objective(c.opt, objective_cb, &c);
+  if (m > 0) {
+    std::vector<double> tol(m, 0.0);
+    nlopt_add_inequality_mconstraint(c.opt, m, constraints_cb, &c, tol.data());
+  }
+  nlopt_set_ftol_rel(c.opt, prob.spec().tol_objective);
+  nlopt_set_maxeval(c.opt, prob.spec().max_evaluations);
+  if (prob.spec().inner_max_evaluations > 0 && alg != NLOPT_LD_SLSQP)
+    nlopt_set_param(c.opt, "inner_maxeval", prob.spec().inner_max_evaluations);
+  double fmin = 0;
+  const nlopt_result r = nlopt_optimize(c.opt, x.data(), &fmin);
+  nlopt_destroy(c.opt);
+
+  res.nlopt_code = r;
+  res.nlopt_status = status_text(r);
+  res.interrupted = c.interrupted;
+  res.history = c.history;
+  res.evaluations = static_cast<long>(c.history.size());
+  res.simulations = prob.simulations();
+  // final design: the best feasible evaluation (NLopt returns its best point too)
+  int best = -1;
+  for (size_t k = 0; k < c.history.size(); ++k)
+    if (c.history[k].ok && c.history[k].max_violation <= prob.spec().tol_constraint &&
+        (best < 0 || c.history[k].objective < c.history[best].objective))
+      best = static_cast<int>(k);
+  if (best >= 0) {
+    res.final = c.history[best];
+  } else {
+    res.final = prob.evaluate(c.to_p(x.data()));
+  }
+  res.p = res.final.p;
+  res.converged = !c.interrupted && best >= 0 &&
+                  (r == NLOPT_FTOL_REACHED || r == NLOPT_XTOL_REACHED || r == NLOPT_SUCCESS);
+  if (!o.out_dir.empty()) write_history(o.out_dir + "/history.csv", prob, c.history);
+  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace lsmbs

@@ -1,0 +1,45 @@
+#pragma once
+// Optimizer — minimizes a DesignProblem with NLopt (LD_MMA, the globally convergent CCSA
+// variant of Svanberg's MMA; LD_CCSAQ; LD_SLSQP). Design variables are scaled to [0, 1],
+// the objective to f/|f(p0)| and each constraint to (g − ū)/|ū|. NLopt may evaluate several
+// points per outer iteration; every new point is one simulation with its sensitivities and is
+// appended to history.csv, and a checkpoint with every evaluation (exact doubles) is written
+// after it. `resume` replays the run from those evaluations (NLopt is deterministic, so it
+// retraces the same path through the cache) and continues: an interrupted run ends at the same
+// design as an uninterrupted one.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lsmbs/optimization/problem.hpp"
+
+namespace lsmbs {
+
+struct OptimizeOptions {
+  std::string out_dir;       ///< history.csv, checkpoint.json (empty: nothing written)
+  bool resume = false;       ///< seed from out_dir/checkpoint.json
+  std::function<void(int, const Evaluation&)> on_evaluation;  ///< progress (evaluation index, result)
+  long stop_after = -1;      ///< testing: stop (as if killed) after this many new simulations
+};
+
+struct OptimizeResult {
+  Vec p;                     ///< final design (best feasible evaluation, else NLopt's last point)
+  Evaluation final;
+  int nlopt_code = 0;
+  std::string nlopt_status;
+  long evaluations = 0;      ///< distinct design points evaluated (incl. replayed ones)
+  long simulations = 0;      ///< simulations run in this process
+  bool converged = false;    ///< NLopt stopped on its tolerance with a feasible design
+  bool interrupted = false;
+  std::vector<Evaluation> history;  ///< every distinct evaluation in order
+  double wall_seconds = 0;
+};
+
+OptimizeResult optimize(DesignProblem& problem, const OptimizeOptions& o);
+
+/// Writes history.csv from evaluations (atomic).
+void write_history(const std::string& path, const DesignProblem& problem, const std::vector<Evaluation>& h);
+
+}  // namespace lsmbs

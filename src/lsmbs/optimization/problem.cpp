@@ -1,0 +1,155 @@
+#include "lsmbs/optimization/problem.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "lsmbs/core/error.hpp"
+
+namespace lsmbs {
+
+nlohmann::json OptimizationSpec::to_json() const {
+  nlohmann::json c = nlohmann::json::array();
+  for (const auto& k : constraints) c.push_back({{"response", k.response}, {"upper", k.upper}});
+  return {{"objective", objective}, {"constraints", c}, {"optimizer", optimizer},
+          {"sensitivity", sensitivity.to_json()}, {"tol_objective", tol_objective},
+          {"tol_constraint", tol_constraint}, {"max_evaluations", max_evaluations},
+          {"inner_max_evaluations", inner_max_evaluations}};
+}
+
+DesignProblem::DesignProblem(Case& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {
+  auto find = [&](const std::string& n) {
+    for (size_t i = 0; i < cs_.responses.size(); ++i)
+      if (cs_.responses[i].name == n) return static_cast<int>(i);
+    return -1;
+  };
+  objective_index_ = find(spec_.objective);
+  if (objective_index_ < 0) throw Error(cs_.file, "/optimization/objective", "unknown response '" + spec_.objective + "'");
+  if (cs_.responses[objective_index_].kind == ResponseSpec::Kind::kPerStep)
+    throw Error(cs_.file, "/optimization/objective", "the objective must be a scalar response (not per_step)");
+  for (const auto& c : spec_.constraints) {
+    const int k = find(c.response);
+    if (k < 0) throw Error(cs_.file, "/optimization/constraints", "unknown response '" + c.response + "'");
+    constraint_index_.push_back(k);
+  }
+  // per-step constraints: count the steps of the window on the time grid
+  for (size_t j = 0; j < constraint_index_.size(); ++j) {
+    const auto& r = cs_.responses[constraint_index_[j]];
+    if (r.kind != ResponseSpec::Kind::kPerStep) {
+      ++num_constraints_;
+      continue;
+    }
+    const double h = cs_.simulation.h;
+    const long n = std::lround(std::ceil(cs_.simulation.t_end / h - 1e-9));
+    int count = 0;
+    for (long i = 0; i <= n; ++i) {
+      const double t = i * h;
+      if (t >= r.t0 - 1e-9 * h && t <= r.t1 + 1e-9 * h) ++count;
+    }
+    num_constraints_ += count;
+  }
+}
+
+void DesignProblem::seed(const Evaluation& e) {
+  cache_[std::vector<double>(e.p.data(), e.p.data() + e.p.size())] = e;
+}
+
+const Evaluation& DesignProblem::evaluate(const Vec& p) {
+  std::vector<double> key(p.data(), p.data() + p.size());
+  if (auto it = cache_.find(key); it != cache_.end()) {
+    ++cache_hits_;
+    return it->second;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto res = compute_sensitivities(cs_, p, spec_.sensitivity);
+  ++simulations_;
+  Evaluation e;
+  e.p = p;
+  e.ok = res.ok;
+  e.message = res.message;
+  const auto& obj = res.responses[objective_index_];
+  e.objective = obj.values.empty() ? NAN : obj.values[0];
+  e.objective_gradient = obj.gradient.rows() ? Vec(obj.gradient.row(0).transpose()) : Vec::Zero(p.size());
+  e.constraint_gradient.resize(num_constraints_, p.size());
+  int row = 0;
+  e.max_violation = -INFINITY;
+  for (size_t j = 0; j < constraint_index_.size(); ++j) {
+    const auto& r = res.responses[constraint_index_[j]];
+    const double ub = spec_.constraints[j].upper;
+    for (size_t k = 0; k < r.values.size() && row < num_constraints_; ++k, ++row) {
+      e.constraints.push_back(r.values[k]);
+      e.upper.push_back(ub);
+      e.constraint_gradient.row(row) = r.gradient.row(static_cast<Eigen::Index>(k));
+      e.max_violation = std::max(e.max_violation, (r.values[k] - ub) / std::max(std::abs(ub), 1e-300));
+    }
+  }
+  if (row != num_constraints_) {
+    e.ok = false;
+    e.message = "a per-step constraint produced " + std::to_string(row) + " values instead of " +
+                std::to_string(num_constraints_) + " (the run did not reach t_end?)";
+  }
+  e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return cache_[key] = e;
+}
+
+namespace {
+std::string hex(double v) {
+  uint64_t b;
+  std::memcpy(&b, &v, 8);
+  char s[17];
+  std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(b));
+  return s;
+}
+double unhex(const std::string& s) {
+  const uint64_t b = std::stoull(s, nullptr, 16);
+  double v;
+  std::memcpy(&v, &b, 8);
+  return v;
+}
+nlohmann::json hexv(const double* d, size_t n) {
+  nlohmann::json a = nlohmann::json::array();
+  for (size_t i = 0; i < n; ++i) a.push_back(hex(d[i]));
+  return a;
+}
+std::vector<double> unhexv(const nlohmann::json& a) {
+  std::vector<double> v;
+  for (const auto& x : a) v.push_back(unhex(x.get<std::string>()));
+  return v;
+}
+}  // namespace
+
+nlohmann::json evaluation_to_json(const Evaluation& e) {
+  return {{"p", hexv(e.p.data(), e.p.size())},
+          {"objective", hex(e.objective)},
+          {"constraints", hexv(e.constraints.data(), e.constraints.size())},
+          {"upper", hexv(e.upper.data(), e.upper.size())},
+          {"objective_gradient", hexv(e.objective_gradient.data(), e.objective_gradient.size())},
+          {"constraint_gradient", hexv(e.constraint_gradient.data(), e.constraint_gradient.size())},
+          {"rows", e.constraint_gradient.rows()},
+          {"max_violation", hex(e.max_violation)},
+          {"wall_seconds", e.wall_seconds},
+          {"ok", e.ok},
+          {"message", e.message}};
+}
+
+Evaluation evaluation_from_json(const nlohmann::json& j) {
+  Evaluation e;
+  const auto p = unhexv(j.at("p"));
+  e.p = Eigen::Map<const Vec>(p.data(), static_cast<Eigen::Index>(p.size()));
+  e.objective = unhex(j.at("objective"));
+  e.constraints = unhexv(j.at("constraints"));
+  e.upper = unhexv(j.at("upper"));
+  const auto g = unhexv(j.at("objective_gradient"));
+  e.objective_gradient = Eigen::Map<const Vec>(g.data(), static_cast<Eigen::Index>(g.size()));
+  const auto cg = unhexv(j.at("constraint_gradient"));
+  const Eigen::Index rows = j.at("rows").get<Eigen::Index>();
+  e.constraint_gradient = Eigen::Map<const Mat>(cg.data(), rows, rows ? static_cast<Eigen::Index>(cg.size()) / rows : 0);
+  e.max_violation = unhex(j.at("max_violation"));
+  e.wall_seconds = j.at("wall_seconds").get<double>();
+  e.ok = j.at("ok").get<bool>();
+  e.message = j.at("message").get<std::string>();
+  return e;
+}
+
+}  // namespace lsmbs

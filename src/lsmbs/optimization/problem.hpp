@@ -1,0 +1,78 @@
+#pragma once
+// DesignProblem — the optimization problem (22) of a case: minimize one response subject to
+// response ≤ bound constraints (a per-step response gives one constraint per step: the local
+// formulation of eq. 42; an aggregated one a single global constraint, e.g. eq. 45), over the
+// design variables within their bounds. evaluate(p) runs ONE simulation with its sensitivities
+// and caches the result by p: NLopt asks for the objective and the constraints separately at
+// the same point, and a resumed run replays its earlier evaluations from the cache.
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/sensitivity/sensitivity.hpp"
+
+namespace lsmbs {
+
+struct OptimizationSpec {
+  std::string objective;  ///< response name (scalar)
+  struct Constraint {
+    std::string response;
+    double upper = 0;
+  };
+  std::vector<Constraint> constraints;
+  std::string optimizer = "mma";  ///< mma | ccsaq | slsqp
+  SensitivityOptions sensitivity;
+  double tol_objective = 1e-4;     ///< relative objective change between accepted iterates
+  double tol_constraint = 2.5e-3;  ///< relative constraint violation allowed at convergence
+  int max_evaluations = 100;
+  int inner_max_evaluations = 0;   ///< NLopt CCSA inner iterations per outer one (0: NLopt's default)
+  nlohmann::json to_json() const;
+};
+
+/// One evaluation: the objective and constraints (raw and scaled) with gradients.
+struct Evaluation {
+  Vec p;
+  double objective = 0;
+  std::vector<double> constraints;   ///< g_j (raw, each ≤ upper_j)
+  std::vector<double> upper;         ///< bounds
+  Vec objective_gradient;            ///< ∂f/∂p
+  Mat constraint_gradient;           ///< m × n_v
+  double max_violation = 0;          ///< max_j (g_j − ū_j)/|ū_j|  (≤ 0: feasible)
+  double wall_seconds = 0;
+  bool ok = true;
+  std::string message;
+};
+
+class DesignProblem {
+ public:
+  DesignProblem(Case& cs, OptimizationSpec spec);
+  int num_variables() const { return cs_.design->size(); }
+  /// Number of scalar constraints (per-step responses count one per step).
+  int num_constraints() const { return num_constraints_; }
+  const Evaluation& evaluate(const Vec& p);
+  long simulations() const { return simulations_; }
+  long cache_hits() const { return cache_hits_; }
+  /// Seeds the cache (resume from a checkpoint).
+  void seed(const Evaluation& e);
+  const std::map<std::vector<double>, Evaluation>& cache() const { return cache_; }
+  const OptimizationSpec& spec() const { return spec_; }
+  Case& case_data() { return cs_; }
+
+ private:
+  Case& cs_;
+  OptimizationSpec spec_;
+  int objective_index_ = -1;
+  std::vector<int> constraint_index_;
+  int num_constraints_ = 0;
+  std::map<std::vector<double>, Evaluation> cache_;
+  long simulations_ = 0, cache_hits_ = 0;
+};
+
+/// Evaluation to/from JSON (checkpoints): exact doubles via their bit patterns in hex.
+nlohmann::json evaluation_to_json(const Evaluation& e);
+Evaluation evaluation_from_json(const nlohmann::json& j);
+
+}  // namespace lsmbs
