@@ -254,7 +254,9 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   const lsmbs::Vec init = d.initial();
   for (int i = 0; i < d.size(); ++i) p0[d.variables[i].name] = init[i], pf[d.variables[i].name] = res.p[i];
   const auto& first = res.history.front();
-  S["initial"] = {{"design", p0}, {"objective", first.objective}, {"max_violation", first.max_violation}};
+  S["initial"] = {{"design", p0}, {"objective", first.objective}, {"max_violation", first.max_violation},
+                  {"constraints_max", first.constraints.empty() ? NAN
+                                      : *std::max_element(first.constraints.begin(), first.constraints.end())}};
   S["final"] = {{"design", pf}, {"objective", res.final.objective}, {"max_violation", res.final.max_violation},
                 {"constraints_max", res.final.constraints.empty() ? NAN
                                     : *std::max_element(res.final.constraints.begin(), res.final.constraints.end())}};
