@@ -36,12 +36,15 @@ std::string joined_args(int argc, char** argv) {
 }
 
 int simulate(const std::string& case_file, const std::string& out, bool quiet, bool verbose,
-             const std::string& cmdline) {
+             const std::string& integrator, double rtol, const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
   lsmbs::RunOptions ro;
   ro.out_dir = out;
   ro.progress = !quiet && ::isatty(STDERR_FILENO);
   ro.command_line = cmdline;
+  ro.idas = integrator == "idas";
+  ro.idas_options.rtol = rtol;
+  ro.idas_options.atol = 1e-3 * rtol;
   if (verbose)
     std::fprintf(stderr, "lsmbs: case '%s': %d DOFs, %d constraint equations, %d nonzeros\n", cs.name.c_str(),
                  cs.model->nq(), cs.model->nc(), cs.model->pattern().nnz());
@@ -301,6 +304,11 @@ int main(int argc, char** argv) {
   sim->add_option("-o,--output", out, "output folder (summary.json, history.csv, VTU)")->capture_default_str();
   sim->add_flag("-q,--quiet", quiet, "print nothing but errors");
   sim->add_flag("-v,--verbose", verbose, "print model statistics");
+  std::string integrator = "generalized-alpha";
+  double rtol = 1e-9;
+  sim->add_option("--integrator", integrator, "generalized-alpha (the paper's) or idas (SUNDIALS IDAS, GGL index 2)")
+      ->check(CLI::IsMember({"generalized-alpha", "idas"}))->capture_default_str();
+  sim->add_option("--rtol", rtol, "IDAS relative tolerance (absolute: 1e-3 rtol × length scale)")->capture_default_str();
 
   std::vector<std::string> sets;
   int width = 1600;
@@ -318,7 +326,8 @@ int main(int argc, char** argv) {
   sen->add_option("case", case_file, "case file (JSON) with design variables and responses")->required()->check(CLI::ExistingFile);
   sen->add_option("-o,--output", out, "output folder")->capture_default_str();
   sen->add_option("--method", method,
-                  "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | fd-central")->capture_default_str();
+                  "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | fd-central | idas")
+      ->capture_default_str();
   sen->add_option("--delta", delta, "perturbation Δp (semi-analytical) or finite-difference step")->capture_default_str();
   sen->add_flag("--absolute", absolute, "Δp absolute instead of relative to max(|p_i|, 1e-2 (upper - lower))");
   std::string matrix = "last";
@@ -351,7 +360,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (*sim) return simulate(case_file, out, quiet, verbose, joined_args(argc, argv));
+    if (*sim) return simulate(case_file, out, quiet, verbose, integrator, rtol, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
     if (*opt) return optimize(case_file, out, resume, quiet, joined_args(argc, argv));
     if (*sen)

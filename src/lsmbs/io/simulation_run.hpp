@@ -8,12 +8,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/io/case.hpp"
 
 namespace lsmbs {
 
 struct SimulationResult {
   IntegratorSummary integrator;
+  IdasStats idas;  ///< when run with IDAS
   std::vector<double> times;                     ///< grid times, starting at t0
   std::vector<std::vector<double>> history;      ///< per grid time: measure columns
   std::vector<std::string> columns;
@@ -29,6 +31,8 @@ struct RunOptions {
   std::string out_dir;       ///< empty: nothing written
   bool progress = false;     ///< progress line on stderr
   std::string command_line;  ///< recorded in summary.json
+  bool idas = false;         ///< integrate with IDAS (GGL) instead of generalized-α
+  IdasOptions idas_options = IdasOptions::reference();
 };
 
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro = {});

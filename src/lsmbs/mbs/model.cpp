@@ -291,6 +291,47 @@ void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const Mo
   }
 }
 
+SpMat Model::constraint_hessian(double t, const Vec& q, const Vec& w) const {
+  std::vector<Eigen::Triplet<double>> trip;
+  LocalVec ql;
+  LocalEqVec wl;
+  LocalMat H;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    gather(q, d, ql);
+    wl = w.segment(eq_offset_[c], cons_[c]->size());
+    cons_[c]->hessian(t, ql, wl, H);
+    for (size_t i = 0; i < d.size(); ++i)
+      for (size_t j = 0; j < d.size(); ++j) trip.emplace_back(d[i], d[j], H(i, j));
+  }
+  SpMat m(nq_, nq_);
+  m.setFromTriplets(trip.begin(), trip.end());
+  return m;
+}
+
+SpMat Model::velocity_constraint_jacobian(double t, const Vec& q, const Vec& v) const {
+  std::vector<Eigen::Triplet<double>> trip;
+  LocalVec ql, vl;
+  LocalEqVec w;
+  LocalMat H;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    const int m = cons_[c]->size();
+    gather(q, d, ql);
+    gather(v, d, vl);
+    for (int i = 0; i < m; ++i) {
+      w.setZero(m);
+      w[i] = 1;
+      cons_[c]->hessian(t, ql, w, H);
+      const LocalVec row = H * vl;
+      for (size_t j = 0; j < d.size(); ++j) trip.emplace_back(eq_offset_[c] + i, d[j], row[j]);
+    }
+  }
+  SpMat m(nc_, nq_);
+  m.setFromTriplets(trip.begin(), trip.end());
+  return m;
+}
+
 double Model::kinetic_energy(const State& s, const ModelParams& p) const {
   LocalState ls;
   ls.t = s.t;

@@ -130,6 +130,11 @@ class Model {
                                     LocalVec& out) const;
   /// Force elements a parameter direction touches (sorted).
   std::vector<int> forces_touched_by(const ParamDirection& dir) const;
+  /// Σ_i w_i ∂²Φ_i/∂q² (nq × nq) with the full local pattern of every constraint (explicit zeros
+  /// kept, so the pattern does not change between calls).
+  SpMat constraint_hessian(double t, const Vec& q, const Vec& w) const;
+  /// ∂(Φ_q q̇)/∂q (nc × nq): row i is (∂²Φ_i/∂q² q̇)ᵀ, full local pattern kept.
+  SpMat velocity_constraint_jacobian(double t, const Vec& q, const Vec& v) const;
   /// Kinetic energy ½ q̇ᵀ M q̇ (M from the force elements).
   double kinetic_energy(const State& s, const ModelParams& p) const;
   /// Strain energy of all flexible bodies.

@@ -6,7 +6,9 @@
 //  semi-analytical-central  the same with central differences of the residual (±Δp);
 //  direct-analytic          the same linear pseudo-problem (37) with exact ∂r/∂p_i
 //                           (element-local, from ∂μ_e/∂p_i) plus M q̈*_i + C q̇*_i — no Δp;
-//  fd-forward, fd-central   whole re-simulations per design variable.
+//  fd-forward, fd-central   whole re-simulations per design variable;
+//  idas                     SUNDIALS IDAS forward sensitivities on the GGL index-2 form
+//                           (independent reference, integrators/idas_ggl.hpp).
 // Responses are the case's output.responses; their gradients follow eq. (24) at every grid
 // step and the aggregation (average eq. 45, per-step eq. 42, max, KS, integral, …).
 #include <string>
@@ -14,12 +16,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/io/case.hpp"
 
 namespace lsmbs {
 
 struct SensitivityOptions {
-  enum class Method { kSemiAnalytical, kSemiAnalyticalCentral, kDirectAnalytic, kFdForward, kFdCentral };
+  enum class Method { kSemiAnalytical, kSemiAnalyticalCentral, kDirectAnalytic, kFdForward, kFdCentral, kIdas };
   Method method = Method::kDirectAnalytic;
   /// Δp of the semi-analytical methods and step of the finite differences:
   /// relative: Δp_i = delta · max(|p_i|, 1e-2 (upper_i − lower_i)); absolute: Δp_i = delta.
@@ -35,6 +38,9 @@ struct SensitivityOptions {
   /// Semi-analytical pseudo-loads evaluated on the whole residual (Algorithm 2 literally) instead
   /// of element-locally (same result up to round-off, far cheaper; see direct_observer.hpp).
   bool full_residual = false;
+  /// IDAS forward sensitivities (method idas): tolerances and options; output grid and final
+  /// time are the case's generalized-α h and t_end.
+  IdasOptions idas = IdasOptions::reference();
   static bool parse_matrix(const std::string& s, Matrix& m);
   static const char* matrix_name(Matrix m);
 
@@ -70,6 +76,7 @@ struct SensitivityResult {
   std::vector<ResponseSensitivity> responses;
   SensitivityCounts counts;
   IntegratorSummary primal;
+  IdasStats idas;  ///< method idas only
 };
 
 /// Sensitivities at design p (the case's model parameters are left at p).
