@@ -8,6 +8,10 @@ namespace lsmbs {
 // The logistic's tail beyond this many bands is below e^-30 ≈ 1e-13: elements farther from every
 // boundary are uniform to round-off, and distances there need no refinement.
 constexpr double kTailBands = 30;
+// Distances are refined to third order within this many bands (blended from half of it): the
+// logistic's weight beyond is below e^-6, and far from a slender feature the Newton projection
+// is not reliable.
+constexpr double kRefineBands = 6;
 
 DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
     : mesh_(&mesh), ls_(std::move(level_set)), opt_(opt) {
@@ -27,7 +31,7 @@ DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
   }
   std::nth_element(h.begin(), h.begin() + ne / 2, h.end());
   eps_ = opt_.band * h[ne / 2] / opt_.subgrid;
-  ls_.set_refine_within(kTailBands * eps_);
+  ls_.set_refine_within(kRefineBands * eps_);
 }
 
 void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {

@@ -111,7 +111,12 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
       g2 = gx * gx + gy * gy + T(1e-30);
     }
     const T g = sqrt(g2);
-    const T Dr = ((x0 - px) * gx + (y0 - py) * gy) / g - phi / g;  // − φ/|∇φ|: residual of the projection
+    // signed distance along the normal at the projected point (− φ/|∇φ|: residual of the
+    // projection), with the sign of φ(x), which is exact: far from a slender feature three
+    // projections may not reach the surface and the normal there may point the wrong way
+    using std::abs;
+    const T Dn = ((x0 - px) * gx + (y0 - py) * gy) / g - phi / g;
+    const T Dr = value(D0) >= 0 ? abs(Dn) : -abs(Dn);
     // C¹ blend from the refined distance (|D₀| ≤ refine_within/2) to D₀ (|D₀| ≥ refine_within),
     // so that μ(p) has no jump where a point crosses the refinement radius
     const double r1 = 0.5 * refine_within;
