@@ -8,10 +8,10 @@ namespace lsmbs {
 // The logistic's tail beyond this many bands is below e^-30 ≈ 1e-13: elements farther from every
 // boundary are uniform to round-off, and distances there need no refinement.
 constexpr double kTailBands = 30;
-// Distances are refined to third order within this many bands (blended from half of it): the
-// logistic's weight beyond is below e^-6, and far from a slender feature the Newton projection
-// is not reliable.
-constexpr double kRefineBands = 6;
+// Distances are refined to third order within this many bands (blended C² from half of it, where
+// the logistic's weight is already below e^-6): far from a slender feature the Newton projection
+// is not reliable (at 30 bands it flipped signs on the robot arm's plate edges).
+constexpr double kRefineBands = 12;
 
 DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
     : mesh_(&mesh), ls_(std::move(level_set)), opt_(opt) {

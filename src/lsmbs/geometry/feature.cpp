@@ -117,7 +117,7 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
     using std::abs;
     const T Dn = ((x0 - px) * gx + (y0 - py) * gy) / g - phi / g;
     const T Dr = value(D0) >= 0 ? abs(Dn) : -abs(Dn);
-    // C¹ blend from the refined distance (|D₀| ≤ refine_within/2) to D₀ (|D₀| ≥ refine_within),
+    // C² blend from the refined distance (|D₀| ≤ refine_within/2) to D₀ (|D₀| ≥ refine_within),
     // so that μ(p) has no jump where a point crosses the refinement radius
     const double r1 = 0.5 * refine_within;
     if (ad <= r1) {
@@ -125,7 +125,7 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
     } else {
       using std::abs;
       const T z = (T(refine_within) - abs(D0)) / T(refine_within - r1);  // 1 → 0
-      const T w = z * z * (T(3.0) - T(2.0) * z);
+      const T w = z * z * z * (z * (T(6.0) * z - T(15.0)) + T(10.0));       // C² (quintic) smoothstep
       D = w * Dr + (T(1.0) - w) * D0;
     }
   }

@@ -40,7 +40,7 @@ class Feature {
   /// Signed distance estimate D at x for parameter values θ (T = double or Dual over the
   /// feature's parameters): D₀ = φ/|∇φ| (first order); where |D₀| < refine_within, three
   /// Newton projections y ← y − φ∇φ/|∇φ|² onto φ = 0 and D = ±|(x − y)·n(y)| with the sign of
-  /// φ(x) (third order near the boundary; blended C¹ into D₀ between refine_within/2 and
+  /// φ(x) (third order near the boundary; blended C² into D₀ between refine_within/2 and
   /// refine_within).
   /// The refinement removes the O(D²) bias of D₀ (e.g. D₀ ≈ s − 2s²/R for a ξ = 5
   /// super-ellipse) that would otherwise shift a smoothed boundary by a fraction of the band.
