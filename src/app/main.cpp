@@ -4,6 +4,7 @@
 //   lsmbs geometry CASE.json -o OUT      level-set design mapped on the mesh (μ_e VTU + PNG, mass)
 //   lsmbs sensitivity CASE.json --method NAME -o OUT   responses and design gradients (§4.3)
 //   lsmbs optimize CASE.json -o OUT [--resume]         fully coupled optimization (NLopt MMA)
+//   lsmbs verify CASE.json -o OUT                      verification report (methods, Δp, h, mesh)
 //   lsmbs --version
 //
 // Exit codes: 0 success; 1 numerical failure (message says when and why); 2 invalid input or
@@ -23,6 +24,7 @@
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/io/verify_run.hpp"
 #include "lsmbs/optimization/kkt.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
 #include "lsmbs/io/simulation_run.hpp"
@@ -349,6 +351,19 @@ int main(int argc, char** argv) {
   opt->add_flag("--resume", resume, "continue an interrupted run from OUT/checkpoint.json");
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
+  lsmbs::VerifyOptions vo;
+  bool no_idas = false, no_mesh = false;
+  auto* ver = app.add_subcommand("verify", "verification report: every sensitivity method, costs, delta-p study, "
+                                           "time-step study against IDAS, mesh study, pass/fail");
+  ver->add_option("case", case_file, "case file (JSON) with design variables and responses")->required()->check(CLI::ExistingFile);
+  ver->add_option("-o,--output", out, "output folder (report.md, CSV, PNG)")->capture_default_str();
+  ver->add_flag("--no-idas", no_idas, "skip IDAS (too slow for long runs of stiff flexible models)");
+  ver->add_flag("--no-mesh-study", no_mesh, "skip the mesh study");
+  ver->add_option("--fd-delta", vo.fd_delta, "fd-central step")->capture_default_str();
+  ver->add_flag("--fd-absolute", vo.fd_absolute, "fd-central step absolute instead of relative");
+  ver->add_option("--tol-fd", vo.tol_fd, "threshold direct-analytic vs fd-central")->capture_default_str();
+  ver->add_option("--tol-semi", vo.tol_semi, "threshold semi-analytical-central vs direct-analytic")->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -363,6 +378,16 @@ int main(int argc, char** argv) {
     if (*sim) return simulate(case_file, out, quiet, verbose, integrator, rtol, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
     if (*opt) return optimize(case_file, out, resume, quiet, joined_args(argc, argv));
+    if (*ver) {
+      vo.out_dir = out;
+      vo.idas = !no_idas;
+      vo.mesh_study = !no_mesh;
+      vo.command_line = joined_args(argc, argv);
+      const auto r = lsmbs::run_verify(case_file, vo);
+      for (const auto& v : r.summary["verdicts"]) std::printf("  %s\n", v.get<std::string>().c_str());
+      std::printf("lsmbs verify: %s — report in %s/report.md\n", r.pass ? "all checks pass" : "SOME CHECKS FAIL", out.c_str());
+      return r.pass ? 0 : 1;
+    }
     if (*sen)
       return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, quiet, joined_args(argc, argv));
     std::cout << app.help();

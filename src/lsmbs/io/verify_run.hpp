@@ -1,0 +1,30 @@
+#pragma once
+// run_verify — the `lsmbs verify` job (verification layer, issue 6): for one case, every
+// sensitivity method against the exact direct method, their costs, the Δp study of the
+// semi-analytical methods, the time-step study against IDAS, and a mesh study, written as
+// OUT/report.md with CSVs and PNG plots, ending with pass/fail lines against stated thresholds.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace lsmbs {
+
+struct VerifyOptions {
+  std::string out_dir;
+  bool idas = true;            ///< IDAS column and h study (too slow for long flexible runs)
+  bool mesh_study = true;      ///< rectangle meshes only
+  double fd_delta = 1e-5;      ///< fd-central step
+  bool fd_absolute = false;
+  double tol_fd = 1e-5;        ///< direct-analytic vs fd-central
+  double tol_semi = 1e-6;      ///< semi-analytical-central vs direct-analytic
+  std::string command_line;
+};
+
+struct VerifyResult {
+  bool pass = true;
+  nlohmann::json summary;
+};
+
+VerifyResult run_verify(const std::string& case_file, const VerifyOptions& o);
+
+}  // namespace lsmbs
