@@ -492,7 +492,7 @@ struct Loader {
     for (size_t i = 0; i < cs.measures.size(); ++i) {
       if (cs.measures[i]) {
         for (auto& s : cs.measures[i]->components()) c.push_back(s);
-      } else {  // constraint force placeholder: components known from the joint's equations
+      } else {  // constraint-force measure (built after finalize): components from the joint's equations
         const auto& [nm, j] = pending_forces[pending_index(i)];
         const auto [b, e] = joint_elements.at(j);
         int m = 0;

@@ -44,7 +44,6 @@ class Recorder : public StepObserver {
       std::fprintf(stderr, "\r  t = %.5f s  step %ld  Newton %d   ", info.state->t, grid_, info.newton_iterations);
     return true;
   }
-  std::vector<std::pair<double, std::string>> vtu_entries;  // per body: flattened as body index order
 
  private:
   void record(const State& s, long step) {

@@ -268,7 +268,7 @@ SpMat Model::constraint_jacobian(double t, const Vec& q, const ModelParams& p) c
   return m;
 }
 
-void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& p, Vec& phi_t,
+void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& /*p*/, Vec& phi_t,
                                   Vec& gamma) const {
   phi_t.setZero(nc_);
   gamma.setZero(nc_);

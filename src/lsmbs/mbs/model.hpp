@@ -141,9 +141,6 @@ class Model {
   double strain_energy(const Vec& q, const ModelParams& p) const;
 
  private:
-  template <class F>
-  void for_each_force(const State& s, F&& f) const;
-
   std::vector<std::string> param_names_;
   ModelParams params_;
   std::vector<std::string> dof_owner_;

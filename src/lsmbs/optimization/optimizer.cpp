@@ -16,6 +16,7 @@ namespace {
 
 
 struct Context {
+  Context(DesignProblem& p, const OptimizeOptions& opt) : prob(p), o(opt) {}
   DesignProblem& prob;
   const OptimizeOptions& o;
   nlopt_opt opt = nullptr;
@@ -120,7 +121,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   Case& cs = prob.case_data();
   const Design& d = *cs.design;
   const int n = d.size(), m = prob.num_constraints();
-  Context c{prob, o};
+  Context c(prob, o);
   c.lower = d.lower();
   c.range = d.upper() - d.lower();
   c.case_sha = cs.sha256;
