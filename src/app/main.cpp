@@ -5,6 +5,7 @@
 //   lsmbs sensitivity CASE.json --method NAME -o OUT   responses and design gradients (§4.3)
 //   lsmbs optimize CASE.json -o OUT [--resume]         fully coupled optimization (NLopt MMA)
 //   lsmbs verify CASE.json -o OUT                      verification report (methods, Δp, h, mesh)
+//   lsmbs bench CASE.json -o OUT                       step cost against the floor, sensitivity overheads
 //   lsmbs --version
 //
 // Exit codes: 0 success; 1 numerical failure (message says when and why); 2 invalid input or
@@ -25,6 +26,7 @@
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/verify_run.hpp"
+#include "lsmbs/io/bench_run.hpp"
 #include "lsmbs/optimization/kkt.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
 #include "lsmbs/io/simulation_run.hpp"
@@ -364,6 +366,17 @@ int main(int argc, char** argv) {
   ver->add_option("--tol-fd", vo.tol_fd, "threshold direct-analytic vs fd-central")->capture_default_str();
   ver->add_option("--tol-semi", vo.tol_semi, "threshold semi-analytical-central vs direct-analytic")->capture_default_str();
 
+  lsmbs::BenchOptions bo;
+  std::vector<std::string> bench_methods;
+  auto* ben = app.add_subcommand("bench", "whole-run benchmark: step cost against the KLU/assembly floor, "
+                                          "sensitivity overheads, peak memory");
+  ben->add_option("case", case_file, "case file (JSON)")->required()->check(CLI::ExistingFile);
+  ben->add_option("-o,--output", out, "output folder (bench.json, summary.json)")->capture_default_str();
+  ben->add_option("--methods", bench_methods, "sensitivity methods to time (default: direct-analytic "
+                                              "semi-analytical-central; 'none' for none)");
+  ben->add_option("--repetitions", bo.repetitions, "repetitions of the floor measurements")->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -378,6 +391,21 @@ int main(int argc, char** argv) {
     if (*sim) return simulate(case_file, out, quiet, verbose, integrator, rtol, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
     if (*opt) return optimize(case_file, out, resume, quiet, joined_args(argc, argv));
+    if (*ben) {
+      bo.out_dir = out;
+      bo.command_line = joined_args(argc, argv);
+      if (!bench_methods.empty()) bo.methods = bench_methods;
+      if (bo.methods.size() == 1 && bo.methods[0] == "none") bo.methods.clear();
+      const auto J = lsmbs::run_bench(case_file, bo);
+      std::printf("lsmbs bench: step %.3f ms, floor %.3f ms (residual %.3f + matrix %.3f + KLU %.3f): ratio %.2f\n",
+                  1e3 * J["primal"]["seconds_per_step"].get<double>(), 1e3 * J["floor_seconds"]["total"].get<double>(),
+                  1e3 * J["floor_seconds"]["residual"].get<double>(), 1e3 * J["floor_seconds"]["iteration_matrix"].get<double>(),
+                  1e3 * J["floor_seconds"]["klu_refactor_and_solve"].get<double>(), J["primal"]["step_over_floor"].get<double>());
+      for (auto it = J["sensitivities"].begin(); it != J["sensitivities"].end(); ++it)
+        std::printf("  %-26s %.2f x primal\n", it.key().c_str(), it.value()["over_primal"].get<double>());
+      std::printf("  peak memory %.1f MB; results in %s\n", J["peak_rss_kb"].get<double>() / 1024, out.c_str());
+      return 0;
+    }
     if (*ver) {
       vo.out_dir = out;
       vo.idas = !no_idas;

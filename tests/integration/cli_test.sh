@@ -122,4 +122,11 @@ assert a["final"]["objective"] == b["final"]["objective"]
 assert b["counts"]["simulations_this_run"] < a["counts"]["simulations_this_run"]
 print("kill/resume ok:", b["counts"])
 PY
+# Bench: the step/floor ratio and the sensitivity overheads are recorded.
+"$exe" bench "$spring" -o "$tmp/bench" --repetitions 5 > /dev/null || fail "bench"
+python3 -c "
+import json, math; b=json.load(open('$tmp/bench/bench.json'))
+assert b['primal']['steps'] == 250 and 0 < b['primal']['step_over_floor'] < 100
+assert set(b['sensitivities']) == {'direct-analytic', 'semi-analytical-central'} and all(v['ok'] for v in b['sensitivities'].values())
+assert b['peak_rss_kb'] > 0" || fail "bench.json"
 echo "cli: all checks passed"

@@ -1,0 +1,24 @@
+#pragma once
+// run_bench — the `lsmbs bench` job: whole-run figures of a case measured in one process:
+//  * the floor of a generalized-α step: one residual assembly + one iteration-matrix assembly +
+//    one KLU refactorization and solve (averaged over repetitions at the initial state);
+//  * the average step of the primal run and its ratio to the floor;
+//  * time(primal + sensitivities) / time(primal) for the listed methods (cases with a design);
+//  * peak resident memory.
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace lsmbs {
+
+struct BenchOptions {
+  std::string out_dir;
+  std::vector<std::string> methods = {"direct-analytic", "semi-analytical-central"};
+  int repetitions = 20;
+  std::string command_line;
+};
+
+nlohmann::json run_bench(const std::string& case_file, const BenchOptions& o);
+
+}  // namespace lsmbs
