@@ -400,14 +400,11 @@ void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat
     gather(s.a, d, ls.a);
     f->mass_damping(ls, p, M, C);
     const bool has_c = !C.isZero(0.0);
-    for (int k = 0; k < nc; ++k)
+    for (Eigen::Index j = 0; j < nd; ++j)  // skip structural zeros (quads: block-diagonal x/y mass)
       for (Eigen::Index i = 0; i < nd; ++i) {
-        double v = 0;
-        for (Eigen::Index j = 0; j < nd; ++j) {
-          v += M(i, j) * Qdd(d[j], k);
-          if (has_c) v += C(i, j) * Vd(d[j], k);
-        }
-        out(d[i], k) += v;
+        const double mij = M(i, j), cij = has_c ? C(i, j) : 0.0;
+        if (mij == 0 && cij == 0) continue;
+        for (int k = 0; k < nc; ++k) out(d[i], k) += mij * Qdd(d[j], k) + cij * Vd(d[j], k);
       }
   }
 }

@@ -65,10 +65,11 @@ void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq
         add_direction(scratch_, d, -2 * t);
         c.measure->evaluate(*cs_.model, s, scratch_, buf_.data());
         const double fm = buf_[c.component];
-        add_direction(scratch_, d, t);
+        // restore the touched entries exactly (no copy of the whole parameter set per step)
+        for (const auto& f : d.fields) scratch_.fields[f.field][f.element] = p.fields[f.field][f.element];
+        for (const auto& [j, v] : d.scalars) scratch_.scalars[j] = p.scalars[j];
         row[i] += (fp - fm) / (2 * t);
       }
-      scratch_ = p;  // remove round-off of the ± moves
     }
     c.grads.push_back(row);
   }
