@@ -31,6 +31,18 @@ void Design::apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu) c
   for (const auto& bd : bindings) params.scalars[bd.parameter] = bd.offset + bd.scale * p[bd.variable];
 }
 
+std::vector<ParamDirection> Design::apply_with_directions(const Vec& p, ModelParams& params) const {
+  std::vector<SpMat> dmu;
+  apply(p, params, &dmu);
+  std::vector<ParamDirection> dirs(size());
+  for (size_t b = 0; b < bodies.size(); ++b)
+    for (int k = 0; k < dmu[b].outerSize(); ++k)
+      for (SpMat::InnerIterator it(dmu[b], k); it; ++it)
+        dirs[it.col()].fields.push_back({bodies[b].body->field, static_cast<int>(it.row()), it.value()});
+  for (const auto& bd : bindings) dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
+  return dirs;
+}
+
 double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params, Vec& grad) {
   const double rt = params.scalars[b.body->rho_param] * params.scalars[b.body->thickness_param];
   const auto& A = b.map->element_areas();

@@ -44,6 +44,9 @@ class Design {
   /// Writes μ(p) into each designed body's field and bound parameter values into scalars.
   /// If dmu is given it receives ∂μ/∂p per designed body (same order as `bodies`).
   void apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu = nullptr) const;
+  /// apply() with ∂μ/∂p, returned as one parameter direction ∂(ModelParams)/∂p_i per variable
+  /// (the mapping runs once).
+  std::vector<ParamDirection> apply_with_directions(const Vec& p, ModelParams& params) const;
   /// Mass of a designed body and its gradient m(p), ∂m/∂p = ρ t Σ_e A_e ∂μ_e/∂p.
   static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params, Vec& grad);
 };

@@ -259,14 +259,7 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
     im.p.assign(pv.data(), pv.data() + nv);
     // parameter directions ∂(ModelParams)/∂p_i for the consistent sensitivity initial values
     ModelParams tmp = im.nominal;
-    std::vector<SpMat> dmu;
-    design.apply(pv, tmp, &dmu);
-    im.dirs.assign(nv, {});
-    for (size_t b = 0; b < design.bodies.size(); ++b)
-      for (int k = 0; k < dmu[b].outerSize(); ++k)
-        for (SpMat::InnerIterator it(dmu[b], k); it; ++it)
-          im.dirs[it.col()].fields.push_back({design.bodies[b].body->field, static_cast<int>(it.row()), it.value()});
-    for (const auto& bd : design.bindings) im.dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
+    im.dirs = design.apply_with_directions(pv, tmp);
     Mat B(m.n(), nv);
     Vec col;
     for (int i = 0; i < nv; ++i) {

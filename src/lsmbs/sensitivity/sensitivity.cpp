@@ -87,22 +87,6 @@ void add_primal(SensitivityCounts& c, const IntegratorSummary& s) {
   c.residual_evaluations += s.residual_evaluations;
 }
 
-// ∂(ModelParams)/∂p_i for every design variable.
-std::vector<ParamDirection> directions(const Design& d, const Vec& p, const ModelParams& params) {
-  ModelParams tmp = params;
-  std::vector<SpMat> dmu;
-  d.apply(p, tmp, &dmu);
-  std::vector<ParamDirection> dirs(d.size());
-  for (size_t b = 0; b < d.bodies.size(); ++b) {
-    const SpMat& J = dmu[b];
-    for (int k = 0; k < J.outerSize(); ++k)
-      for (SpMat::InnerIterator it(J, k); it; ++it)
-        dirs[it.col()].fields.push_back({d.bodies[b].body->field, static_cast<int>(it.row()), it.value()});
-  }
-  for (const auto& bd : d.bindings) dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
-  return dirs;
-}
-
 std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal) {
   ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()));
   struct Obs : StepObserver {
@@ -135,10 +119,9 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
   const int nv = d.size();
   SensitivityResult res;
   ModelParams& params = cs.model->params();
-  d.apply(p, params);
 
   if (o.method == Method::kIdas) {
-    ResponseTracker tracker(cs, directions(d, p, params));
+    ResponseTracker tracker(cs, d.apply_with_directions(p, params));
     tracker.set_scaling(1.0);  // IDAS carries the physical multipliers
     IdasOptions io = o.idas;
     io.h_out = cs.simulation.h;
@@ -161,6 +144,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     return res;
   }
   if (o.method == Method::kFdForward || o.method == Method::kFdCentral) {
+    d.apply(p, params);
     try {
       const auto base = run_values(cs, res.counts, &res.primal);
       res.counts.primal_wall_seconds = res.primal.wall_seconds;
@@ -194,7 +178,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     }
     d.apply(p, params);
   } else {
-    auto dirs = directions(d, p, params);
+    auto dirs = d.apply_with_directions(p, params);
     ResponseTracker tracker(cs, dirs);
     std::unique_ptr<PseudoLoad> load;
     if (o.method == Method::kDirectAnalytic) {
