@@ -39,10 +39,17 @@ std::string joined_args(int argc, char** argv) {
   return s;
 }
 
-int simulate(const std::string& case_file, const std::string& out, bool quiet, bool verbose,
-             const std::string& integrator, double rtol, const std::string& cmdline) {
+lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets);
+
+int simulate(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets, bool quiet,
+             bool verbose, const std::string& integrator, double rtol, const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
   lsmbs::RunOptions ro;
+  if (!sets.empty()) {
+    if (!cs.design) throw lsmbs::Error(case_file, "/design", "--set needs a design section (design variables)");
+    ro.design_point = design_point(cs, sets);
+    cs.design->apply(ro.design_point, cs.model->params());
+  }
   ro.out_dir = out;
   ro.progress = !quiet && ::isatty(STDERR_FILENO);
   ro.command_line = cmdline;
@@ -229,9 +236,15 @@ bool plot_history(const std::string& out) {
   return ok;
 }
 
-int optimize(const std::string& case_file, const std::string& out, bool resume, bool quiet, const std::string& cmdline) {
+int optimize(const std::string& case_file, const std::string& out, bool resume, const std::string& optimizer,
+             bool quiet, const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);
-  const lsmbs::OptimizationSpec spec = lsmbs::parse_optimization(cs);  // validated before anything is written
+  lsmbs::OptimizationSpec spec = lsmbs::parse_optimization(cs);  // validated before anything is written
+  if (!optimizer.empty()) {
+    if (optimizer != "mma-svanberg" && cs.optimization.contains("move_limit"))
+      throw lsmbs::Error("--optimizer " + optimizer + ": the case sets a move_limit, which only mma-svanberg has");
+    spec.optimizer = optimizer;
+  }
   std::filesystem::create_directories(out);
   lsmbs::DesignProblem prob(cs, spec);
   const auto& d = *cs.design;
@@ -315,6 +328,7 @@ int main(int argc, char** argv) {
   sim->add_option("--rtol", rtol, "IDAS relative tolerance (absolute: 1e-3 rtol × length scale)")->capture_default_str();
 
   std::vector<std::string> sets;
+  sim->add_option("--set", sets, "design variable override name=value (repeatable)");
   int width = 1600;
   auto* geo = app.add_subcommand("geometry", "map the level-set design onto the mesh: μ_e (VTU, PNG), mass and its gradient");
   geo->add_option("case", case_file, "case file (JSON) with a design section")->required()->check(CLI::ExistingFile);
@@ -351,6 +365,9 @@ int main(int argc, char** argv) {
   opt->add_option("-o,--output", out, "output folder (history.csv, checkpoint.json, final_design/, summary.json)")
       ->capture_default_str();
   opt->add_flag("--resume", resume, "continue an interrupted run from OUT/checkpoint.json");
+  std::string optimizer;
+  opt->add_option("--optimizer", optimizer, "override the case's optimizer")
+      ->check(CLI::IsMember({"mma", "ccsaq", "slsqp", "mma-svanberg"}));
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
   lsmbs::VerifyOptions vo;
@@ -388,9 +405,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (*sim) return simulate(case_file, out, quiet, verbose, integrator, rtol, joined_args(argc, argv));
+    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
-    if (*opt) return optimize(case_file, out, resume, quiet, joined_args(argc, argv));
+    if (*opt) return optimize(case_file, out, resume, optimizer, quiet, joined_args(argc, argv));
     if (*ben) {
       bo.out_dir = out;
       bo.command_line = joined_args(argc, argv);

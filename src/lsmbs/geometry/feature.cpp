@@ -93,10 +93,82 @@ void Feature::phi_grad(const T& px, const T& py, const T* th, T& phi, T& gx, T& 
   gy = s * gu + c * gv;
 }
 
+namespace {
+
+// Closest point of the ellipse (u/e0)² + (v/e1)² = 1 to (y0, y1), both in the first quadrant
+// and e0 ≥ e1 > 0 (Eberly, "Distance from a point to an ellipse, an ellipsoid, or a
+// hyperellipsoid", 2013: bisection on the root of the monotone secular function, robust for
+// every point, inside or outside, slender or not).
+void ellipse_closest_first_quadrant(double e0, double e1, double y0, double y1, double& x0, double& x1) {
+  if (y1 > 0) {
+    if (y0 > 0) {
+      const double z0 = y0 / e0, z1 = y1 / e1, g = z0 * z0 + z1 * z1 - 1;
+      if (g == 0) {
+        x0 = y0, x1 = y1;
+        return;
+      }
+      const double r0 = (e0 / e1) * (e0 / e1), n0 = r0 * z0;
+      double s0 = z1 - 1, s1 = g < 0 ? 0 : std::hypot(n0, z1) - 1, sb = 0;
+      for (int i = 0; i < 1100; ++i) {
+        sb = 0.5 * (s0 + s1);
+        if (sb == s0 || sb == s1) break;
+        const double q0 = n0 / (sb + r0), q1 = z1 / (sb + 1), gg = q0 * q0 + q1 * q1 - 1;
+        if (gg > 0) s0 = sb;
+        else if (gg < 0) s1 = sb;
+        else break;
+      }
+      x0 = r0 * y0 / (sb + r0);
+      x1 = y1 / (sb + 1);
+    } else {
+      x0 = 0, x1 = e1;
+    }
+  } else {
+    const double numer0 = e0 * y0, denom0 = e0 * e0 - e1 * e1;
+    if (numer0 < denom0) {
+      const double xde0 = numer0 / denom0;
+      x0 = e0 * xde0;
+      x1 = e1 * std::sqrt(std::max(0.0, 1 - xde0 * xde0));
+    } else {
+      x0 = e0, x1 = 0;
+    }
+  }
+}
+
+}  // namespace
+
 template <class T>
 T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
   const T x0(x.x()), y0(x.y());
   T phi, gx, gy;
+  if (type_ == Type::kEllipse) {
+    // eq. (41): the exact Euclidean distance to the ellipse with semi-axes a·d, b·d. Its
+    // derivative with respect to every parameter θ follows from the closest point y* alone
+    // (the envelope theorem): ∂D/∂θ = (∂φ/∂θ)(y*) / |∇φ(y*)|. The exact distance is monotone
+    // in d, so μ(d) is monotone even for holes smaller than a sub-cell (the normalized φ/|∇φ| is
+    // not, and a tiny slender hole's mass then had gradients of the wrong sign).
+    const double A = value(th[2]) * value(th[4]), B = value(th[3]) * value(th[4]);
+    if (A > 0 && B > 0) {
+      const double ang = value(th[5]), c = std::cos(ang), sn = std::sin(ang);
+      const double dx = x.x() - value(th[0]), dy = x.y() - value(th[1]);
+      const double u = c * dx + sn * dy, v = c * dy - sn * dx;
+      double cu, cv;
+      if (A >= B) {
+        ellipse_closest_first_quadrant(A, B, std::abs(u), std::abs(v), cu, cv);
+      } else {
+        ellipse_closest_first_quadrant(B, A, std::abs(v), std::abs(u), cv, cu);
+      }
+      cu = std::copysign(cu, u), cv = std::copysign(cv, v);
+      const bool inside = (u / A) * (u / A) + (v / B) * (v / B) < 1;
+      const double dist = std::hypot(u - cu, v - cv);
+      const double d = inside ? -dist : dist;
+      // φ and ∇φ at the closest point, carrying ∂/∂θ in T
+      const T yx(value(th[0]) + c * cu - sn * cv), yy(value(th[1]) + sn * cu + c * cv);
+      phi_grad(yx, yy, th, phi, gx, gy);
+      const double g = std::sqrt(value(gx) * value(gx) + value(gy) * value(gy));
+      const T D = T(d) + (phi - T(value(phi))) / g;
+      return hole_ ? D : -D;
+    }
+  }
   phi_grad(x0, y0, th, phi, gx, gy);
   T g2 = gx * gx + gy * gy + T(1e-30);
   const T D0 = phi / sqrt(g2);

@@ -28,7 +28,13 @@ OptimizationSpec parse_optimization(const Case& cs) {
     c.finish();
     s.constraints.push_back(k);
   }
-  s.optimizer = r.one_of("optimizer", {"mma", "ccsaq", "slsqp"}, "mma");
+  s.optimizer = r.one_of("optimizer", {"mma", "ccsaq", "slsqp", "mma-svanberg"}, "mma");
+  if (r.has("move_limit")) {
+    if (s.optimizer != "mma-svanberg")
+      r.fail("move_limit", "a move limit needs \"optimizer\": \"mma-svanberg\" (NLopt 2.7 cannot bound its steps)");
+    s.move_limit = r.positive("move_limit");
+    if (s.move_limit > 1) r.fail("move_limit", "expected a fraction of the variable range in (0, 1]");
+  }
   if (auto so = r.optional_child("sensitivity")) {
     const std::string m = so->string("method", "direct-analytic");
     if (!SensitivityOptions::parse(m, s.sensitivity.method)) {
@@ -49,6 +55,8 @@ OptimizationSpec parse_optimization(const Case& cs) {
     st->finish();
   }
   s.inner_max_evaluations = r.integer("inner_max_evaluations", 0, 0);
+  if (s.inner_max_evaluations > 0 && s.optimizer == "mma-svanberg")
+    r.fail("inner_max_evaluations", "the classic MMA has no inner iterations (this option is for mma and ccsaq)");
   r.finish();
   return s;
 }

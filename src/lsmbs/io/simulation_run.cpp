@@ -137,6 +137,12 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["options"] = {{"integrator", ro.idas ? "idas" : "generalized-alpha"},
                   {ro.idas ? "idas" : "generalized_alpha", ro.idas ? ro.idas_options.to_json() : cs.simulation.to_json()},
                   {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};
+  if (cs.design) {
+    const Vec p = ro.design_point.size() ? ro.design_point : cs.design->initial();
+    nlohmann::json d = nlohmann::json::object();
+    for (int i = 0; i < cs.design->size(); ++i) d[cs.design->variables[i].name] = p[i];
+    S["design"] = d;
+  }
   S["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"unknowns", m.n()}, {"nonzeros", m.pattern().nnz()},
                 {"rigid_bodies", m.rigid_bodies().size()}, {"flexible_bodies", bodies}};
   S["counts"] = ro.idas ? res.idas.to_json() : res.integrator.to_json();

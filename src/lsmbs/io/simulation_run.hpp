@@ -33,6 +33,9 @@ struct RunOptions {
   std::string command_line;  ///< recorded in summary.json
   bool idas = false;         ///< integrate with IDAS (GGL) instead of generalized-α
   IdasOptions idas_options = IdasOptions::reference();
+  /// Design point the case's parameters were set to (recorded in summary.json; empty: the
+  /// case's initial design, if it has one).
+  Vec design_point;
 };
 
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro = {});

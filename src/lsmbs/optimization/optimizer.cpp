@@ -9,6 +9,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/optimization/mma_classic.hpp"
 
 namespace lsmbs {
 
@@ -25,6 +26,7 @@ struct Context {
   std::vector<Evaluation> history;
   long new_sims = 0;
   bool interrupted = false;
+  bool stop = false;  ///< set when the run must end (interrupted, failed simulation)
   std::string case_sha, spec_json;
 
   Vec to_p(const double* x) const {
@@ -47,11 +49,29 @@ struct Context {
       if (o.on_evaluation) o.on_evaluation(static_cast<int>(history.size()), e);
       if (o.stop_after >= 0 && new_sims >= o.stop_after) {
         interrupted = true;
-        nlopt_force_stop(opt);
+        request_stop();
       }
     }
-    if (!e.ok) nlopt_force_stop(opt);
+    if (!e.ok) request_stop();
     return e;
+  }
+  void request_stop() {
+    stop = true;
+    if (opt) nlopt_force_stop(opt);
+  }
+  // scaled quantities (x in [0, 1]^n, f / f0, (g − ū)/|ū|)
+  Vec scaled_objective_gradient(const Evaluation& e) const {
+    return e.objective_gradient.cwiseProduct(range) / f0;
+  }
+  void scaled_constraints(const Evaluation& e, Vec& g, Mat& dg) const {
+    const Eigen::Index m = static_cast<Eigen::Index>(e.constraints.size());
+    g.resize(m);
+    dg.resize(m, range.size());
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const double s = std::max(std::abs(e.upper[j]), 1e-300);
+      g[j] = (e.constraints[j] - e.upper[j]) / s;
+      dg.row(j) = e.constraint_gradient.row(j).cwiseProduct(range.transpose()) / s;
+    }
   }
   void checkpoint() {
     if (o.out_dir.empty()) return;
@@ -65,20 +85,20 @@ struct Context {
 double objective_cb(unsigned n, const double* x, double* grad, void* data) {
   auto& c = *static_cast<Context*>(data);
   const Evaluation& e = c.eval(x);
-  if (grad)
-    for (unsigned i = 0; i < n; ++i) grad[i] = e.objective_gradient[i] * c.range[i] / c.f0;
+  if (grad) Eigen::Map<Vec>(grad, n) = c.scaled_objective_gradient(e);
   return e.objective / c.f0;
 }
 
 void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
   auto& c = *static_cast<Context*>(data);
   const Evaluation& e = c.eval(x);
-  for (unsigned j = 0; j < m; ++j) {
-    const double s = std::max(std::abs(e.upper[j]), 1e-300);
-    result[j] = (e.constraints[j] - e.upper[j]) / s;
-    if (grad)
-      for (unsigned i = 0; i < n; ++i) grad[j * n + i] = e.constraint_gradient(j, i) * c.range[i] / s;
-  }
+  Vec g;
+  Mat dg;
+  c.scaled_constraints(e, g, dg);
+  Eigen::Map<Vec>(result, m) = g;
+  if (grad)  // NLopt: row-major m × n
+    for (unsigned j = 0; j < m; ++j)
+      for (unsigned i = 0; i < n; ++i) grad[j * n + i] = dg(j, i);
 }
 
 const char* status_text(nlopt_result r) {
@@ -96,6 +116,33 @@ const char* status_text(nlopt_result r) {
     case NLOPT_FORCED_STOP: return "stopped";
     default: return "unknown";
   }
+}
+
+// Svanberg's classic MMA: one simulation per outer iteration; stops when the objective changes
+// by less than tol_objective (relative) between two iterations and the new design is feasible
+// within tol_constraint (the paper's rule), or after max_evaluations simulations.
+nlopt_result run_mma_classic(Context& c, std::vector<double>& xs, const Evaluation& e0) {
+  const int n = static_cast<int>(xs.size());
+  const auto& spec = c.prob.spec();
+  MmaOptions mo;
+  mo.move = spec.move_limit;
+  MmaClassic mma(Vec::Zero(n), Vec::Ones(n), static_cast<int>(e0.constraints.size()), mo);
+  Vec x = Eigen::Map<const Vec>(xs.data(), n);
+  Evaluation cur = e0;
+  for (int k = 1; k < spec.max_evaluations; ++k) {
+    Vec g;
+    Mat dg;
+    c.scaled_constraints(cur, g, dg);
+    const Vec xn = mma.step(x, c.scaled_objective_gradient(cur), g, dg).cwiseMax(0.0).cwiseMin(1.0);
+    const Evaluation& e = c.eval(xn.data());
+    if (c.stop) return NLOPT_FORCED_STOP;
+    const double change = std::abs(e.objective - cur.objective) / std::max(std::abs(cur.objective), 1e-300);
+    x = xn;
+    cur = e;
+    std::copy(x.data(), x.data() + n, xs.begin());
+    if (change < spec.tol_objective && e.max_violation <= spec.tol_constraint) return NLOPT_FTOL_REACHED;
+  }
+  return NLOPT_MAXEVAL_REACHED;
 }
 
 }  // namespace
@@ -144,35 +191,38 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
     for (const auto& e : j.at("evaluations")) prob.seed(evaluation_from_json(e));
   }
 
+  const bool classic = prob.spec().optimizer == "mma-svanberg";
   nlopt_algorithm alg = prob.spec().optimizer == "ccsaq" ? NLOPT_LD_CCSAQ
                       : prob.spec().optimizer == "slsqp" ? NLOPT_LD_SLSQP
                                                          : NLOPT_LD_MMA;
-  c.opt = nlopt_create(alg, n);
   std::vector<double> lb(n, 0.0), ub(n, 1.0), x(n);
   const Vec p0 = d.initial();
   for (int i = 0; i < n; ++i) x[i] = (p0[i] - c.lower[i]) / c.range[i];
-  nlopt_set_lower_bounds(c.opt, lb.data());
-  nlopt_set_upper_bounds(c.opt, ub.data());
-  // objective scale from the initial design (evaluated first, also as NLopt's first point)
-  const Evaluation& e0 = c.eval(x.data());
+  // objective scale from the initial design (evaluated first, also as the optimizer's first point)
+  const Evaluation e0 = c.eval(x.data());
   OptimizeResult res;
-  if (!e0.ok) {
-    nlopt_destroy(c.opt);
-    throw NumericalFailure("the initial design could not be simulated: " + e0.message);
-  }
+  if (!e0.ok) throw NumericalFailure("the initial design could not be simulated: " + e0.message);
   c.f0 = std::max(std::abs(e0.objective), 1e-300);
-  nlopt_set_min_objective(c.opt, objective_cb, &c);
-  if (m > 0) {
-    std::vector<double> tol(m, 0.0);
-    nlopt_add_inequality_mconstraint(c.opt, m, constraints_cb, &c, tol.data());
+  nlopt_result r;
+  if (classic) {
+    r = c.stop ? NLOPT_FORCED_STOP : run_mma_classic(c, x, e0);
+  } else {
+    c.opt = nlopt_create(alg, n);
+    nlopt_set_lower_bounds(c.opt, lb.data());
+    nlopt_set_upper_bounds(c.opt, ub.data());
+    nlopt_set_min_objective(c.opt, objective_cb, &c);
+    if (m > 0) {
+      std::vector<double> tol(m, 0.0);
+      nlopt_add_inequality_mconstraint(c.opt, m, constraints_cb, &c, tol.data());
+    }
+    nlopt_set_ftol_rel(c.opt, prob.spec().tol_objective);
+    nlopt_set_maxeval(c.opt, prob.spec().max_evaluations);
+    if (prob.spec().inner_max_evaluations > 0 && alg != NLOPT_LD_SLSQP)
+      nlopt_set_param(c.opt, "inner_maxeval", prob.spec().inner_max_evaluations);
+    double fmin = 0;
+    r = c.stop ? NLOPT_FORCED_STOP : nlopt_optimize(c.opt, x.data(), &fmin);
+    nlopt_destroy(c.opt);
   }
-  nlopt_set_ftol_rel(c.opt, prob.spec().tol_objective);
-  nlopt_set_maxeval(c.opt, prob.spec().max_evaluations);
-  if (prob.spec().inner_max_evaluations > 0 && alg != NLOPT_LD_SLSQP)
-    nlopt_set_param(c.opt, "inner_maxeval", prob.spec().inner_max_evaluations);
-  double fmin = 0;
-  const nlopt_result r = nlopt_optimize(c.opt, x.data(), &fmin);
-  nlopt_destroy(c.opt);
 
   res.nlopt_code = r;
   res.nlopt_status = status_text(r);

@@ -15,7 +15,7 @@ nlohmann::json OptimizationSpec::to_json() const {
   return {{"objective", objective}, {"constraints", c}, {"optimizer", optimizer},
           {"sensitivity", sensitivity.to_json()}, {"tol_objective", tol_objective},
           {"tol_constraint", tol_constraint}, {"max_evaluations", max_evaluations},
-          {"inner_max_evaluations", inner_max_evaluations}};
+          {"inner_max_evaluations", inner_max_evaluations}, {"move_limit", move_limit}};
 }
 
 DesignProblem::DesignProblem(Case& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {

@@ -23,7 +23,8 @@ struct OptimizationSpec {
     double upper = 0;
   };
   std::vector<Constraint> constraints;
-  std::string optimizer = "mma";  ///< mma | ccsaq | slsqp
+  std::string optimizer = "mma";  ///< mma | ccsaq | slsqp (NLopt) | mma-svanberg (classic MMA)
+  double move_limit = 0.5;        ///< mma-svanberg: largest step per iteration, fraction of the range
   SensitivityOptions sensitivity;
   double tol_objective = 1e-4;     ///< relative objective change between accepted iterates
   double tol_constraint = 2.5e-3;  ///< relative constraint violation allowed at convergence
