@@ -77,21 +77,26 @@ int simulate(const std::string& case_file, const std::string& out, const std::ve
 }
 
 // "name=value" overrides of design variables.
+std::pair<std::string, double> parse_set(const std::string& s) {
+  const auto eq = s.find('=');
+  if (eq == std::string::npos) throw lsmbs::Error("--set " + s + ": expected name=value");
+  try {
+    size_t used = 0;
+    const double v = std::stod(s.substr(eq + 1), &used);
+    if (used != s.size() - eq - 1) throw std::invalid_argument("trailing characters");
+    return {s.substr(0, eq), v};
+  } catch (const std::exception&) {
+    throw lsmbs::Error("--set " + s + ": expected a number after '='");
+  }
+}
+
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets) {
   lsmbs::Vec p = cs.design->initial();
   for (const auto& s : sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos) throw lsmbs::Error("--set " + s + ": expected name=value");
-    const std::string name = s.substr(0, eq);
+    const auto [name, value] = parse_set(s);
     const int k = cs.design->variable_index(name);
     if (k < 0) throw lsmbs::Error("--set " + s + ": unknown design variable '" + name + "'");
-    try {
-      size_t used = 0;
-      p[k] = std::stod(s.substr(eq + 1), &used);
-      if (used != s.size() - eq - 1) throw std::invalid_argument("trailing characters");
-    } catch (const std::exception&) {
-      throw lsmbs::Error("--set " + s + ": expected a number after '='");
-    }
+    p[k] = value;
   }
   return p;
 }
@@ -382,6 +387,7 @@ int main(int argc, char** argv) {
   ver->add_flag("--fd-absolute", vo.fd_absolute, "fd-central step absolute instead of relative");
   ver->add_option("--tol-fd", vo.tol_fd, "threshold direct-analytic vs fd-central")->capture_default_str();
   ver->add_option("--tol-semi", vo.tol_semi, "threshold semi-analytical-central vs direct-analytic")->capture_default_str();
+  ver->add_option("--set", sets, "design variable override name=value (repeatable)");
 
   lsmbs::BenchOptions bo;
   std::vector<std::string> bench_methods;
@@ -428,6 +434,7 @@ int main(int argc, char** argv) {
       vo.idas = !no_idas;
       vo.mesh_study = !no_mesh;
       vo.command_line = joined_args(argc, argv);
+      for (const auto& st : sets) vo.design_overrides.push_back(parse_set(st));
       const auto r = lsmbs::run_verify(case_file, vo);
       for (const auto& v : r.summary["verdicts"]) std::printf("  %s\n", v.get<std::string>().c_str());
       std::printf("lsmbs verify: %s — report in %s/report.md\n", r.pass ? "all checks pass" : "SOME CHECKS FAIL", out.c_str());

@@ -4,6 +4,8 @@
 // semi-analytical methods, the time-step study against IDAS, and a mesh study, written as
 // OUT/report.md with CSVs and PNG plots, ending with pass/fail lines against stated thresholds.
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -18,6 +20,9 @@ struct VerifyOptions {
   double tol_fd = 1e-5;        ///< direct-analytic vs fd-central
   double tol_semi = 1e-6;      ///< semi-analytical-central vs direct-analytic
   std::string command_line;
+  /// Design point as name=value overrides of the initial design (e.g. an interior point where
+  /// a tiny start hole has negligible gradients).
+  std::vector<std::pair<std::string, double>> design_overrides;
 };
 
 struct VerifyResult {
