@@ -33,6 +33,11 @@ c=json.load(open('$case_file')); c['bodies'][0]['mass']=-1; json.dump(c,open('$t
 [ $rc -eq 2 ] || fail "invalid input returned $rc, expected 2"
 grep -q "/bodies/0/mass: expected a non-negative number" "$tmp/err.txt" || fail "message: $(cat "$tmp/err.txt")"
 [ ! -e "$tmp/bad_out" ] || fail "output written for invalid input"
+# a number out of double range (found by the fuzzer: it used to be an "internal error", exit 1)
+printf '{"name": 1e999}' > "$tmp/overflow.json"
+"$exe" simulate "$tmp/overflow.json" -o "$tmp/ov_out" 2> "$tmp/err_ov.txt"; rc=$?
+[ $rc -eq 2 ] || fail "number overflow returned $rc, expected 2"
+grep -q "overflow.json: invalid JSON" "$tmp/err_ov.txt" || fail "message: $(cat "$tmp/err_ov.txt")"
 
 # Numerical failure: exit 1, partial results flagged.
 python3 -c "

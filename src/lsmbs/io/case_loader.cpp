@@ -780,6 +780,8 @@ Case load_case(const std::string& path) {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw Error(path, "byte " + std::to_string(e.byte), std::string("invalid JSON: ") + e.what());
+  } catch (const nlohmann::json::exception& e) {  // e.g. out_of_range: a number like 1e999 (found by fuzzing)
+    throw Error(path, "", std::string("invalid JSON: ") + e.what());
   }
   Case cs = load_case_json(j, path, fs::path(path).parent_path().string());
   cs.sha256 = sha256_hex(text);

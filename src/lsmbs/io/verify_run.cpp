@@ -29,6 +29,8 @@ json read_json(const std::string& file) {
     return json::parse(f);
   } catch (const json::parse_error& e) {
     throw Error(file, "byte " + std::to_string(e.byte), std::string("invalid JSON: ") + e.what());
+  } catch (const json::exception& e) {  // out_of_range: a number like 1e999
+    throw Error(file, "", std::string("invalid JSON: ") + e.what());
   }
 }
 
