@@ -85,7 +85,7 @@ def table3(out):
     return lines
 
 
-def fig8(out, case, lsmbs):
+def fig8(out, case, lsmbs, link_base):
     """Designs of selected iterations mapped on the mesh (Fig. 8: the holes merge)."""
     _, h = load(out)
     names = ["p1", "p2", "p3", "p4", "p5"]
@@ -105,7 +105,7 @@ def fig8(out, case, lsmbs):
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
         g = json.load(open(os.path.join(sub, "summary.json")))["bodies"][0]
         lines.append(f"| {k + 1} | {1e3 * g['mass']:.3f} | {1e6 * g['void_area']:.1f} | "
-                     f"![iteration {k + 1}](fig8/iter_{k + 1:02d}/rod.png) |")
+                     f"![iteration {k + 1}]({os.path.relpath(os.path.join(sub, 'rod.png'), link_base)}) |")
     return lines + [""]
 
 
@@ -122,7 +122,8 @@ def main():
              "The rod, the pressure curve and the crank radius are reconstructed (data/slider_crank/README.md); "
              "the initial one-hole design is calibrated to the paper's mass and elongation. Elongations are the "
              "maximum over the 171 steps.", ""]
-    lines += table1(a.one_hole) + table3(a.three_holes) + fig8(a.three_holes, a.case3, a.lsmbs)
+    lines += table1(a.one_hole) + table3(a.three_holes) + fig8(a.three_holes, a.case3, a.lsmbs,
+                                                              os.path.dirname(os.path.abspath(a.target)) if a.target else ".")
     text = "\n".join(lines)
     if a.target:
         open(a.target, "w").write(text)

@@ -61,7 +61,7 @@ void Feature::phi_grad(const T& px, const T& py, const T* th, T& phi, T& gx, T& 
     u = c * dx + s * dy;
     v = c * dy - s * dx;
   }
-  T gu, gv;  // gradient in the local frame
+  T gu(0.0), gv(0.0);  // gradient in the local frame
   const double tiny = 1e-300;
   switch (type_) {
     case Type::kEllipse: {
