@@ -30,10 +30,12 @@ json tiny_robot_arm() {
   return c;
 }
 
-OptimizeResult run(const json& j, const std::string& out, bool resume, long stop_after, DesignProblem** keep = nullptr) {
+// Loads the case (file names resolved against base_dir) and optimizes it.
+OptimizeResult run(const json& j, const std::string& out, bool resume, long stop_after, DesignProblem** keep = nullptr,
+                   const std::string& base_dir = LSMBS_SOURCE_DIR) {
   static std::vector<std::unique_ptr<Case>> cases;  // keep alive for `keep`
   static std::vector<std::unique_ptr<DesignProblem>> probs;
-  cases.push_back(std::make_unique<Case>(test::make_case(j)));
+  cases.push_back(std::make_unique<Case>(load_case_json(j, "<test>", base_dir)));
   probs.push_back(std::make_unique<DesignProblem>(*cases.back(), parse_optimization(*cases.back())));
   OptimizeOptions o;
   o.out_dir = out;
@@ -107,18 +109,10 @@ json coarse_rod() {
   return c;
 }
 
+const std::string kRodDir = std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank";
+
 OptimizeResult run_rod(const json& j, const std::string& out, bool resume, long stop_after, DesignProblem** keep) {
-  static std::vector<std::unique_ptr<Case>> cases;
-  static std::vector<std::unique_ptr<DesignProblem>> probs;
-  cases.push_back(std::make_unique<Case>(load_case_json(j, "<coarse rod>", std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank")));
-  probs.push_back(std::make_unique<DesignProblem>(*cases.back(), parse_optimization(*cases.back())));
-  OptimizeOptions o;
-  o.out_dir = out;
-  o.resume = resume;
-  o.stop_after = stop_after;
-  std::filesystem::create_directories(out);
-  if (keep) *keep = probs.back().get();
-  return optimize(*probs.back(), o);
+  return run(j, out, resume, stop_after, keep, kRodDir);
 }
 
 }  // namespace
@@ -146,7 +140,7 @@ TEST(Optimization, CoarseOneHoleRodReachesTheElongationBoundFoundByBisection) {
   // the maximum elongation reaches 16 um — found by bisection on plain simulations. The final
   // design may violate the bound by the accepted 0.25 %, so p lies between the roots for
   // 16 um and 16.04 um.
-  Case cs = load_case_json(coarse_rod(), "<coarse rod>", std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank");
+  Case cs = load_case_json(coarse_rod(), "<coarse rod>", kRodDir);
   DesignProblem bis(cs, parse_optimization(cs));
   auto root = [&](double violation) {
     double lo = 0.03, hi = 0.12;
