@@ -23,6 +23,7 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/sensitivity/response_quadrature.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/verify_run.hpp"
@@ -35,14 +36,17 @@ namespace {
 
 std::string joined_args(int argc, char** argv) {
   std::string s;
-  for (int i = 0; i < argc; ++i) s += (i ? " " : "") + std::string(argv[i]);
+  for (int i = 0; i < argc; ++i) {
+    if (i) s += ' ';
+    s += argv[i];
+  }
   return s;
 }
 
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets);
 
 int simulate(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets, bool quiet,
-             bool verbose, const std::string& integrator, double rtol, const std::string& cmdline) {
+             bool verbose, const std::string& integrator, double rtol, int max_order, const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
   lsmbs::RunOptions ro;
   if (!sets.empty()) {
@@ -56,6 +60,7 @@ int simulate(const std::string& case_file, const std::string& out, const std::ve
   ro.idas = integrator == "idas";
   ro.idas_options.rtol = rtol;
   ro.idas_options.atol = 1e-3 * rtol;
+  ro.idas_options.max_order = max_order;
   if (verbose)
     std::fprintf(stderr, "lsmbs: case '%s': %d DOFs, %d constraint equations, %d nonzeros\n", cs.name.c_str(),
                  cs.model->nq(), cs.model->nc(), cs.model->pattern().nnz());
@@ -140,7 +145,10 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   if (!cs.design) throw lsmbs::Error(case_file, "/design", "sensitivities need a design section (design variables)");
   if (cs.responses.empty()) throw lsmbs::Error(case_file, "/output/responses", "sensitivities need at least one response");
   const lsmbs::Vec p = design_point(cs, sets);
+  lsmbs::ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
+  so.progress = &line;
   const auto res = lsmbs::compute_sensitivities(cs, p, so);
+  line.clear();
   const auto& d = *cs.design;
   // summary.json and gradients.csv
   nlohmann::json responses = nlohmann::json::object(), grads = nlohmann::json::object();
@@ -182,6 +190,12 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   S["wall_seconds"] = res.counts.wall_seconds;
   S["responses"] = responses;
   S["gradients"] = grads;
+  if (!res.quadratures.empty()) {
+    std::vector<std::string> names;
+    for (const auto& v : d.variables) names.push_back(v.name);
+    S["quadratures"] = lsmbs::ResponseQuadrature::to_json(res.quadratures, names);
+  }
+  if (so.method == lsmbs::SensitivityOptions::Method::kIdas) S["idas"] = res.idas.to_json();
   std::filesystem::create_directories(out);
   {
     // the CSV names responses by index (numbers only); the mapping is in the header comment
@@ -241,8 +255,10 @@ bool plot_history(const std::string& out) {
   return ok;
 }
 
+// On a terminal: a table row per evaluation and a progress line of the running simulation; not on
+// a terminal: the final summary only (history.csv has every evaluation), unless --verbose.
 int optimize(const std::string& case_file, const std::string& out, bool resume, const std::string& optimizer,
-             bool quiet, const std::string& cmdline) {
+             bool quiet, bool verbose, const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);
   lsmbs::OptimizationSpec spec = lsmbs::parse_optimization(cs);  // validated before anything is written
   if (!optimizer.empty()) {
@@ -250,22 +266,28 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
       throw lsmbs::Error("--optimizer " + optimizer + ": the case sets a move_limit, which only mma-svanberg has");
     spec.optimizer = optimizer;
   }
+  const bool interactive = !quiet && ::isatty(STDOUT_FILENO) && ::isatty(STDERR_FILENO);
+  const bool table = interactive || (verbose && !quiet);
+  lsmbs::ProgressLine line(interactive);
+  spec.sensitivity.progress = &line;
   std::filesystem::create_directories(out);
   lsmbs::DesignProblem prob(cs, spec);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
   o.out_dir = out;
   o.resume = resume;
-  if (!quiet) {
+  if (table) {
     std::printf("lsmbs optimize: %d variables, %d constraints, optimizer %s, sensitivities %s\n", d.size(),
                 prob.num_constraints(), spec.optimizer.c_str(), lsmbs::SensitivityOptions::name(spec.sensitivity.method));
     std::printf("%6s %16s %14s %10s\n", "eval", "objective", "max violation", "time [s]");
   }
   o.on_evaluation = [&](int k, const lsmbs::Evaluation& e) {
-    if (!quiet) std::printf("%6d %16.9g %14.4e %10.2f\n", k, e.objective, e.max_violation, e.wall_seconds);
+    line.clear();
+    if (table) std::printf("%6d %16.9g %14.4e %10.2f\n", k, e.objective, e.max_violation, e.wall_seconds);
     std::fflush(stdout);
   };
   const auto res = lsmbs::optimize(prob, o);
+  line.clear();
   // final design pictures and summary
   lsmbs::GeometryRunOptions go;
   go.out_dir = out + "/final_design";
@@ -331,6 +353,9 @@ int main(int argc, char** argv) {
   sim->add_option("--integrator", integrator, "generalized-alpha (the paper's) or idas (SUNDIALS IDAS, GGL index 2)")
       ->check(CLI::IsMember({"generalized-alpha", "idas"}))->capture_default_str();
   sim->add_option("--rtol", rtol, "IDAS relative tolerance (absolute: 1e-3 rtol × length scale)")->capture_default_str();
+  int max_order = 5;
+  sim->add_option("--max-order", max_order, "IDAS maximum BDF order (2: A-stable, for undamped flexible models)")
+      ->check(CLI::Range(1, 5))->capture_default_str();
 
   std::vector<std::string> sets;
   sim->add_option("--set", sets, "design variable override name=value (repeatable)");
@@ -374,6 +399,7 @@ int main(int argc, char** argv) {
   opt->add_option("--optimizer", optimizer, "override the case's optimizer")
       ->check(CLI::IsMember({"mma", "ccsaq", "slsqp", "mma-svanberg"}));
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
+  opt->add_flag("-v,--verbose", verbose, "a row per evaluation also when not on a terminal (default there: final summary only)");
 
   lsmbs::VerifyOptions vo;
   bool no_idas = false, no_mesh = false;
@@ -411,9 +437,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, joined_args(argc, argv));
+    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, max_order, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
-    if (*opt) return optimize(case_file, out, resume, optimizer, quiet, joined_args(argc, argv));
+    if (*opt) return optimize(case_file, out, resume, optimizer, quiet, verbose, joined_args(argc, argv));
     if (*ben) {
       bo.out_dir = out;
       bo.command_line = joined_args(argc, argv);

@@ -127,6 +127,21 @@ assert a["final"]["objective"] == b["final"]["objective"]
 assert b["counts"]["simulations_this_run"] < a["counts"]["simulations_this_run"]
 print("kill/resume ok:", b["counts"])
 PY
+# Progress (issue 9): not on a terminal, optimize prints its final summary only (no row per
+# evaluation, no progress line); --verbose adds the rows; on a terminal (a pseudo-terminal from
+# script(1)) a self-overwriting progress line with time, step and Newton iterations appears.
+"$exe" optimize "$tmp/opt.json" -o "$tmp/opt_quiet" > "$tmp/opt_out.txt" 2>&1 || fail "optimize (not a terminal)"
+grep -q "objective" "$tmp/opt_out.txt" || fail "no final summary: $(cat "$tmp/opt_out.txt")"
+! grep -q $'\r' "$tmp/opt_out.txt" || fail "progress line written to a file"
+! grep -qE "^ +1 +[0-9.]" "$tmp/opt_out.txt" || fail "evaluation rows without a terminal"
+"$exe" optimize "$tmp/opt.json" -o "$tmp/opt_verbose" -v > "$tmp/opt_verb.txt" 2>&1 || fail "optimize -v"
+grep -qE "^ +1 +[0-9.]" "$tmp/opt_verb.txt" || fail "--verbose: no evaluation rows: $(cat "$tmp/opt_verb.txt")"
+if command -v script > /dev/null; then
+  script -qec "'$exe' sensitivity '$spring' -o '$tmp/sens_tty'" /dev/null > "$tmp/tty.txt" 2>&1 || fail "sensitivity on a pty"
+  grep -qE $'\r.*t = [0-9.]+ s .*step [0-9]+ +Newton [0-9]' "$tmp/tty.txt" || fail "no progress line on a terminal"
+  script -qec "'$exe' sensitivity '$spring' -o '$tmp/sens_tty_q' -q" /dev/null > "$tmp/tty_q.txt" 2>&1 || fail "-q on a pty"
+  [ ! -s "$tmp/tty_q.txt" ] || fail "--quiet printed: $(cat -v "$tmp/tty_q.txt")"
+fi
 # Bench: the step/floor ratio and the sensitivity overheads are recorded.
 "$exe" bench "$spring" -o "$tmp/bench" --repetitions 5 > /dev/null || fail "bench"
 python3 -c "

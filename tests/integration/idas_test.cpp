@@ -141,3 +141,105 @@ TEST(Idas, GeneralizedAlphaGradientsConvergeToIdasGradientsAtSecondOrder) {
   EXPECT_GT(d[1] / d[2], 3.5);
   EXPECT_LT(d[1] / d[2], 4.5);
 }
+
+// IDAS quadratures (IDAQuadInit) of a fully driven rigid slider-crank against the closed form:
+// after the ramp the crank turns at ω, θ(t) = ω (t − T/2), and the piston is at
+// x = r cos θ + sqrt(l² − r² sin² θ); ∫ x dt over a window that starts and ends between grid
+// times (IDAS must stop there) is integrated by composite Simpson with 20,000 intervals.
+TEST(Idas, QuadratureOfTheDrivenPistonMatchesTheClosedForm) {
+  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_rigid.json"));
+  const double a = 0.0153, b = 0.0391;
+  c["output"]["responses"] = json::array(
+      {json{{"name", "int_x"}, {"measure", "piston.x"}, {"aggregate", "integral"}, {"window", {{"t0", a}, {"t1", b}}}},
+       json{{"name", "mean_x"}, {"measure", "piston.x"}, {"aggregate", "average"}, {"window", {{"t0", a}, {"t1", b}}}},
+       json{{"name", "rms_x"}, {"measure", "piston.x"}, {"aggregate", "rms"}, {"window", {{"t0", a}, {"t1", b}}}}});
+  Case cs = test::make_case(c);
+  RunOptions ro;
+  ro.idas = true;
+  ro.idas_options = IdasOptions::reference();
+  const auto r = run_simulation(cs, ro);
+  ASSERT_TRUE(r.integrator.ok) << r.integrator.message;
+  ASSERT_EQ(r.quadratures.size(), 3u);
+  const double rc = 0.045, l = 0.1356, w = 418.87902047863906, T = 0.01;
+  auto x = [&](double t) {
+    const double th = w * (t - T / 2);
+    return rc * std::cos(th) + std::sqrt(l * l - rc * rc * std::sin(th) * std::sin(th));
+  };
+  const int n = 20000;
+  double s1 = 0, s2 = 0;
+  for (int i = 0; i <= n; ++i) {
+    const double t = a + (b - a) * i / n, wgt = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
+    s1 += wgt * x(t), s2 += wgt * x(t) * x(t);
+  }
+  s1 *= (b - a) / (3 * n), s2 *= (b - a) / (3 * n);
+  const double expect[3] = {s1, s1 / (b - a), std::sqrt(s2 / (b - a))};
+  for (int k = 0; k < 3; ++k) {
+    const auto& q = r.quadratures[k];
+    std::printf("%s: IDAS quadrature %.12e, closed form %.12e (%.1e), window [%g, %g]\n", q.name.c_str(), q.value,
+                expect[k], std::abs(q.value / expect[k] - 1), q.t0, q.t1);
+    EXPECT_NEAR(q.value / expect[k], 1.0, 1e-8) << q.name;
+    EXPECT_DOUBLE_EQ(q.t0, a);
+    EXPECT_DOUBLE_EQ(q.t1, b);
+  }
+}
+
+// Quadrature sensitivities (IDAQuadSensInit) of the spring slider-crank's time-integral
+// responses against central differences of IDAS quadrature values, and the generalized-α
+// trapezoidal `energy_integral` gradient (direct-analytic) converging to them at second order.
+TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
+  json c = spring_crank();
+  Case cs = test::make_case(c);
+  SensitivityOptions o;
+  o.method = SensitivityOptions::Method::kIdas;
+  o.idas.rtol = 1e-10;
+  o.idas.atol = 1e-13;
+  const Vec p = cs.design->initial();
+  const auto s = compute_sensitivities(cs, p, o);
+  ASSERT_TRUE(s.ok) << s.message;
+  ASSERT_EQ(s.quadratures.size(), 2u);  // mean_piston_x (average), energy_integral (integral)
+  double worst = 0;
+  for (int i = 0; i < 2; ++i) {
+    const double h = 1e-4 * std::abs(p[i]);
+    auto value = [&](double dp) {
+      Vec pp = p;
+      pp[i] += dp;
+      cs.design->apply(pp, cs.model->params());
+      RunOptions ro;
+      ro.idas = true;
+      ro.idas_options = o.idas;
+      const auto res = run_simulation(cs, ro);
+      cs.design->apply(p, cs.model->params());
+      return res.quadratures;
+    };
+    const auto plus = value(h), minus = value(-h);
+    for (size_t k = 0; k < 2; ++k) {
+      const double fd = (plus[k].value - minus[k].value) / (2 * h), an = s.quadratures[k].gradient[i];
+      const double e = std::abs(an - fd) / std::abs(fd);
+      std::printf("d %s / d p%d (quadrature): IDAS %.8e, FD of IDAS %.8e (%.1e)\n", s.quadratures[k].name.c_str(), i,
+                  an, fd, e);
+      worst = std::max(worst, e);
+    }
+  }
+  EXPECT_LT(worst, 1e-4);
+  // generalized-α: trapezoidal integral of the energy on the grid, h0, h0/2, h0/4
+  const Eigen::RowVectorXd ref = s.quadratures[1].gradient;
+  double d[3];
+  for (int k = 0; k < 3; ++k) {
+    c["simulation"]["h"] = 2e-3 / (1 << k);
+    Case cg = test::make_case(c);
+    SensitivityOptions og;
+    og.matrix = SensitivityOptions::Matrix::kRefined;
+    const auto sg = compute_sensitivities(cg, cg.design->initial(), og);
+    ASSERT_TRUE(sg.ok);
+    d[k] = 0;
+    for (const auto& rs : sg.responses)
+      if (rs.name == "energy_integral")
+        for (int i = 0; i < 2; ++i) d[k] = std::max(d[k], std::abs(rs.gradient(0, i) - ref[i]) / std::abs(ref[i]));
+  }
+  std::printf("d energy_integral / dp: |GA trapezoid - IDAS quadrature| relative %.3e %.3e %.3e; ratios %.2f %.2f\n",
+              d[0], d[1], d[2], d[0] / d[1], d[1] / d[2]);
+  EXPECT_GT(d[0] / d[1], 3.5);
+  EXPECT_LT(d[0] / d[1], 4.5);
+  EXPECT_GT(d[1] / d[2], 3.5);
+  EXPECT_LT(d[1] / d[2], 4.5);
+}

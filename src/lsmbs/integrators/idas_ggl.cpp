@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <map>
 #include <vector>
 
@@ -25,8 +26,11 @@ IdasOptions IdasOptions::reference() {
 }
 
 nlohmann::json IdasOptions::to_json() const {
-  return {{"rtol", rtol}, {"atol", atol}, {"h_out", h_out}, {"t_end", t_end}, {"max_steps", max_steps},
+  return {{"rtol", rtol}, {"atol", atol}, {"h_out", h_out}, {"t_end", t_end}, {"max_steps", max_steps}, {"max_order", max_order},
           {"corrector", staggered ? "staggered" : "simultaneous"},
+          {"error_test", error_test == ErrorTest::kPositions                ? "positions"
+                         : error_test == ErrorTest::kPositionsAndVelocities ? "positions+velocities"
+                                                                            : "auto"},
           {"sensitivity_residual", analytic_sensitivity_residual ? "analytic" : "idas_difference_quotients"}};
 }
 
@@ -34,7 +38,8 @@ nlohmann::json IdasStats::to_json() const {
   return {{"ok", ok}, {"message", message}, {"steps", steps}, {"residual_evaluations", residual_evaluations},
           {"jacobian_evaluations", jacobian_evaluations}, {"nonlinear_iterations", nonlinear_iterations},
           {"error_test_failures", error_test_failures},
-          {"sensitivity_residual_evaluations", sensitivity_residual_evaluations}, {"wall_seconds", wall_seconds}};
+          {"sensitivity_residual_evaluations", sensitivity_residual_evaluations}, {"wall_seconds", wall_seconds},
+          {"error_test", error_test}};
 }
 
 struct IdasGGL::Impl {
@@ -53,6 +58,9 @@ struct IdasGGL::Impl {
   // workspace
   Vec R, phi_t, gamma;
   std::vector<double> vals;
+  // quadratures
+  IdasQuadrature* quad = nullptr;
+  Mat qs_dq, qs_dv, qs_da, qs_dl, qs_dg;
 
   Impl(const Model& model, const ModelParams& params, IdasOptions opt)
       : m(model), nominal(params), o(opt), nq(model.nq()), nc(model.nc()), N(2 * model.nq() + 2 * model.nc()),
@@ -140,6 +148,27 @@ struct IdasGGL::Impl {
     return Jm;
   }
 
+  int quad_rhs(double t, const double* y, const double* yp, double* g) {
+    quad->integrand(state(t, y, yp), params(), g);
+    return 0;
+  }
+
+  int quad_sens_rhs(double t, const double* y, const double* yp, const std::vector<const double*>& yS,
+                    const std::vector<const double*>& ypS, const std::vector<double*>& gS) {
+    const int nv = static_cast<int>(yS.size());
+    qs_dq.resize(nq, nv), qs_dv.resize(nq, nv), qs_da.resize(nq, nv), qs_dl.resize(nc, nv);
+    for (int i = 0; i < nv; ++i) {
+      const Eigen::Map<const Vec> ys(yS[i], N), yps(ypS[i], N);
+      qs_dq.col(i) = ys.head(nq);
+      qs_dv.col(i) = ys.segment(nq, nq);
+      qs_dl.col(i) = ys.segment(2 * nq, nc);
+      qs_da.col(i) = yps.segment(nq, nq);
+    }
+    quad->integrand_sensitivity(state(t, y, yp), nominal, qs_dq, qs_dv, qs_da, qs_dl, qs_dg);
+    for (int i = 0; i < nv; ++i) Eigen::Map<Vec>(gS[i], quad->size()) = qs_dg.col(i);
+    return 0;
+  }
+
   // Analytic sensitivity residuals F_y yS + F_ẏ ẏS + F_p (all variables).
   int sens_residual(double t, const double* y, const double* yp, const std::vector<const double*>& yS,
                     const std::vector<const double*>& ypS, const std::vector<double*>& rS) {
@@ -195,12 +224,25 @@ int sens_tramp(int Ns, realtype t, N_Vector y, N_Vector yp, N_Vector, N_Vector* 
   return static_cast<IdasGGL::Impl*>(ud)->sens_residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), a, b, c);
 }
 
+int quad_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector rQ, void* ud) {
+  return static_cast<IdasGGL::Impl*>(ud)->quad_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(rQ));
+}
+
+int quad_sens_tramp(int Ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_Vector* ypS, N_Vector, N_Vector* rQS,
+                    void* ud, N_Vector, N_Vector, N_Vector) {
+  std::vector<const double*> a(Ns), b(Ns);
+  std::vector<double*> c(Ns);
+  for (int i = 0; i < Ns; ++i) a[i] = N_VGetArrayPointer(yS[i]), b[i] = N_VGetArrayPointer(ypS[i]), c[i] = N_VGetArrayPointer(rQS[i]);
+  return static_cast<IdasGGL::Impl*>(ud)->quad_sens_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), a, b, c);
+}
+
 // RAII for the SUNDIALS objects of one run.
 struct Sundials {
   SUNContext ctx = nullptr;
   void* mem = nullptr;
-  N_Vector y = nullptr, yp = nullptr, id = nullptr, atol = nullptr, dky = nullptr;
+  N_Vector y = nullptr, yp = nullptr, id = nullptr, atol = nullptr, dky = nullptr, yQ = nullptr;
   N_Vector* yS = nullptr;
+  N_Vector* yQS = nullptr;
   N_Vector* ypS = nullptr;
   N_Vector* dkyS = nullptr;
   int ns = 0;
@@ -210,8 +252,9 @@ struct Sundials {
     if (mem) IDAFree(&mem);
     if (LS) SUNLinSolFree(LS);
     if (A) SUNMatDestroy(A);
-    for (N_Vector v : {y, yp, id, atol, dky})
+    for (N_Vector v : {y, yp, id, atol, dky, yQ})
       if (v) N_VDestroy(v);
+    if (yQS) N_VDestroyVectorArray(yQS, ns);
     if (yS) N_VDestroyVectorArray(yS, ns);
     if (ypS) N_VDestroyVectorArray(ypS, ns);
     if (dkyS) N_VDestroyVectorArray(dkyS, ns);
@@ -224,6 +267,7 @@ struct Sundials {
 IdasGGL::IdasGGL(const Model& model, const ModelParams& params, IdasOptions o)
     : impl_(std::make_unique<Impl>(model, params, o)) {}
 IdasGGL::~IdasGGL() = default;
+void IdasGGL::set_quadrature(IdasQuadrature* q) { impl_->quad = q; }
 
 IdasStats IdasGGL::run(State s0, const Output& out) { return run_with_sensitivities(std::move(s0), Design{}, Vec(), out); }
 
@@ -248,7 +292,15 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
   SparseLU lu;
   lu.analyze(m.pattern());
   if (auto r = project_initial_state(m, im.nominal, s0, lu, 1e-13 * m.length_scale()); !r.ok()) return fail(r.message);
-  if (auto r = consistent_accelerations(m, im.nominal, 1.0, s0, lu); !r.ok()) return fail(r.message);
+  {
+    // ẏ(t0) from the right limit of the drivers' accelerations: a law that switches on at t0
+    // (a ramp) has q̈(t0⁺) ≠ q̈(t0⁻), and IDAS fails its first error tests from the left limit
+    State right = s0;
+    right.t = s0.t + 1e-9 * im.o.h_out;
+    if (auto r = consistent_accelerations(m, im.nominal, 1.0, right, lu); !r.ok()) return fail(r.message);
+    s0.a = right.a;
+    s0.lambda = right.lambda;
+  }
   const double kappa = GeneralizedAlpha::automatic_scaling(m, im.nominal, s0, AlphaCoefficients::make(0.8, im.o.h_out));
   im.s3 = kappa;
   im.s1 = im.s4 = kappa * im.o.h_out;
@@ -284,12 +336,17 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
   yp << s0.v, s0.a, Vec::Zero(nc), Vec::Zero(nc);
   id << Vec::Ones(2 * nq), Vec::Zero(2 * nc);
   const double L = m.length_scale(), T = std::max(im.o.t_end, im.o.h_out);
-  atol << Vec::Constant(nq, im.o.atol * L), Vec::Constant(nq, im.o.atol * L / T), Vec::Constant(2 * nc, 1.0);
+  const bool positions_only = im.o.error_test == IdasOptions::ErrorTest::kPositions ||
+                              (im.o.error_test == IdasOptions::ErrorTest::kAuto && !m.flexible_bodies().empty());
+  st.error_test = positions_only ? "positions" : "positions+velocities";
+  // velocities out of the error test: an absolute tolerance so large that their weight vanishes
+  atol << Vec::Constant(nq, im.o.atol * L), Vec::Constant(nq, positions_only ? 1e30 : im.o.atol * L / T),
+      Vec::Constant(2 * nc, 1.0);
   sd.mem = IDACreate(sd.ctx);
   if (!sd.mem) return fail("IDACreate failed");
   if (IDAInit(sd.mem, res_tramp, 0.0 + s0.t, sd.y, sd.yp) || IDASVtolerances(sd.mem, im.o.rtol, sd.atol) ||
       IDASetUserData(sd.mem, &im) || IDASetId(sd.mem, sd.id) || IDASetSuppressAlg(sd.mem, SUNTRUE) ||
-      IDASetMaxNumSteps(sd.mem, im.o.max_steps))
+      IDASetMaxNumSteps(sd.mem, im.o.max_steps) || IDASetMaxOrd(sd.mem, im.o.max_order))
     return fail("IDAS set-up failed");
   const SpMat J0 = im.jacobian(s0.t, 1.0, y.data(), yp.data());
   sd.A = SUNSparseMatrix(N, N, J0.nonZeros(), CSC_MAT, sd.ctx);
@@ -316,6 +373,38 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
         IDASetSensParams(sd.mem, im.p.data(), pbar.data(), nullptr))
       return fail("IDAS sensitivity set-up failed");
   }
+  const int nQ = im.quad ? im.quad->size() : 0;
+  if (nQ > 0) {
+    sd.yQ = N_VNew_Serial(nQ, sd.ctx);
+    N_VConst(0.0, sd.yQ);
+    if (IDAQuadInit(sd.mem, quad_tramp, sd.yQ)) return fail("IDAS quadrature set-up failed");
+    if (sens) {
+      sd.yQS = N_VCloneVectorArray(nv, sd.yQ);
+      for (int i = 0; i < nv; ++i) N_VConst(0.0, sd.yQS[i]);
+      if (IDAQuadSensInit(sd.mem, im.o.analytic_sensitivity_residual ? quad_sens_tramp : nullptr, sd.yQS))
+        return fail("IDAS quadrature sensitivity set-up failed");
+    }
+  }
+  std::vector<double> breaks;
+  if (nQ > 0)
+    for (double b : im.quad->breakpoints())
+      if (b > s0.t + 1e-12 * im.o.h_out && b < im.o.t_end - 1e-12 * im.o.h_out) breaks.push_back(b);
+  std::sort(breaks.begin(), breaks.end());
+  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+  size_t next_break = 0;
+  if (!breaks.empty()) IDASetStopTime(sd.mem, breaks[0]);
+  Vec Qv(nQ);
+  Mat dQ(nQ, nv);
+  auto report_quadrature = [&](double t) {
+    realtype tq;
+    IDAGetQuad(sd.mem, &tq, sd.yQ);
+    Qv = Eigen::Map<Vec>(N_VGetArrayPointer(sd.yQ), nQ);
+    if (sens) {
+      IDAGetQuadSens(sd.mem, &tq, sd.yQS);
+      for (int i = 0; i < nv; ++i) dQ.col(i) = Eigen::Map<Vec>(N_VGetArrayPointer(sd.yQS[i]), nQ);
+    }
+    im.quad->on_breakpoint(t, Qv, sens ? &dQ : nullptr);
+  };
   // ---- outputs on the grid
   Mat dq(nq, nv), dv(nq, nv), da(nq, nv), dl(nc, nv);
   auto emit = [&](double t) {
@@ -349,16 +438,25 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
     }
   }
   const long n_out = std::lround(std::ceil((im.o.t_end - s0.t) / im.o.h_out - 1e-9));
+  double t_last = s0.t;
   for (long k = 1; k <= n_out; ++k) {
     const double tout = s0.t + k * im.o.h_out;
     realtype tret = 0;
-    const int flag = IDASolve(sd.mem, tout, &tret, sd.y, sd.yp, IDA_NORMAL);
+    int flag;
+    // window boundaries are stop times (set before IDAS's internal time can pass them): no step
+    // straddles the switch of an integrand
+    while ((flag = IDASolve(sd.mem, tout, &tret, sd.y, sd.yp, IDA_NORMAL)) == IDA_TSTOP_RETURN) {
+      report_quadrature(tret);
+      if (++next_break < breaks.size()) IDASetStopTime(sd.mem, breaks[next_break]);
+      if (tret >= tout - 1e-12 * im.o.h_out) break;
+    }
     if (flag < 0) {
       st.ok = false;
       st.message = "IDAS failed at t = " + std::to_string(tret) + " (flag " + std::to_string(flag) + ")";
       break;
     }
     emit(tout);
+    t_last = tout;
   }
   long v;
   IDAGetNumSteps(sd.mem, &v), st.steps = v;
@@ -367,6 +465,7 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
   IDAGetNumNonlinSolvIters(sd.mem, &v), st.nonlinear_iterations = v;
   IDAGetNumErrTestFails(sd.mem, &v), st.error_test_failures = v;
   if (sens) IDAGetSensNumResEvals(sd.mem, &v), st.sensitivity_residual_evaluations = v;
+  if (nQ > 0 && st.ok) report_quadrature(t_last);
   st.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return st;
 }

@@ -3,6 +3,9 @@
 // factorization of the iteration matrix used in the step's last Newton iteration
 // (DESIGN.md §Core interfaces 5). Sensitivity methods (Algorithm 2) and output writers are
 // observers; they never see how the integrator or the model work inside.
+#include <string>
+
+#include "lsmbs/core/progress.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
 #include "lsmbs/mbs/model.hpp"
 
@@ -37,6 +40,24 @@ class StepObserver {
                         double /*zeta*/, const SparseLU* /*start_factor*/) {}
   /// Return false to stop the integration (the run is then reported as aborted).
   virtual bool on_step(const StepInfo& info) = 0;
+};
+
+/// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …".
+class ProgressObserver : public StepObserver {
+ public:
+  ProgressObserver(ProgressLine& line, double t_end, std::string label = {})
+      : line_(line), t_end_(t_end), label_(std::move(label)) {}
+  bool on_step(const StepInfo& i) override {
+    if (line_.enabled())
+      line_.update(false, "%s t = %.5f s (%3.0f %%)  step %d  Newton %d", label_.c_str(), i.state->t,
+                   t_end_ > 0 ? 100.0 * i.state->t / t_end_ : 0.0, i.step, i.newton_iterations);
+    return true;
+  }
+
+ private:
+  ProgressLine& line_;
+  double t_end_;
+  std::string label_;
 };
 
 }  // namespace lsmbs

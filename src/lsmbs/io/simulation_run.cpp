@@ -6,6 +6,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/sensitivity/response_quadrature.hpp"
 
 namespace lsmbs {
 
@@ -40,8 +41,6 @@ class Recorder : public StepObserver {
     if (!info.grid_point) return true;
     ++grid_;
     record(*info.state, grid_);
-    if (ro_.progress && grid_ % 20 == 0)
-      std::fprintf(stderr, "\r  t = %.5f s  step %ld  Newton %d   ", info.state->t, grid_, info.newton_iterations);
     return true;
   }
 
@@ -83,11 +82,14 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     if (cs.output.vtu_stride > 0) std::filesystem::create_directories(ro.out_dir + "/vtu");
   }
   Recorder rec(cs, res, ro);
+  ProgressLine line(ro.progress);
   if (ro.idas) {
     IdasOptions io = ro.idas_options;
     io.h_out = cs.simulation.h;
     io.t_end = cs.simulation.t_end;
     IdasGGL idas(*cs.model, cs.model->params(), io);
+    ResponseQuadrature quad(cs, {}, cs.initial.t, io.t_end);
+    if (!quad.empty()) idas.set_quadrature(&quad);
     bool first = true;
     res.idas = idas.run(cs.initial, [&](const State& s, const Mat*, const Mat*, const Mat*, const Mat*) {
       if (first) {
@@ -96,6 +98,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
       } else {
         rec.record_state(s);
       }
+      line.update(false, " IDAS t = %.5f s (%3.0f %%)", s.t, 100.0 * s.t / io.t_end);
       res.final_state = s;
     });
     res.integrator.ok = res.idas.ok;
@@ -104,11 +107,14 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     res.integrator.residual_evaluations = res.idas.residual_evaluations;
     res.integrator.wall_seconds = res.idas.wall_seconds;
     res.integrator.t_reached = res.final_state.t;
+    res.idas_options = io;
+    if (!quad.empty()) res.quadratures = quad.results();
   } else {
     GeneralizedAlpha ga(cs.simulation);
-    res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec}, &res.final_state);
+    ProgressObserver prog(line, cs.simulation.t_end);
+    res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec, &prog}, &res.final_state);
   }
-  if (ro.progress) std::fprintf(stderr, "\n");
+  line.clear();
 
   nlohmann::json responses = nlohmann::json::object(), windows = nlohmann::json::object();
   for (const auto& r : cs.responses) {
@@ -135,7 +141,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["status"] = res.integrator.ok ? "complete" : "partial";
   if (!res.integrator.ok) S["failure"] = res.integrator.message;
   S["options"] = {{"integrator", ro.idas ? "idas" : "generalized-alpha"},
-                  {ro.idas ? "idas" : "generalized_alpha", ro.idas ? ro.idas_options.to_json() : cs.simulation.to_json()},
+                  {ro.idas ? "idas" : "generalized_alpha", ro.idas ? res.idas_options.to_json() : cs.simulation.to_json()},
                   {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};
   if (cs.design) {
     const Vec p = ro.design_point.size() ? ro.design_point : cs.design->initial();
@@ -146,6 +152,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"unknowns", m.n()}, {"nonzeros", m.pattern().nnz()},
                 {"rigid_bodies", m.rigid_bodies().size()}, {"flexible_bodies", bodies}};
   S["counts"] = ro.idas ? res.idas.to_json() : res.integrator.to_json();
+  if (!res.quadratures.empty()) S["quadratures"] = ResponseQuadrature::to_json(res.quadratures, {});
   S["wall_seconds"] = res.integrator.wall_seconds;
   S["responses"] = responses;
   S["response_definitions"] = windows;

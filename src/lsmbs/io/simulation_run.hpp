@@ -10,12 +10,16 @@
 
 #include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
 
 struct SimulationResult {
   IntegratorSummary integrator;
   IdasStats idas;  ///< when run with IDAS
+  IdasOptions idas_options;  ///< the options IDAS ran with (output grid and final time: the case's)
+  /// With IDAS: the time-integral responses from IDAS quadratures (continuous-time values).
+  std::vector<QuadratureResponse> quadratures;
   std::vector<double> times;                     ///< grid times, starting at t0
   std::vector<std::vector<double>> history;      ///< per grid time: measure columns
   std::vector<std::string> columns;

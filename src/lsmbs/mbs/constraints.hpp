@@ -50,7 +50,10 @@ class AngleDriver : public ConstraintElement {
   std::span<const int> dofs() const override { return dofs_; }
   int size() const override { return 1; }
   void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi, LocalJac* J) const override;
-  void hessian(double, const LocalVec&, const LocalEqVec&, LocalMat& H) const override { H.setZero(); }
+  void hessian(double, const LocalVec&, const LocalEqVec&, LocalMat& H) const override {
+    const auto n = static_cast<Eigen::Index>(dofs_.size());
+    H.setZero(n, n);  // sized: H is reused across constraints of different sizes
+  }
   void time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_tt) const override;
   const TimeLaw& law() const { return *law_; }
 

@@ -32,47 +32,63 @@ void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq
                              const Mat* dl) {
   times_.push_back(s.t);
   const int nv = static_cast<int>(dirs_.size());
-  MeasureGradient g;
   for (auto& c : cols_) {
-    buf_.resize(c.measure->components().size());
-    c.measure->evaluate(*cs_.model, s, p, buf_.data());
-    c.values.push_back(buf_[c.component]);
-    if (!dq) continue;
-    Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(nv);
-    g.clear();
-    c.measure->gradient(*cs_.model, s, p, c.component, g);
-    for (const auto& [j, w] : g.dq) row += w * dq->row(j);
-    for (const auto& [j, w] : g.dv) row += w * dv->row(j);
-    for (const auto& [j, w] : g.da) row += w * da->row(j);
-    for (const auto& [j, w] : g.dl) row += w * dl->row(j);
-    if (c.measure->depends_on_params()) {
-      // explicit ∂f/∂p_i by a central difference along the parameter direction; the measures
-      // that depend on parameters (mass, energies) are linear in μ and in most parameters
-      for (int i = 0; i < nv; ++i) {
-        const auto& d = dirs_[i];
-        if (d.empty()) continue;
-        // step: 1e-3 of μ (the measures are linear in μ, so any step is exact and a large one
-        // avoids round-off) and 1e-6 relative for scalar parameters
-        double t = 1e300;
-        for (const auto& f : d.fields)
-          if (f.value != 0) t = std::min(t, 1e-3 / std::abs(f.value));
-        for (const auto& [j, v] : d.scalars)
-          if (v != 0) t = std::min(t, 1e-6 * std::max(std::abs(p.scalars[j]), 1e-300) / std::abs(v));
-        if (!(t < 1e300)) continue;
-        add_direction(scratch_, d, t);
-        c.measure->evaluate(*cs_.model, s, scratch_, buf_.data());
-        const double fp = buf_[c.component];
-        add_direction(scratch_, d, -2 * t);
-        c.measure->evaluate(*cs_.model, s, scratch_, buf_.data());
-        const double fm = buf_[c.component];
-        // restore the touched entries exactly (no copy of the whole parameter set per step)
-        for (const auto& f : d.fields) scratch_.fields[f.field][f.element] = p.fields[f.field][f.element];
-        for (const auto& [j, v] : d.scalars) scratch_.scalars[j] = p.scalars[j];
-        row[i] += (fp - fm) / (2 * t);
-      }
-    }
-    c.grads.push_back(row);
+    Eigen::RowVectorXd row;
+    if (dq) row.setZero(nv);
+    c.values.push_back(evaluate(c.measure, c.component, s, p, dq, dv, da, dl, dq ? &row : nullptr));
+    if (dq) c.grads.push_back(row);
   }
+}
+
+double ResponseTracker::response_measure(size_t r, const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
+                                         const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad) {
+  const auto& c = cols_[response_column_[r]];
+  if (grad) grad->setZero(static_cast<Eigen::Index>(dirs_.size()));
+  return evaluate(c.measure, c.component, s, p, dq, dv, da, dl, grad);
+}
+
+double ResponseTracker::evaluate(const Measure* measure, int component, const State& s, const ModelParams& p,
+                                 const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad) {
+  buf_.resize(measure->components().size());
+  measure->evaluate(*cs_.model, s, p, buf_.data());
+  const double value = buf_[component];
+  if (!grad) return value;
+  Eigen::RowVectorXd& row = *grad;
+  const int nv = static_cast<int>(dirs_.size());
+  MeasureGradient& g = grad_;
+  g.clear();
+  measure->gradient(*cs_.model, s, p, component, g);
+  for (const auto& [j, w] : g.dq) row += w * dq->row(j);
+  for (const auto& [j, w] : g.dv) row += w * dv->row(j);
+  for (const auto& [j, w] : g.da) row += w * da->row(j);
+  for (const auto& [j, w] : g.dl) row += w * dl->row(j);
+  if (measure->depends_on_params()) {
+    // explicit ∂f/∂p_i by a central difference along the parameter direction; the measures
+    // that depend on parameters (mass, energies) are linear in μ and in most parameters
+    for (int i = 0; i < nv; ++i) {
+      const auto& d = dirs_[i];
+      if (d.empty()) continue;
+      // step: 1e-3 of μ (the measures are linear in μ, so any step is exact and a large one
+      // avoids round-off) and 1e-6 relative for scalar parameters
+      double t = 1e300;
+      for (const auto& f : d.fields)
+        if (f.value != 0) t = std::min(t, 1e-3 / std::abs(f.value));
+      for (const auto& [j, v] : d.scalars)
+        if (v != 0) t = std::min(t, 1e-6 * std::max(std::abs(p.scalars[j]), 1e-300) / std::abs(v));
+      if (!(t < 1e300)) continue;
+      add_direction(scratch_, d, t);
+      measure->evaluate(*cs_.model, s, scratch_, buf_.data());
+      const double fp = buf_[component];
+      add_direction(scratch_, d, -2 * t);
+      measure->evaluate(*cs_.model, s, scratch_, buf_.data());
+      const double fm = buf_[component];
+      // restore the touched entries exactly (no copy of the whole parameter set per step)
+      for (const auto& f : d.fields) scratch_.fields[f.field][f.element] = p.fields[f.field][f.element];
+      for (const auto& [j, v] : d.scalars) scratch_.scalars[j] = p.scalars[j];
+      row[i] += (fp - fm) / (2 * t);
+    }
+  }
+  return value;
 }
 
 std::vector<ResponseSensitivity> ResponseTracker::results() const {

@@ -19,6 +19,10 @@ class ResponseTracker {
   std::vector<ResponseSensitivity> results() const;
   /// The run's constraint scaling k (constraint forces are kλ).
   void set_scaling(double k);
+  /// Value of response r's measure component at s and, with the state derivatives, its total
+  /// derivative (eq. 24) in `grad` (1 × n_v). Not recorded.
+  double response_measure(size_t r, const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
+                          const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad);
 
  private:
   const Case& cs_;
@@ -29,7 +33,10 @@ class ResponseTracker {
     std::vector<double> values;
     std::vector<Eigen::RowVectorXd> grads;
   };
+  double evaluate(const Measure* measure, int component, const State& s, const ModelParams& p, const Mat* dq,
+                  const Mat* dv, const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad);
   std::vector<Column> cols_;
+  MeasureGradient grad_;
   std::vector<int> response_column_;
   std::vector<double> times_;
   ModelParams scratch_;

@@ -5,6 +5,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/sensitivity/direct_observer.hpp"
+#include "lsmbs/sensitivity/response_quadrature.hpp"
 #include "lsmbs/sensitivity/response_tracker.hpp"
 
 namespace lsmbs {
@@ -87,7 +88,13 @@ void add_primal(SensitivityCounts& c, const IntegratorSummary& s) {
   c.residual_evaluations += s.residual_evaluations;
 }
 
-std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal) {
+// Progress label of simulation `k` of `n` ("" for a single run).
+std::string run_label(long k, long n) {
+  return n > 1 ? "simulation " + std::to_string(k) + "/" + std::to_string(n) : std::string();
+}
+
+std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal,
+                                            ProgressLine* line, long n_runs) {
   ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()));
   struct Obs : StepObserver {
     ResponseTracker& tr;
@@ -102,7 +109,9 @@ std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts,
       return true;
     }
   } obs(tr, cs.model->params());
-  const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs});
+  ProgressLine off;
+  ProgressObserver prog(line ? *line : off, cs.simulation.t_end, run_label(counts.simulations + 1, n_runs));
+  const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs, &prog});
   add_primal(counts, s);
   if (primal) *primal = s;
   if (!s.ok) throw NumericalFailure("simulation failed during finite differences: " + s.message);
@@ -127,9 +136,12 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     io.h_out = cs.simulation.h;
     io.t_end = cs.simulation.t_end;
     IdasGGL idas(*cs.model, params, io);
+    ResponseQuadrature quad(cs, d.apply_with_directions(p, params), cs.initial.t, io.t_end);
+    if (!quad.empty()) idas.set_quadrature(&quad);
     const auto st = idas.run_with_sensitivities(cs.initial, d, p, [&](const State& s, const Mat* dq, const Mat* dv,
                                                                        const Mat* da, const Mat* dl) {
       tracker.record(s, params, dq, dv, da, dl);
+      if (o.progress) o.progress->update(false, " IDAS t = %.5f s (%3.0f %%)", s.t, 100.0 * s.t / io.t_end);
     });
     res.ok = st.ok;
     res.message = st.message;
@@ -140,13 +152,15 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     res.counts.factorizations = st.jacobian_evaluations;
     res.counts.newton_iterations = st.nonlinear_iterations;
     res.responses = tracker.results();
+    if (!quad.empty()) res.quadratures = quad.results();
     res.counts.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return res;
   }
   if (o.method == Method::kFdForward || o.method == Method::kFdCentral) {
     d.apply(p, params);
     try {
-      const auto base = run_values(cs, res.counts, &res.primal);
+      const long n_runs = 1 + (o.method == Method::kFdCentral ? 2 : 1) * nv;
+      const auto base = run_values(cs, res.counts, &res.primal, o.progress, n_runs);
       res.counts.primal_wall_seconds = res.primal.wall_seconds;
       res.responses = base;
       for (auto& r : res.responses) r.gradient.setZero(static_cast<Eigen::Index>(r.values.size()), nv);
@@ -155,13 +169,13 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
         Vec pp = p;
         pp[i] += h;
         d.apply(pp, params);
-        const auto plus = run_values(cs, res.counts, nullptr);
+        const auto plus = run_values(cs, res.counts, nullptr, o.progress, n_runs);
         std::vector<ResponseSensitivity> minus;
         if (o.method == Method::kFdCentral) {
           Vec pm = p;
           pm[i] -= h;
           d.apply(pm, params);
-          minus = run_values(cs, res.counts, nullptr);
+          minus = run_values(cs, res.counts, nullptr, o.progress, n_runs);
         }
         for (size_t r = 0; r < res.responses.size(); ++r) {
           if (plus[r].values.size() != base[r].values.size())
@@ -206,7 +220,9 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
                                   o.matrix == SensitivityOptions::Matrix::kRefined ? o.refinement_steps : 0);
     GeneralizedAlphaOptions go = cs.simulation;
     go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
-    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs});
+    ProgressLine off;
+    ProgressObserver prog(o.progress ? *o.progress : off, go.t_end);
+    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog});
     add_primal(res.counts, res.primal);
     res.ok = res.primal.ok;
     res.message = res.primal.message;

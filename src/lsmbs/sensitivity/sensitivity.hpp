@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lsmbs/core/progress.hpp"
 #include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/io/case.hpp"
 
@@ -41,6 +42,8 @@ struct SensitivityOptions {
   /// IDAS forward sensitivities (method idas): tolerances and options; output grid and final
   /// time are the case's generalized-α h and t_end.
   IdasOptions idas = IdasOptions::reference();
+  /// Progress line for the simulations (not an option of the method: not in to_json()).
+  ProgressLine* progress = nullptr;
   static bool parse_matrix(const std::string& s, Matrix& m);
   static const char* matrix_name(Matrix m);
 
@@ -56,6 +59,15 @@ struct ResponseSensitivity {
   std::vector<double> values;  ///< one, or one per grid step for a per-step response
   std::vector<double> times;   ///< per-step responses: the step times
   Mat gradient;                ///< values.size() × n_v
+};
+
+/// A time-integral response evaluated by IDAS quadratures (see response_quadrature.hpp).
+struct QuadratureResponse {
+  std::string name;             ///< the response's name
+  std::string definition;       ///< e.g. "(Q(b) - Q(a)) / (b - a), Q = integral of tip_deviation dt"
+  double t0 = 0, t1 = 0;        ///< window used (clipped to the run)
+  double value = 0;
+  Eigen::RowVectorXd gradient;  ///< 1 × n_v (empty without sensitivities)
 };
 
 struct SensitivityCounts {
@@ -77,6 +89,9 @@ struct SensitivityResult {
   SensitivityCounts counts;
   IntegratorSummary primal;
   IdasStats idas;  ///< method idas only
+  /// Method idas: the time-integral responses from IDAS quadratures with their gradients
+  /// (IDAQuadSensInit), the continuous-time counterparts of the grid aggregates.
+  std::vector<QuadratureResponse> quadratures;
 };
 
 /// Sensitivities at design p (the case's model parameters are left at p).
