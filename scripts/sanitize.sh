@@ -13,7 +13,7 @@ if [ "${1:-}" = "--ci" ]; then ci=1; shift; fi
 bash "$root/scripts/setup-deps.sh"
 build="$root/build-asan"
 # unity build: the Eigen-heavy translation units compile about twice as fast batched
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DLSMBS_WITH_SANITIZERS=ON \
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DLSMBS_WITH_SANITIZERS=ON \
   -DLSMBS_BUILD_TESTS=ON -DCMAKE_UNITY_BUILD=ON >/dev/null
 cmake --build "$build" -j"$(nproc)"
 cd "$build"
