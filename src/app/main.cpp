@@ -46,7 +46,8 @@ std::string joined_args(int argc, char** argv) {
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets);
 
 int simulate(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets, bool quiet,
-             bool verbose, const std::string& integrator, double rtol, int max_order, const std::string& cmdline) {
+             bool verbose, const std::string& integrator, double rtol, double atol, int max_order,
+             const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
   lsmbs::RunOptions ro;
   if (!sets.empty()) {
@@ -59,7 +60,7 @@ int simulate(const std::string& case_file, const std::string& out, const std::ve
   ro.command_line = cmdline;
   ro.idas = integrator == "idas";
   ro.idas_options.rtol = rtol;
-  ro.idas_options.atol = 1e-3 * rtol;
+  ro.idas_options.atol = atol > 0 ? atol : rtol;
   ro.idas_options.max_order = max_order;
   if (verbose)
     std::fprintf(stderr, "lsmbs: case '%s': %d DOFs, %d constraint equations, %d nonzeros\n", cs.name.c_str(),
@@ -352,7 +353,10 @@ int main(int argc, char** argv) {
   double rtol = 1e-9;
   sim->add_option("--integrator", integrator, "generalized-alpha (the paper's) or idas (SUNDIALS IDAS, GGL index 2)")
       ->check(CLI::IsMember({"generalized-alpha", "idas"}))->capture_default_str();
-  sim->add_option("--rtol", rtol, "IDAS relative tolerance (absolute: 1e-3 rtol × length scale)")->capture_default_str();
+  sim->add_option("--rtol", rtol, "IDAS relative tolerance")->capture_default_str();
+  double atol = 0;
+  sim->add_option("--atol", atol, "IDAS absolute tolerance on positions, in units of the model's length scale "
+                                  "(default: rtol)");
   int max_order = 5;
   sim->add_option("--max-order", max_order, "IDAS maximum BDF order (2: A-stable, for undamped flexible models)")
       ->check(CLI::Range(1, 5))->capture_default_str();
@@ -437,7 +441,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, max_order, joined_args(argc, argv));
+    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
     if (*opt) return optimize(case_file, out, resume, optimizer, quiet, verbose, joined_args(argc, argv));
     if (*ben) {

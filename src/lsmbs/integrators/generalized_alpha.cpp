@@ -39,6 +39,7 @@ nlohmann::json GeneralizedAlphaOptions::to_json() const {
           {"force_floor", force_floor}, {"max_iter", max_iter}, {"min_iter", min_iter},
           {"consistent_start", consistent_start}, {"project_initial", project_initial},
           {"newton", newton == Newton::kFull ? "full" : "modified"}, {"max_halvings", max_halvings},
+          {"ordering", SparseLU::ordering_name(ordering)},
           {"sensitivity_matrix", refactor_converged ? "converged" : "last_iteration"},
           {"k", k}, {"zeta", zeta}};
 }
@@ -99,6 +100,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   if (s0.lambda.size() != nc) s0.lambda.setZero(nc);
 
   SparseLU lu;
+  lu.set_ordering(opt_.ordering);
   lu.analyze(model.pattern());
   const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
 

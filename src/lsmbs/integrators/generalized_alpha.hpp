@@ -31,6 +31,9 @@ struct GeneralizedAlphaOptions {
   bool consistent_start = true;  ///< false: q̈0 = a0 = 0, λ0 = 0 as Algorithm 1
   bool project_initial = true;   ///< project q0, q̇0 onto the constraint manifold
   enum class Newton { kFull, kModified } newton = Newton::kFull;
+  /// Fill-reducing ordering of the KLU analysis (SparseLU::Ordering; case key "ordering":
+  /// "amd" or "nested_dissection").
+  SparseLU::Ordering ordering = SparseLU::Ordering::kAmd;
   int max_halvings = 6;   ///< step-halving retries of one step (h / 2^k)
   /// Factorization handed to step observers (Algorithm 2): the one of the step's last Newton
   /// iteration (the paper's choice, no extra cost), or S_t re-assembled and factorized at the

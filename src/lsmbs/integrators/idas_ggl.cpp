@@ -21,7 +21,7 @@ namespace lsmbs {
 IdasOptions IdasOptions::reference() {
   IdasOptions o;
   o.rtol = 1e-9;
-  o.atol = 1e-12;
+  o.atol = 1e-9;
   return o;
 }
 

@@ -45,7 +45,11 @@ class IdasQuadrature {
 
 struct IdasOptions {
   double rtol = 1e-6;
-  double atol = 1e-9;        ///< times the model length scale (positions) or length/time (velocities)
+  /// Absolute tolerance, times the model length scale (positions) or length/time (velocities).
+  /// Equal to rtol by default: a coordinate that passes through zero (a rotation angle, a node
+  /// near the origin) then gets the accuracy rtol × model size. With atol = 1e-3 rtol the robot
+  /// arm at rtol 1e-8 needed > 120 s for 0.05 s; with atol = rtol, 218 steps (0.8 s).
+  double atol = 1e-6;
   double h_out = 1e-3;       ///< output grid
   double t_end = 1.0;
   long max_steps = 500000;
@@ -63,7 +67,7 @@ struct IdasOptions {
   /// true (default): the model's analytic partials; false: IDAS's own difference quotients on p
   /// (these fail with corrector-convergence failures at rtol <= 1e-8 on the slider-crank)
   bool analytic_sensitivity_residual = true;
-  static IdasOptions reference();               ///< rtol 1e-9, atol 1e-12
+  static IdasOptions reference();               ///< rtol = atol = 1e-9
   nlohmann::json to_json() const;
 };
 

@@ -42,6 +42,7 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   Vec R, x;
   std::vector<double> vals;
   SparseLU lu;
+  lu.set_ordering(cs.simulation.ordering);
   lu.analyze(m.pattern());
   m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
   lu.factor(vals);
@@ -69,7 +70,8 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   nlohmann::json J = provenance(o.command_line, file, cs.sha256);
   J["case_name"] = cs.name;
   J["status"] = "complete";
-  J["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"nonzeros", m.pattern().nnz()}};
+  J["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"nonzeros", m.pattern().nnz()},
+                {"ordering", SparseLU::ordering_name(lu.ordering())}, {"lu_nonzeros", lu.factor_nonzeros()}};
   J["floor_seconds"] = {{"residual", t_res}, {"iteration_matrix", t_mat}, {"klu_refactor_and_solve", t_lu}, {"total", floor}};
   J["primal"] = {{"wall_seconds", t_primal}, {"steps", primal.steps},
                  {"newton_per_step", static_cast<double>(primal.newton_iterations) / primal.steps},

@@ -524,6 +524,9 @@ struct Loader {
     o.project_initial = r.boolean("project_initial", o.project_initial);
     o.newton = r.one_of("newton", {"full", "modified"}, "full") == "full" ? GeneralizedAlphaOptions::Newton::kFull
                                                                           : GeneralizedAlphaOptions::Newton::kModified;
+    o.ordering = r.one_of("ordering", {"amd", "nested_dissection"}, "amd") == "amd"
+                     ? SparseLU::Ordering::kAmd
+                     : SparseLU::Ordering::kNestedDissection;
     o.k = r.non_negative("k", 0.0);
     o.zeta = r.non_negative("zeta", 0.0);
     if (auto msg = o.validate(); !msg.empty()) {

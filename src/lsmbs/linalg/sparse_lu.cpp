@@ -1,7 +1,9 @@
 #include "lsmbs/linalg/sparse_lu.hpp"
 
+#include <cholmod.h>
 #include <klu.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -20,6 +22,58 @@ struct SparseLU::Impl {
   }
 };
 
+namespace {
+
+// KLU user ordering (Common.ordering = 3): nested dissection of the symmetrized pattern
+// S = A + Aᵀ by METIS through CHOLMOD (cholmod_metis, postordered). Returns 0 on failure (KLU
+// then reports an error), otherwise -1 ("no fill estimate").
+int nested_dissection_order(int n, int Ap[], int Ai[], int Perm[], klu_common*) {
+  if (n <= 0) return 0;
+  if (n < 3) {  // METIS needs a graph; a tiny block needs no ordering
+    for (int k = 0; k < n; ++k) Perm[k] = k;
+    return -1;
+  }
+  // upper triangle of the pattern of A + Aᵀ, diagonal excluded, as a CSC matrix
+  std::vector<std::vector<int>> cols(n);
+  for (int j = 0; j < n; ++j)
+    for (int p = Ap[j]; p < Ap[j + 1]; ++p) {
+      const int i = Ai[p];
+      if (i < j) cols[j].push_back(i);
+      else if (i > j) cols[i].push_back(j);
+    }
+  std::vector<int> sp(n + 1, 0), si;
+  for (int j = 0; j < n; ++j) {
+    auto& c = cols[j];
+    std::sort(c.begin(), c.end());
+    c.erase(std::unique(c.begin(), c.end()), c.end());
+    si.insert(si.end(), c.begin(), c.end());
+    sp[j + 1] = static_cast<int>(si.size());
+  }
+  if (si.empty()) {
+    for (int k = 0; k < n; ++k) Perm[k] = k;
+    return -1;
+  }
+  cholmod_common cm;
+  cholmod_start(&cm);
+  cm.print = 0;
+  cholmod_sparse S{};
+  S.nrow = S.ncol = static_cast<size_t>(n);
+  S.nzmax = si.size();
+  S.p = sp.data();
+  S.i = si.data();
+  S.stype = 1;  // symmetric, upper triangle stored
+  S.itype = CHOLMOD_INT;
+  S.xtype = CHOLMOD_PATTERN;
+  S.dtype = CHOLMOD_DOUBLE;
+  S.sorted = 1;
+  S.packed = 1;
+  const int ok = cholmod_metis(&S, nullptr, 0, 1, Perm, &cm);
+  cholmod_finish(&cm);
+  return ok ? -1 : 0;
+}
+
+}  // namespace
+
 SparseLU::SparseLU() : impl_(std::make_unique<Impl>()) {}
 SparseLU::~SparseLU() = default;
 
@@ -30,6 +84,13 @@ void SparseLU::analyze(const CscPattern& pattern) {
   m.n = pattern.n;
   m.ap = pattern.col_ptr;
   m.ai = pattern.row_ind;
+  if (ordering_ == Ordering::kNestedDissection) {
+    m.common.ordering = 3;
+    m.common.user_order = nested_dissection_order;
+  } else {
+    m.common.ordering = 0;
+    m.common.user_order = nullptr;
+  }
   m.symbolic = klu_analyze(m.n, m.ap.data(), m.ai.data(), &m.common);
   if (!m.symbolic) throw std::runtime_error("KLU symbolic analysis failed (status " +
                                             std::to_string(m.common.status) + ")");
@@ -88,5 +149,10 @@ void SparseLU::reset_pivoting() {
 
 bool SparseLU::factored() const { return impl_->numeric != nullptr; }
 double SparseLU::rcond() const { return impl_->common.rcond; }
+
+long SparseLU::factor_nonzeros() const {
+  const auto& m = *impl_;
+  return m.numeric ? static_cast<long>(m.numeric->lnz) + static_cast<long>(m.numeric->unz) : 0;
+}
 
 }  // namespace lsmbs
