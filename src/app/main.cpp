@@ -129,7 +129,7 @@ int geometry(const std::string& case_file, const std::string& out, const std::ve
 
 int sensitivity(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets,
                 const std::string& method, double delta, bool absolute, const std::string& matrix, bool full_residual,
-                bool quiet, const std::string& cmdline) {
+                double rtol, double atol, bool quiet, const std::string& cmdline) {
   lsmbs::SensitivityOptions so;
   if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
     std::string all;
@@ -141,11 +141,15 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     throw lsmbs::Error("--matrix " + matrix + ": expected last, converged or refined");
   so.delta = delta;
   so.relative = !absolute;
+  so.idas.rtol = rtol;
+  so.idas.atol = atol > 0 ? atol : rtol;
   so.full_residual = full_residual;
   lsmbs::Case cs = lsmbs::load_case(case_file);
   if (!cs.design) throw lsmbs::Error(case_file, "/design", "sensitivities need a design section (design variables)");
   if (cs.responses.empty()) throw lsmbs::Error(case_file, "/output/responses", "sensitivities need at least one response");
   const lsmbs::Vec p = design_point(cs, sets);
+  so.idas.h_out = cs.simulation.h;  // what IDAS runs with (recorded in summary.json)
+  so.idas.t_end = cs.simulation.t_end;
   lsmbs::ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
   so.progress = &line;
   const auto res = lsmbs::compute_sensitivities(cs, p, so);
@@ -390,6 +394,8 @@ int main(int argc, char** argv) {
                   "matrix of the back-solves: last (last Newton iteration, the paper's), converged (refactorized), "
                   "refined (last LU + iterative refinement)")->capture_default_str();
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
+  sen->add_option("--rtol", rtol, "--method idas: IDAS relative tolerance")->capture_default_str();
+  sen->add_option("--atol", atol, "--method idas: IDAS absolute tolerance in units of the length scale (default: rtol)");
   sen->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
   bool resume = false;
@@ -471,7 +477,8 @@ int main(int argc, char** argv) {
       return r.pass ? 0 : 1;
     }
     if (*sen)
-      return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, quiet, joined_args(argc, argv));
+      return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, rtol, atol, quiet,
+                         joined_args(argc, argv));
     std::cout << app.help();
     return 2;
   } catch (const lsmbs::Error& e) {

@@ -127,6 +127,18 @@ assert a["final"]["objective"] == b["final"]["objective"]
 assert b["counts"]["simulations_this_run"] < a["counts"]["simulations_this_run"]
 print("kill/resume ok:", b["counts"])
 PY
+# IDAS sensitivities from the command line: statistics, quadratures with gradients, options as run.
+"$exe" sensitivity "$spring" --method idas --rtol 1e-8 -o "$tmp/sens_idas" -q || fail "sensitivity --method idas"
+python3 - "$tmp/sens_idas/summary.json" <<'PY' || fail "idas summary.json"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["idas"]["steps"] > 0 and s["idas"]["nonlinear_iterations"] > 0 and "error_test_failures" in s["idas"]
+o = s["options"]["sensitivity"]["idas"]
+assert o["rtol"] == 1e-8 and o["atol"] == 1e-8 and o["t_end"] == 0.25, o
+q = s["quadratures"]["energy_integral"]
+assert q["value"] > 0 and set(q["gradient"]) == {"k", "c"}, q
+print("idas sensitivity ok")
+PY
 # Progress (issue 9): not on a terminal, optimize prints its final summary only (no row per
 # evaluation, no progress line); --verbose adds the rows; on a terminal (a pseudo-terminal from
 # script(1)) a self-overwriting progress line with time, step and Newton iterations appears.
