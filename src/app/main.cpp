@@ -47,7 +47,7 @@ lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& s
 
 int simulate(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets, bool quiet,
              bool verbose, const std::string& integrator, double rtol, double atol, int max_order,
-             const std::string& cmdline) {
+             const std::string& error_test, const std::string& cmdline) {
   lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
   lsmbs::RunOptions ro;
   if (!sets.empty()) {
@@ -62,6 +62,10 @@ int simulate(const std::string& case_file, const std::string& out, const std::ve
   ro.idas_options.rtol = rtol;
   ro.idas_options.atol = atol > 0 ? atol : rtol;
   ro.idas_options.max_order = max_order;
+  using ET = lsmbs::IdasOptions::ErrorTest;
+  ro.idas_options.error_test = error_test == "positions"    ? ET::kPositions
+                               : error_test == "positions+velocities" ? ET::kPositionsAndVelocities
+                                                                       : ET::kAuto;
   if (verbose)
     std::fprintf(stderr, "lsmbs: case '%s': %d DOFs, %d constraint equations, %d nonzeros\n", cs.name.c_str(),
                  cs.model->nq(), cs.model->nc(), cs.model->pattern().nnz());
@@ -364,6 +368,10 @@ int main(int argc, char** argv) {
   int max_order = 5;
   sim->add_option("--max-order", max_order, "IDAS maximum BDF order (2: A-stable, for undamped flexible models)")
       ->check(CLI::Range(1, 5))->capture_default_str();
+  std::string error_test = "auto";
+  sim->add_option("--error-test", error_test, "IDAS error test: positions, positions+velocities, or auto (positions "
+                                              "for models with a flexible body)")
+      ->check(CLI::IsMember({"auto", "positions", "positions+velocities"}))->capture_default_str();
 
   std::vector<std::string> sets;
   sim->add_option("--set", sets, "design variable override name=value (repeatable)");
@@ -447,7 +455,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, joined_args(argc, argv));
+    if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, error_test,
+                                joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
     if (*opt) return optimize(case_file, out, resume, optimizer, quiet, verbose, joined_args(argc, argv));
     if (*ben) {

@@ -139,6 +139,17 @@ q = s["quadratures"]["energy_integral"]
 assert q["value"] > 0 and set(q["gradient"]) == {"k", "c"}, q
 print("idas sensitivity ok")
 PY
+# IDAS simulation options reach IDAS and summary.json.
+"$exe" simulate "$spring" --integrator idas --rtol 1e-7 --error-test positions --max-order 3 -o "$tmp/sim_idas" -q || fail "simulate --integrator idas"
+python3 - "$tmp/sim_idas/summary.json" <<'PY' || fail "idas simulate summary.json"
+import json, sys
+s = json.load(open(sys.argv[1]))
+c, o = s["counts"], s["options"]["idas"]
+assert c["error_test"] == "positions" and c["steps"] > 0 and "nonlinear_convergence_failures" in c, c
+assert o["rtol"] == 1e-7 and o["atol"] == 1e-7 and o["max_order"] == 3 and o["error_test"] == "positions", o
+assert "energy_integral" in s["quadratures"]
+print("idas simulate ok")
+PY
 # Progress (issue 9): not on a terminal, optimize prints its final summary only (no row per
 # evaluation, no progress line); --verbose adds the rows; on a terminal (a pseudo-terminal from
 # script(1)) a self-overwriting progress line with time, step and Newton iterations appears.

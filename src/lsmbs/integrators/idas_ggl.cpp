@@ -37,7 +37,7 @@ nlohmann::json IdasOptions::to_json() const {
 nlohmann::json IdasStats::to_json() const {
   return {{"ok", ok}, {"message", message}, {"steps", steps}, {"residual_evaluations", residual_evaluations},
           {"jacobian_evaluations", jacobian_evaluations}, {"nonlinear_iterations", nonlinear_iterations},
-          {"error_test_failures", error_test_failures},
+          {"error_test_failures", error_test_failures}, {"nonlinear_convergence_failures", nonlinear_convergence_failures},
           {"sensitivity_residual_evaluations", sensitivity_residual_evaluations}, {"wall_seconds", wall_seconds},
           {"error_test", error_test}};
 }
@@ -464,6 +464,7 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
   IDAGetNumJacEvals(sd.mem, &v), st.jacobian_evaluations = v;
   IDAGetNumNonlinSolvIters(sd.mem, &v), st.nonlinear_iterations = v;
   IDAGetNumErrTestFails(sd.mem, &v), st.error_test_failures = v;
+  IDAGetNumNonlinSolvConvFails(sd.mem, &v), st.nonlinear_convergence_failures = v;
   if (sens) IDAGetSensNumResEvals(sd.mem, &v), st.sensitivity_residual_evaluations = v;
   if (nQ > 0 && st.ok) report_quadrature(t_last);
   st.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

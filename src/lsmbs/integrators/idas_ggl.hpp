@@ -75,7 +75,7 @@ struct IdasStats {
   bool ok = true;
   std::string message;
   long steps = 0, residual_evaluations = 0, jacobian_evaluations = 0, nonlinear_iterations = 0;
-  long error_test_failures = 0, sensitivity_residual_evaluations = 0;
+  long error_test_failures = 0, nonlinear_convergence_failures = 0, sensitivity_residual_evaluations = 0;
   std::string error_test;           ///< resolved: "positions" or "positions+velocities"
   double wall_seconds = 0;
   nlohmann::json to_json() const;
