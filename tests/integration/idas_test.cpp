@@ -61,6 +61,19 @@ void expect_second_order(const json& c, const std::string& column, double h0, co
   EXPECT_LT(r2, 4.5);
 }
 
+// One IDAS run of the case with design variable i moved by dp (the parameters are restored).
+SimulationResult idas_run_at(Case& cs, const Vec& p, int i, double dp, const IdasOptions& io) {
+  Vec pp = p;
+  pp[i] += dp;
+  cs.design->apply(pp, cs.model->params());
+  RunOptions ro;
+  ro.idas = true;
+  ro.idas_options = io;
+  auto res = run_simulation(cs, ro);
+  cs.design->apply(p, cs.model->params());
+  return res;
+}
+
 }  // namespace
 
 TEST(Idas, GeneralizedAlphaConvergesToIdasAtSecondOrderOnARigidMechanism) {
@@ -85,19 +98,9 @@ TEST(Idas, ForwardSensitivitiesAgreeWithFiniteDifferencesOfIdasRuns) {
   double worst = 0;
   for (int i = 0; i < 2; ++i) {
     const double h = 1e-4 * std::abs(p[i]);
-    auto value = [&](double dp, int r) {
-      Vec pp = p;
-      pp[i] += dp;
-      cs.design->apply(pp, cs.model->params());
-      RunOptions ro;
-      ro.idas = true;
-      ro.idas_options = o.idas;
-      const auto res = run_simulation(cs, ro);
-      cs.design->apply(p, cs.model->params());
-      return res.responses.at(resp[r]);
-    };
+    const auto plus = idas_run_at(cs, p, i, h, o.idas), minus = idas_run_at(cs, p, i, -h, o.idas);
     for (int r = 0; r < 3; ++r) {
-      const double fd = (value(h, r) - value(-h, r)) / (2 * h);
+      const double fd = (plus.responses.at(resp[r]) - minus.responses.at(resp[r])) / (2 * h);
       double an = NAN;
       for (const auto& rs : s.responses)
         if (rs.name == resp[r]) an = rs.gradient(0, i);
@@ -201,18 +204,7 @@ TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
   double worst = 0;
   for (int i = 0; i < 2; ++i) {
     const double h = 1e-4 * std::abs(p[i]);
-    auto value = [&](double dp) {
-      Vec pp = p;
-      pp[i] += dp;
-      cs.design->apply(pp, cs.model->params());
-      RunOptions ro;
-      ro.idas = true;
-      ro.idas_options = o.idas;
-      const auto res = run_simulation(cs, ro);
-      cs.design->apply(p, cs.model->params());
-      return res.quadratures;
-    };
-    const auto plus = value(h), minus = value(-h);
+    const auto plus = idas_run_at(cs, p, i, h, o.idas).quadratures, minus = idas_run_at(cs, p, i, -h, o.idas).quadratures;
     for (size_t k = 0; k < 2; ++k) {
       const double fd = (plus[k].value - minus[k].value) / (2 * h), an = s.quadratures[k].gradient[i];
       const double e = std::abs(an - fd) / std::abs(fd);

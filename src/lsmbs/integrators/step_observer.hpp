@@ -42,20 +42,21 @@ class StepObserver {
   virtual bool on_step(const StepInfo& info) = 0;
 };
 
-/// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …".
+/// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …"
+/// (null line: nothing).
 class ProgressObserver : public StepObserver {
  public:
-  ProgressObserver(ProgressLine& line, double t_end, std::string label = {})
+  ProgressObserver(ProgressLine* line, double t_end, std::string label = {})
       : line_(line), t_end_(t_end), label_(std::move(label)) {}
   bool on_step(const StepInfo& i) override {
-    if (line_.enabled())
-      line_.update(false, "%s t = %.5f s (%3.0f %%)  step %d  Newton %d", label_.c_str(), i.state->t,
-                   t_end_ > 0 ? 100.0 * i.state->t / t_end_ : 0.0, i.step, i.newton_iterations);
+    if (line_ && line_->enabled())
+      line_->update(false, "%s t = %.5f s (%3.0f %%)  step %d  Newton %d", label_.c_str(), i.state->t,
+                    t_end_ > 0 ? 100.0 * i.state->t / t_end_ : 0.0, i.step, i.newton_iterations);
     return true;
   }
 
  private:
-  ProgressLine& line_;
+  ProgressLine* line_;
   double t_end_;
   std::string label_;
 };

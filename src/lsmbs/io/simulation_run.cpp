@@ -111,7 +111,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     if (!quad.empty()) res.quadratures = quad.results();
   } else {
     GeneralizedAlpha ga(cs.simulation);
-    ProgressObserver prog(line, cs.simulation.t_end);
+    ProgressObserver prog(&line, cs.simulation.t_end);
     res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec, &prog}, &res.final_state);
   }
   line.clear();

@@ -109,8 +109,7 @@ std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts,
       return true;
     }
   } obs(tr, cs.model->params());
-  ProgressLine off;
-  ProgressObserver prog(line ? *line : off, cs.simulation.t_end, run_label(counts.simulations + 1, n_runs));
+  ProgressObserver prog(line, cs.simulation.t_end, run_label(counts.simulations + 1, n_runs));
   const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs, &prog});
   add_primal(counts, s);
   if (primal) *primal = s;
@@ -220,8 +219,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
                                   o.matrix == SensitivityOptions::Matrix::kRefined ? o.refinement_steps : 0);
     GeneralizedAlphaOptions go = cs.simulation;
     go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
-    ProgressLine off;
-    ProgressObserver prog(o.progress ? *o.progress : off, go.t_end);
+    ProgressObserver prog(o.progress, go.t_end);
     res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog});
     add_primal(res.counts, res.primal);
     res.ok = res.primal.ok;
