@@ -133,8 +133,9 @@ int geometry(const std::string& case_file, const std::string& out, const std::ve
 
 int sensitivity(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets,
                 const std::string& method, double delta, bool absolute, const std::string& matrix, bool full_residual,
-                double rtol, double atol, bool quiet, const std::string& cmdline) {
+                double rtol, double atol, int threads, bool quiet, const std::string& cmdline) {
   lsmbs::SensitivityOptions so;
+  so.threads = threads;
   if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
     std::string all;
     for (const auto& n : lsmbs::SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
@@ -404,6 +405,10 @@ int main(int argc, char** argv) {
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
   sen->add_option("--rtol", rtol, "--method idas: IDAS relative tolerance")->capture_default_str();
   sen->add_option("--atol", atol, "--method idas: IDAS absolute tolerance in units of the length scale (default: rtol)");
+  int threads = 2;
+  sen->add_option("--threads", threads,
+                  "2: the sensitivity update of each step runs on a second thread while the next step is computed; "
+                  "1: one thread (same results to round-off)")->capture_default_str()->check(CLI::Range(1, 2));
   sen->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
   bool resume = false;
@@ -443,6 +448,8 @@ int main(int argc, char** argv) {
                                               "semi-analytical-central; 'none' for none)");
   ben->add_option("--repetitions", bo.repetitions, "repetitions of the floor measurements")->capture_default_str()
       ->check(CLI::Range(1, 100000));
+  ben->add_option("--threads", bo.threads, "threads of the sensitivity runs (see sensitivity --threads)")
+      ->capture_default_str()->check(CLI::Range(1, 2));
 
   try {
     app.parse(argc, argv);
@@ -486,7 +493,7 @@ int main(int argc, char** argv) {
       return r.pass ? 0 : 1;
     }
     if (*sen)
-      return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, rtol, atol, quiet,
+      return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, rtol, atol, threads, quiet,
                          joined_args(argc, argv));
     std::cout << app.help();
     return 2;

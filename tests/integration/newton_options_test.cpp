@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <stdexcept>
+#include <thread>
 
 #include "support/test_models.hpp"
 
@@ -98,4 +101,80 @@ TEST(NewtonOptions, ZeroStartOfAlgorithm1ReducesTheOrderToOneConsistentStartKeep
   EXPECT_NEAR(order_zero, 1.0, 0.2);
   EXPECT_NEAR(order_consistent, 2.0, 0.2);
   EXPECT_GT(ez[2], ec[2]);
+}
+
+// threads = 2: observers that declare themselves concurrent run on a worker thread one step
+// behind, each step's factorization alternating between two numeric factorizations. Reference:
+// the same observer run on the integrator's thread. It sleeps before it solves, so a
+// factorization overwritten by the next step would show in its solutions.
+namespace {
+
+struct Recorder : StepObserver {
+  bool concurrent_ = false;
+  int throw_at = -1, stop_at = -1;
+  std::vector<double> times;
+  std::vector<int> steps;
+  std::vector<bool> grid;
+  std::vector<Vec> q, solutions;
+  bool on_step(const StepInfo& i) override {
+    if (i.step == throw_at) throw std::runtime_error("observer failure at step " + std::to_string(i.step));
+    if (concurrent_) std::this_thread::sleep_for(std::chrono::microseconds(300));
+    times.push_back(i.state->t);
+    steps.push_back(i.step);
+    grid.push_back(i.grid_point);
+    q.push_back(i.state->q);
+    Vec x = Vec::LinSpaced(i.state->q.size() + i.state->lambda.size(), 1.0, 2.0);
+    i.factor->solve(x);
+    solutions.push_back(x);
+    return i.step != stop_at;
+  }
+  bool concurrent() const override { return concurrent_; }
+};
+
+IntegratorSummary run_with(Case& cs, int threads, Recorder& r) {
+  GeneralizedAlphaOptions o = cs.simulation;
+  o.threads = threads;
+  return GeneralizedAlpha(o).run(*cs.model, cs.model->params(), cs.initial, {&r});
+}
+
+}  // namespace
+
+TEST(NewtonOptions, ConcurrentObserversSeeEveryStepWithItsOwnFactorizationIncludingHalvedSteps) {
+  json j = pendulum(0.1);
+  j["simulation"]["max_iter"] = 2;  // halved sub-steps (previous test)
+  Case cs = test::make_case(j);
+  Recorder serial, worker;
+  worker.concurrent_ = true;
+  const auto a = run_with(cs, 1, serial), b = run_with(cs, 2, worker);
+  ASSERT_TRUE(a.ok && b.ok) << a.message << b.message;
+  ASSERT_GT(b.halvings, 0);
+  ASSERT_EQ(serial.times.size(), static_cast<size_t>(a.steps));
+  ASSERT_EQ(worker.times.size(), serial.times.size()) << "every step, the last one included";
+  double worst = 0;
+  for (size_t k = 0; k < serial.times.size(); ++k) {
+    EXPECT_EQ(worker.steps[k], serial.steps[k]);
+    EXPECT_EQ(worker.grid[k], serial.grid[k]);
+    EXPECT_DOUBLE_EQ(worker.times[k], serial.times[k]);
+    worst = std::max(worst, (worker.q[k] - serial.q[k]).norm());
+    worst = std::max(worst, (worker.solutions[k] - serial.solutions[k]).norm() / serial.solutions[k].norm());
+  }
+  EXPECT_LT(worst, 1e-12);
+}
+
+TEST(NewtonOptions, ConcurrentObserverFailuresReachTheCallerAndStopsTakeEffectOneStepLate) {
+  Case cs = test::make_case(pendulum(0.01));
+  Recorder thrower;
+  thrower.concurrent_ = true;
+  thrower.throw_at = 5;
+  EXPECT_THROW(run_with(cs, 2, thrower), std::runtime_error);
+  Recorder stopper;
+  stopper.concurrent_ = true;
+  stopper.stop_at = 5;
+  const auto s = run_with(cs, 2, stopper);
+  EXPECT_TRUE(s.aborted);
+  EXPECT_EQ(s.steps, 6) << "step 6 was computed while step 5's observer ran";
+  EXPECT_EQ(stopper.times.size(), 6u);
+  Recorder serial_stop;
+  serial_stop.stop_at = 5;
+  EXPECT_EQ(run_with(cs, 1, serial_stop).steps, 5);
 }

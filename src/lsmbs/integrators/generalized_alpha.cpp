@@ -2,7 +2,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <optional>
 #include <sstream>
+#include <thread>
+#include <utility>
 
 #include "lsmbs/integrators/initial_state.hpp"
 
@@ -30,6 +36,7 @@ std::string GeneralizedAlphaOptions::validate() const {
   if (max_iter < 1) return "max_iter: expected at least 1";
   if (min_iter < 0 || min_iter > max_iter) return "min_iter: expected 0 <= min_iter <= max_iter";
   if (max_halvings < 0 || max_halvings > 30) return "max_halvings: expected 0..30";
+  if (threads < 1 || threads > 2) return "threads: expected 1 or 2";
   if (k < 0 || zeta < 0) return "k, zeta: expected non-negative values (0 = automatic)";
   return {};
 }
@@ -40,7 +47,7 @@ nlohmann::json GeneralizedAlphaOptions::to_json() const {
           {"consistent_start", consistent_start}, {"project_initial", project_initial},
           {"newton", newton == Newton::kFull ? "full" : "modified"}, {"max_halvings", max_halvings},
           {"ordering", SparseLU::ordering_name(ordering)},
-          {"sensitivity_matrix", refactor_converged ? "converged" : "last_iteration"},
+          {"sensitivity_matrix", refactor_converged ? "converged" : "last_iteration"}, {"threads", threads},
           {"k", k}, {"zeta", zeta}};
 }
 
@@ -79,13 +86,93 @@ struct Workspace {
   std::vector<double> vals;
 };
 
+// Runs the concurrent observers on one worker thread, one step behind the integrator. One job
+// slot: post() copies the step (no allocation once the slot has its sizes) after wait_idle()
+// has seen the previous job finish, so at most one step is in flight.
+class ObserverWorker {
+ public:
+  explicit ObserverWorker(std::vector<StepObserver*> observers)
+      : observers_(std::move(observers)), thread_([this] { loop(); }) {}
+  ~ObserverWorker() {
+    {
+      std::lock_guard<std::mutex> lk(mu_);
+      quit_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  ObserverWorker(const ObserverWorker&) = delete;
+  ObserverWorker& operator=(const ObserverWorker&) = delete;
+
+  /// Waits for the job in flight; false when an observer asked to stop. Rethrows an observer's
+  /// exception on the integrator's thread.
+  bool wait_idle() {
+    std::unique_lock<std::mutex> lk(mu_);
+    cv_.wait(lk, [&] { return !pending_; });
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    return !stop_;
+  }
+  /// Copies the step and hands it to the worker (call after wait_idle()).
+  void post(const StepInfo& info) {
+    job_.prev = *info.prev;
+    job_.prev_acc = *info.prev_acc_like;
+    job_.state = *info.state;
+    job_.acc = *info.acc_like;
+    job_.info = info;
+    job_.info.prev = &job_.prev;
+    job_.info.prev_acc_like = &job_.prev_acc;
+    job_.info.state = &job_.state;
+    job_.info.acc_like = &job_.acc;
+    {
+      std::lock_guard<std::mutex> lk(mu_);
+      pending_ = true;
+    }
+    cv_.notify_all();
+  }
+
+ private:
+  void loop() {
+    std::unique_lock<std::mutex> lk(mu_);
+    for (;;) {
+      cv_.wait(lk, [&] { return pending_ || quit_; });
+      if (!pending_) return;
+      lk.unlock();
+      bool go_on = true;
+      std::exception_ptr err;
+      try {
+        for (auto* o : observers_) go_on &= o->on_step(job_.info);
+      } catch (...) {
+        err = std::current_exception();
+      }
+      lk.lock();
+      if (!go_on) stop_ = true;
+      if (err && !error_) error_ = err;
+      pending_ = false;
+      cv_.notify_all();
+    }
+  }
+  struct Job {
+    State prev, state;
+    Vec prev_acc, acc;
+    StepInfo info;
+  } job_;
+  std::vector<StepObserver*> observers_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  bool pending_ = false, quit_ = false, stop_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;  // last: started once everything above exists
+};
+
 }  // namespace
 
 IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p, State s0,
                                         std::vector<StepObserver*> observers, State* final_state) {
   const auto t_start = std::chrono::steady_clock::now();
   IntegratorSummary sum;
+  std::optional<ObserverWorker> worker;
   auto finish = [&](IntegratorSummary& s) -> IntegratorSummary& {
+    if (worker && !worker->wait_idle()) s.aborted = true;  // the last step's observers complete
     s.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     return s;
   };
@@ -138,6 +225,17 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   for (auto* o : observers) o->on_start(s0, w.a_cur, c0, k, zeta, opt_.consistent_start ? &lu : nullptr);
   lu.reset_pivoting();  // the first Newton iteration factorizes with fresh pivoting
 
+  // Concurrent observers: a second numeric factorization of the same symbolic analysis, so that
+  // step n+1 is factorized into one while the worker back-solves with step n's in the other.
+  std::vector<StepObserver*> sync_observers, concurrent_observers;
+  for (auto* o : observers) (opt_.threads > 1 && o->concurrent() ? concurrent_observers : sync_observers).push_back(o);
+  SparseLU lu_alt;
+  SparseLU* step_lu = &lu;  // the factorization the current step writes
+  if (!concurrent_observers.empty()) {
+    lu_alt.share_analysis(lu);
+    worker.emplace(std::move(concurrent_observers));
+  }
+
   const double tol_phi = opt_.tol_phi * model.length_scale();
   // Round-off floor of the residual: the constraint terms Φ_qᵀ(kλ + ζΦ) carry errors of order
   // (k + ζ)·ε·L (positions of size L, ε machine precision); no Newton iteration gets below it.
@@ -189,10 +287,10 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       if (refactor) {
         model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
         ++sum.matrix_evaluations;
-        const Status st = lu.factor(w.vals);
+        const Status st = step_lu->factor(w.vals);
         ++sum.factorizations;
         if (!st.ok()) {
-          why = "singular iteration matrix: the motion of " + model.describe_unknown(lu.singular_column()) +
+          why = "singular iteration matrix: the motion of " + model.describe_unknown(step_lu->singular_column()) +
                 " is not determined";
           have_factor = false;
           break;
@@ -201,7 +299,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       }
       prev_rn = rn;
       w.dx = -w.R;
-      lu.solve(w.dx);
+      step_lu->solve(w.dx);
       x.q += w.dx.head(nq);
       x.v += c.gamma_p * w.dx.head(nq);
       x.a += c.beta_p * w.dx.head(nq);
@@ -240,7 +338,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
       ++sum.matrix_evaluations;
       ++sum.factorizations;
-      if (!lu.factor(w.vals).ok()) {
+      if (!step_lu->factor(w.vals).ok()) {
         sum.ok = false;
         sum.message = "t = " + std::to_string(x.t) + ": singular iteration matrix at the converged state";
         sum.t_reached = w.prev.t;
@@ -263,10 +361,15 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     info.coef = c;
     info.k = k;
     info.zeta = zeta;
-    info.factor = &lu;
+    info.factor = step_lu;
     info.newton_iterations = it;
     bool stop = false;
-    for (auto* o : observers) stop |= !o->on_step(info);
+    for (auto* o : sync_observers) stop |= !o->on_step(info);
+    if (worker) {
+      stop |= !worker->wait_idle();  // step n's observers are done with the other factorization
+      worker->post(info);
+      step_lu = step_lu == &lu ? &lu_alt : &lu;
+    }
     std::swap(w.prev, w.cur);
     std::swap(w.a_prev, w.a_cur);
     if (stop) {

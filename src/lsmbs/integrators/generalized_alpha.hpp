@@ -9,6 +9,9 @@
 // Sparse KLU: one symbolic analysis per run, numeric (re)factorization per Newton iteration
 // (full Newton) or reuse within a step while convergence is fast (modified Newton, opt-in).
 // A step whose Newton iteration fails is retried with halved sub-steps (bounded).
+// With threads = 2, concurrent observers (the direct sensitivities of Algorithm 2) run on a
+// worker thread one step behind, each step's factorization alternating between two numeric
+// factorizations of the one symbolic analysis.
 #include <string>
 #include <vector>
 
@@ -40,6 +43,11 @@ struct GeneralizedAlphaOptions {
   /// converged state (exact Jacobian; one more factorization per step). Set by the
   /// sensitivity methods (SensitivityOptions::matrix), not by case files.
   bool refactor_converged = false;
+  /// 1: observers run on the calling thread. 2: observers that declare themselves concurrent
+  /// (StepObserver::concurrent) run on a second thread while the next step is computed. The
+  /// results are the same to round-off (the two factorizations pivot independently).
+  /// Set by the sensitivity methods (SensitivityOptions::threads), not by case files.
+  int threads = 1;
   double k = 0;           ///< constraint scaling of eq. (7); 0: automatic
   double zeta = 0;        ///< augmented-Lagrangian penalty of eq. (7); 0: automatic (= k)
 

@@ -40,6 +40,12 @@ class StepObserver {
                         double /*zeta*/, const SparseLU* /*start_factor*/) {}
   /// Return false to stop the integration (the run is then reported as aborted).
   virtual bool on_step(const StepInfo& info) = 0;
+  /// True when on_step may run on a worker thread, one step behind the integrator, on a copy of
+  /// the step (GeneralizedAlphaOptions::threads = 2). The observer must then touch nothing the
+  /// integrator or the other observers use; its `info.factor` is a second numeric factorization
+  /// that the integrator leaves alone until on_step returns. A stop request then takes effect
+  /// one step late.
+  virtual bool concurrent() const { return false; }
 };
 
 /// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …"

@@ -81,6 +81,7 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
     Case cm = load_case(file);
     SensitivityOptions so;
     SensitivityOptions::parse(name, so.method);
+    so.threads = o.threads;
     t = now();
     const auto r = compute_sensitivities(cm, cm.design->initial(), so);
     const double w = now() - t;
@@ -88,7 +89,7 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   }
   J["sensitivities"] = sens;
   J["peak_rss_kb"] = peak_rss_kb();
-  J["options"] = {{"repetitions", o.repetitions}, {"methods", o.methods}};
+  J["options"] = {{"repetitions", o.repetitions}, {"methods", o.methods}, {"threads", o.threads}};
   J["responses"] = nlohmann::json::object();
   write_json_atomic(o.out_dir + "/bench.json", J);
   write_json_atomic(o.out_dir + "/summary.json", J);

@@ -16,6 +16,7 @@ struct BenchOptions {
   std::string out_dir;
   std::vector<std::string> methods = {"direct-analytic", "semi-analytical-central"};
   int repetitions = 20;
+  int threads = 2;  ///< SensitivityOptions::threads of the timed sensitivity runs
   std::string command_line;
 };
 

@@ -9,17 +9,30 @@
 
 namespace lsmbs {
 
+namespace {
+// The symbolic analysis is read-only once computed, so factorizations may share it
+// (SparseLU::share_analysis); it is freed with the last of them.
+struct SymbolicDeleter {
+  void operator()(klu_symbolic* s) const {
+    klu_common c;
+    klu_defaults(&c);
+    klu_free_symbolic(&s, &c);
+  }
+};
+}  // namespace
+
 struct SparseLU::Impl {
   klu_common common{};
-  klu_symbolic* symbolic = nullptr;
+  std::shared_ptr<klu_symbolic> symbolic;
   klu_numeric* numeric = nullptr;
-  std::vector<int> ap, ai;
+  std::shared_ptr<const std::vector<int>> ap, ai;
   int n = 0;
   Impl() { klu_defaults(&common); }
   ~Impl() {
     if (numeric) klu_free_numeric(&numeric, &common);
-    if (symbolic) klu_free_symbolic(&symbolic, &common);
   }
+  int* Ap() const { return const_cast<int*>(ap->data()); }  // KLU's API is not const-correct
+  int* Ai() const { return const_cast<int*>(ai->data()); }
 };
 
 namespace {
@@ -80,10 +93,10 @@ SparseLU::~SparseLU() = default;
 void SparseLU::analyze(const CscPattern& pattern) {
   auto& m = *impl_;
   if (m.numeric) klu_free_numeric(&m.numeric, &m.common);
-  if (m.symbolic) klu_free_symbolic(&m.symbolic, &m.common);
+  m.symbolic.reset();
   m.n = pattern.n;
-  m.ap = pattern.col_ptr;
-  m.ai = pattern.row_ind;
+  m.ap = std::make_shared<const std::vector<int>>(pattern.col_ptr);
+  m.ai = std::make_shared<const std::vector<int>>(pattern.row_ind);
   if (ordering_ == Ordering::kNestedDissection) {
     m.common.ordering = 3;
     m.common.user_order = nested_dissection_order;
@@ -91,10 +104,24 @@ void SparseLU::analyze(const CscPattern& pattern) {
     m.common.ordering = 0;
     m.common.user_order = nullptr;
   }
-  m.symbolic = klu_analyze(m.n, m.ap.data(), m.ai.data(), &m.common);
-  if (!m.symbolic) throw std::runtime_error("KLU symbolic analysis failed (status " +
-                                            std::to_string(m.common.status) + ")");
+  klu_symbolic* sym = klu_analyze(m.n, m.Ap(), m.Ai(), &m.common);
+  if (!sym) throw std::runtime_error("KLU symbolic analysis failed (status " + std::to_string(m.common.status) + ")");
+  m.symbolic.reset(sym, SymbolicDeleter{});
   ++counters_.symbolic;
+}
+
+void SparseLU::share_analysis(const SparseLU& other) {
+  const auto& o = *other.impl_;
+  if (!o.symbolic) throw std::logic_error("SparseLU::share_analysis from an unanalyzed factorization");
+  auto& m = *impl_;
+  if (m.numeric) klu_free_numeric(&m.numeric, &m.common);
+  m.common = o.common;  // same options (ordering, pivot tolerance)
+  m.symbolic = o.symbolic;
+  m.ap = o.ap;
+  m.ai = o.ai;
+  m.n = o.n;
+  ordering_ = other.ordering_;
+  refactor_rcond_threshold = other.refactor_rcond_threshold;
 }
 
 Status SparseLU::factor(std::span<const double> values) {
@@ -103,8 +130,8 @@ Status SparseLU::factor(std::span<const double> values) {
   auto* vals = const_cast<double*>(values.data());  // KLU's API is not const-correct
   singular_col_ = -1;
   if (m.numeric) {
-    if (klu_refactor(m.ap.data(), m.ai.data(), vals, m.symbolic, m.numeric, &m.common)) {
-      klu_rcond(m.symbolic, m.numeric, &m.common);
+    if (klu_refactor(m.Ap(), m.Ai(), vals, m.symbolic.get(), m.numeric, &m.common)) {
+      klu_rcond(m.symbolic.get(), m.numeric, &m.common);
       if (m.common.rcond > refactor_rcond_threshold && std::isfinite(m.common.rcond)) {
         ++counters_.refactorizations;
         return Status::Ok();
@@ -112,7 +139,7 @@ Status SparseLU::factor(std::span<const double> values) {
     }
     klu_free_numeric(&m.numeric, &m.common);
   }
-  m.numeric = klu_factor(m.ap.data(), m.ai.data(), vals, m.symbolic, &m.common);
+  m.numeric = klu_factor(m.Ap(), m.Ai(), vals, m.symbolic.get(), &m.common);
   ++counters_.full_factorizations;
   if (!m.numeric || m.common.status == KLU_SINGULAR) {
     singular_col_ = m.common.singular_col;
@@ -120,14 +147,14 @@ Status SparseLU::factor(std::span<const double> values) {
     return Status::Fail(Status::Code::kSingular,
                         "singular iteration matrix (column " + std::to_string(singular_col_) + ")");
   }
-  klu_rcond(m.symbolic, m.numeric, &m.common);
+  klu_rcond(m.symbolic.get(), m.numeric, &m.common);
   return Status::Ok();
 }
 
 void SparseLU::solve(std::span<double> b, int nrhs) const {
   auto& m = *impl_;
   if (!m.numeric) throw std::logic_error("SparseLU::solve without a factorization");
-  klu_solve(m.symbolic, m.numeric, m.n, nrhs, b.data(), &m.common);
+  klu_solve(m.symbolic.get(), m.numeric, m.n, nrhs, b.data(), &m.common);
   auto& c = counters_;
   ++c.solves;
   c.rhs += nrhs;
@@ -136,7 +163,7 @@ void SparseLU::solve(std::span<double> b, int nrhs) const {
 void SparseLU::solve_transpose(std::span<double> b, int nrhs) const {
   auto& m = *impl_;
   if (!m.numeric) throw std::logic_error("SparseLU::solve_transpose without a factorization");
-  klu_tsolve(m.symbolic, m.numeric, m.n, nrhs, b.data(), &m.common);
+  klu_tsolve(m.symbolic.get(), m.numeric, m.n, nrhs, b.data(), &m.common);
   auto& c = counters_;
   ++c.solves;
   c.rhs += nrhs;

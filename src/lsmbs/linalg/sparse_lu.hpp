@@ -30,6 +30,10 @@ class SparseLU {
 
   /// Symbolic analysis (ordering); the pattern must outlive the factorization.
   void analyze(const CscPattern& pattern);
+  /// Uses `other`'s symbolic analysis (shared, read-only; not recomputed) for a second, independent
+  /// numeric factorization of the same pattern — e.g. one a worker thread solves with while the
+  /// integrator factorizes the next step into the other.
+  void share_analysis(const SparseLU& other);
   /// Nonzeros of the last factorization's L and U (fill-in).
   long factor_nonzeros() const;
   /// Numeric factorization of values laid out on the analyzed pattern.

@@ -80,6 +80,9 @@ class DirectSensitivityObserver : public StepObserver {
   void on_start(const State& s0, const Vec& a0, const AlphaCoefficients& c, double k, double zeta,
                 const SparseLU* start_factor) override;
   bool on_step(const StepInfo& info) override;
+  /// Touches only its own state, the tracker and the counts: may run one step behind on a
+  /// worker thread (SensitivityOptions::threads = 2).
+  bool concurrent() const override { return true; }
 
  private:
   const Model& m_;

@@ -59,7 +59,7 @@ nlohmann::json SensitivityOptions::to_json() const {
   if (method == Method::kIdas) return {{"method", name(method)}, {"idas", idas.to_json()}};
   return {{"method", name(method)}, {"delta", delta}, {"delta_mode", relative ? "relative" : "absolute"},
           {"matrix", matrix_name(matrix)}, {"refinement_steps", refinement_steps},
-          {"pseudo_load", full_residual ? "full_residual" : "element_local"}};
+          {"pseudo_load", full_residual ? "full_residual" : "element_local"}, {"threads", threads}};
 }
 
 nlohmann::json SensitivityCounts::to_json() const {
@@ -219,6 +219,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
                                   o.matrix == SensitivityOptions::Matrix::kRefined ? o.refinement_steps : 0);
     GeneralizedAlphaOptions go = cs.simulation;
     go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
+    go.threads = o.threads;
     ProgressObserver prog(o.progress, go.t_end);
     res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog});
     add_primal(res.counts, res.primal);

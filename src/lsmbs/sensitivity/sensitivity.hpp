@@ -39,6 +39,11 @@ struct SensitivityOptions {
   /// Semi-analytical pseudo-loads evaluated on the whole residual (Algorithm 2 literally) instead
   /// of element-locally (same result up to round-off, far cheaper; see direct_observer.hpp).
   bool full_residual = false;
+  /// Direct and semi-analytical methods: 2 runs the sensitivity update of each step (pseudo-loads,
+  /// back-solves, response derivatives) on a second thread while the next step is computed; 1
+  /// keeps everything on one thread. Same results to round-off. Not machine-dependent: 2 is
+  /// also the default on a one-core machine (it then only interleaves).
+  int threads = 2;
   /// IDAS forward sensitivities (method idas): tolerances and options; output grid and final
   /// time are the case's generalized-α h and t_end.
   IdasOptions idas = IdasOptions::reference();
