@@ -458,7 +458,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
   if (version) {
-    std::printf("lsmbs %s (commit %s)\n", lsmbs::kVersion, lsmbs::kGitCommit);
+    std::printf("lsmbs %s (commit %s)\n", lsmbs::kVersion, lsmbs::git_commit());
     return 0;
   }
   try {

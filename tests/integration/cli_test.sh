@@ -20,6 +20,12 @@ assert "max_piston_x" in s["responses"]
 print("summary.json ok")
 PY
 head -1 "$tmp/ok/history.csv" | grep -q "^t,piston.x,piston.y" || fail "history.csv header"
+# The recorded commit is the one the binary was built from (refreshed at build time, not at
+# configure time): compare with git itself.
+if head=$(git -C "$src" rev-parse HEAD 2>/dev/null); then
+  rec=$(python3 -c "import json; print(json.load(open('$tmp/ok/summary.json'))['git_commit'])")
+  [ "${rec%-dirty}" = "$head" ] || fail "summary.json git_commit $rec, source tree at $head (stale build?)"
+fi
 
 # Same input, same numbers.
 "$exe" simulate "$case_file" -o "$tmp/again" -q || fail "second run"

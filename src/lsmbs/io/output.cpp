@@ -99,7 +99,7 @@ nlohmann::json provenance(const std::string& command, const std::string& case_fi
   char buf[32];
   const std::time_t now = std::time(nullptr);
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  return {{"program", "lsmbs"}, {"version", kVersion}, {"git_commit", kGitCommit}, {"command", command},
+  return {{"program", "lsmbs"}, {"version", kVersion}, {"git_commit", git_commit()}, {"command", command},
           {"case_file", case_file}, {"case_sha256", sha}, {"created_utc", buf}};
 }
 
