@@ -60,6 +60,30 @@ TEST(NewtonOptions, ModifiedNewtonReachesTheFullNewtonSolutionWithFewerFactoriza
   EXPECT_EQ(b.integrator.factorizations, b.integrator.steps) << "one factorization per step";
 }
 
+TEST(NewtonOptions, ModifiedNewtonAcrossStepsReachesTheFullNewtonSolutionWithFewFactorizations) {
+  // the factorization is kept across steps (same h) while the residual falls fourfold per iteration
+  Case full = test::make_case(pendulum(0.01));
+  json j = pendulum(0.01);
+  j["simulation"]["newton"] = "modified_across_steps";
+  Case across = test::make_case(j);
+  const auto a = run_simulation(full), b = run_simulation(across);
+  ASSERT_TRUE(a.integrator.ok && b.integrator.ok) << b.integrator.message;
+  EXPECT_LT((a.final_state.q - b.final_state.q).norm(), 1e-9);
+  std::printf("pendulum, 100 steps: %ld factorizations / %ld Newton iterations across steps, %ld / %ld full\n",
+              b.integrator.factorizations, b.integrator.newton_iterations, a.integrator.factorizations,
+              a.integrator.newton_iterations);
+  EXPECT_LT(b.integrator.factorizations, b.integrator.steps / 2);
+  // with the halving test's too-small max_iter, steps that fail with an old factorization are
+  // redone with a fresh one before any halving, and the run still ends on the reference
+  json jh = pendulum(0.1);
+  jh["simulation"]["max_iter"] = 4;
+  jh["simulation"]["newton"] = "modified_across_steps";
+  const auto h = run_simulation(test::make_case(jh));
+  ASSERT_TRUE(h.integrator.ok) << h.integrator.message;
+  EXPECT_GT(h.integrator.fresh_factor_retries, 0);
+  EXPECT_LT((h.final_state.q.head<2>() - reference()).norm(), 2e-2);
+}
+
 TEST(NewtonOptions, FailedStepsAreRetriedWithHalvedStepsOnTheSameOutputGrid) {
   json j = pendulum(0.1);
   j["simulation"]["max_iter"] = 2;  // too few for h = 0.1 on the steep part of the swing

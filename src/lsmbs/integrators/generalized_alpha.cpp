@@ -45,17 +45,22 @@ nlohmann::json GeneralizedAlphaOptions::to_json() const {
   return {{"h", h}, {"t_end", t_end}, {"rho_inf", rho_inf}, {"tol_r", tol_r}, {"tol_phi", tol_phi},
           {"force_floor", force_floor}, {"max_iter", max_iter}, {"min_iter", min_iter},
           {"consistent_start", consistent_start}, {"project_initial", project_initial},
-          {"newton", newton == Newton::kFull ? "full" : "modified"}, {"max_halvings", max_halvings},
+          {"newton", newton_name(newton)}, {"max_halvings", max_halvings},
           {"ordering", SparseLU::ordering_name(ordering)},
           {"sensitivity_matrix", refactor_converged ? "converged" : "last_iteration"}, {"threads", threads},
           {"k", k}, {"zeta", zeta}};
+}
+
+const char* GeneralizedAlphaOptions::newton_name(Newton n) {
+  return n == Newton::kFull ? "full" : n == Newton::kModified ? "modified" : "modified_across_steps";
 }
 
 nlohmann::json IntegratorSummary::to_json() const {
   return {{"ok", ok}, {"aborted", aborted}, {"message", message}, {"t_reached", t_reached},
           {"steps", steps}, {"newton_iterations", newton_iterations}, {"factorizations", factorizations},
           {"residual_evaluations", residual_evaluations}, {"matrix_evaluations", matrix_evaluations},
-          {"halvings", halvings}, {"halving_times", halving_times}, {"k", k}, {"zeta", zeta},
+          {"halvings", halvings}, {"halving_times", halving_times},
+          {"fresh_factor_retries", fresh_factor_retries}, {"k", k}, {"zeta", zeta},
           {"residual_floor_N", force_floor},
           {"wall_seconds", wall_seconds}};
 }
@@ -246,6 +251,11 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   double h_try = opt_.h;
   int depth = 0;  // halvings active for the current grid interval
   double t_grid_next = s0.t + opt_.h;
+  using Newton = GeneralizedAlphaOptions::Newton;
+  // Factorization in step_lu that a step may start from (modified_across_steps): its h, and
+  // whether a failed step should be retried with a fresh one.
+  bool have_factor = false, retried_fresh = false;
+  double factor_h = 0;
 
   while (grid < n_steps) {
     const double t_n = w.prev.t;
@@ -259,10 +269,12 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     x.a.setZero();
     x.lambda.setZero();
     // ---- Newton
-    bool converged = false, have_factor = false;
+    if (opt_.newton != Newton::kModifiedAcrossSteps || factor_h != h_try) have_factor = false;
+    const bool started_with_old_factor = have_factor;
+    bool converged = false;
     std::string why;
     int it = 0;
-    double rn = 0, pn = 0, prev_rn = INFINITY;
+    double rn = 0, pn = 0, prev_err = INFINITY;
     const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
     for (;; ++it) {
       model.residual(x, p, k, zeta, w.R, &w.r_abs);
@@ -282,8 +294,9 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
         why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations";
         break;
       }
-      const bool refactor = opt_.newton == GeneralizedAlphaOptions::Newton::kFull || !have_factor ||
-                            rn > 0.25 * prev_rn;
+      // convergence measure: residual and constraints relative to their tolerances
+      const double err = std::max(rn / std::max(opt_.tol_r * scale, sum.force_floor), pn / tol_phi);
+      const bool refactor = opt_.newton == Newton::kFull || !have_factor || err > 0.25 * prev_err;
       if (refactor) {
         model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
         ++sum.matrix_evaluations;
@@ -296,8 +309,9 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
           break;
         }
         have_factor = true;
+        factor_h = h_try;
       }
-      prev_rn = rn;
+      prev_err = err;
       w.dx = -w.R;
       step_lu->solve(w.dx);
       x.q += w.dx.head(nq);
@@ -307,6 +321,14 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       ++sum.newton_iterations;
     }
     if (!converged) {
+      if (started_with_old_factor && !retried_fresh && why.rfind("singular", 0) != 0) {
+        retried_fresh = true;  // an old factorization may be what failed: redo the step once
+        have_factor = false;
+        ++sum.fresh_factor_retries;
+        x = w.prev;
+        continue;
+      }
+      retried_fresh = false;
       if (depth < opt_.max_halvings && why.rfind("singular", 0) != 0) {
         ++depth;
         ++sum.halvings;
@@ -346,6 +368,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
         return finish(sum);
       }
     }
+    retried_fresh = false;
     // ---- accept: a_{n+1} += (1−α_f)/(1−α_m) q̈_{n+1}   (Algorithm 1, last line)
     w.a_cur += (1 - c.alpha_f) / (1 - c.alpha_m) * x.a;
     ++sum.steps;
@@ -369,6 +392,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       stop |= !worker->wait_idle();  // step n's observers are done with the other factorization
       worker->post(info);
       step_lu = step_lu == &lu ? &lu_alt : &lu;
+      have_factor = false;  // the worker solves with the last one; the other is two steps old
     }
     std::swap(w.prev, w.cur);
     std::swap(w.a_prev, w.a_cur);

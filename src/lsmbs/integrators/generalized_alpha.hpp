@@ -7,7 +7,8 @@
 // coefficients from ρ∞ (11); Newton on [r; kΦ] with the iteration matrix S_t (20) and the
 // corrections Δq̇ = γ' Δq, Δq̈ = β' Δq (17)–(18). Predictor: q̈_{n+1} = 0, λ_{n+1} = 0.
 // Sparse KLU: one symbolic analysis per run, numeric (re)factorization per Newton iteration
-// (full Newton) or reuse within a step while convergence is fast (modified Newton, opt-in).
+// (full Newton), or reuse while convergence is fast: within a step (modified Newton) or across
+// steps of equal h (modified_across_steps; primal runs of large models), both opt-in.
 // A step whose Newton iteration fails is retried with halved sub-steps (bounded).
 // With threads = 2, concurrent observers (the direct sensitivities of Algorithm 2) run on a
 // worker thread one step behind, each step's factorization alternating between two numeric
@@ -33,7 +34,13 @@ struct GeneralizedAlphaOptions {
   int min_iter = 1;       ///< ≥ 1: every step factorizes S_t at least once (Algorithm 2 needs it)
   bool consistent_start = true;  ///< false: q̈0 = a0 = 0, λ0 = 0 as Algorithm 1
   bool project_initial = true;   ///< project q0, q̇0 onto the constraint manifold
-  enum class Newton { kFull, kModified } newton = Newton::kFull;
+  /// kFull: factorize S_t at every iteration. kModified: reuse the step's first factorization
+  /// while the residual falls fourfold per iteration. kModifiedAcrossSteps: also keep it for the
+  /// next steps (same h) until the residual stops falling fourfold; a step that fails with an old
+  /// factorization is retried with a fresh one before any halving. The observers then see an old
+  /// factorization (sensitivities need SensitivityOptions::matrix converged or refined).
+  enum class Newton { kFull, kModified, kModifiedAcrossSteps } newton = Newton::kFull;
+  static const char* newton_name(Newton n);
   /// Fill-reducing ordering of the KLU analysis (SparseLU::Ordering; case key "ordering":
   /// "amd" or "nested_dissection").
   SparseLU::Ordering ordering = SparseLU::Ordering::kAmd;
@@ -63,6 +70,7 @@ struct IntegratorSummary {
   double t_reached = 0;
   long steps = 0, newton_iterations = 0, factorizations = 0, residual_evaluations = 0;
   long matrix_evaluations = 0, halvings = 0;
+  long fresh_factor_retries = 0;  ///< steps redone with a fresh factorization (modified_across_steps)
   std::vector<double> halving_times;
   double k = 0, zeta = 0;
   double force_floor = 0;  ///< absolute residual floor used [N]

@@ -522,8 +522,11 @@ struct Loader {
     o.max_halvings = r.integer("max_halvings", o.max_halvings, 0);
     o.consistent_start = r.boolean("consistent_start", o.consistent_start);
     o.project_initial = r.boolean("project_initial", o.project_initial);
-    o.newton = r.one_of("newton", {"full", "modified"}, "full") == "full" ? GeneralizedAlphaOptions::Newton::kFull
-                                                                          : GeneralizedAlphaOptions::Newton::kModified;
+    {
+      const std::string nw = r.one_of("newton", {"full", "modified", "modified_across_steps"}, "full");
+      using N = GeneralizedAlphaOptions::Newton;
+      o.newton = nw == "full" ? N::kFull : nw == "modified" ? N::kModified : N::kModifiedAcrossSteps;
+    }
     o.ordering = r.one_of("ordering", {"amd", "nested_dissection"}, "amd") == "amd"
                      ? SparseLU::Ordering::kAmd
                      : SparseLU::Ordering::kNestedDissection;

@@ -191,6 +191,12 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     }
     d.apply(p, params);
   } else {
+    if (cs.simulation.newton == GeneralizedAlphaOptions::Newton::kModifiedAcrossSteps &&
+        o.matrix == SensitivityOptions::Matrix::kLastIteration)
+      throw Error(cs.file, "/simulation/newton",
+                  "\"modified_across_steps\" keeps factorizations of earlier steps, which Algorithm 2 cannot "
+                  "back-solve with: use the sensitivity matrix \"converged\" or \"refined\" (--matrix), or another "
+                  "newton option");
     auto dirs = d.apply_with_directions(p, params);
     ResponseTracker tracker(cs, dirs);
     std::unique_ptr<PseudoLoad> load;
