@@ -42,7 +42,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
   std::vector<double> grad(nv), acc(nv);
   const double cut_dist = kTailBands * eps_;
   const int n = opt_.subgrid;
-  last_cut_ = 0;
+  int cut = 0;
   for (int e = 0; e < ne; ++e) {
     const auto& q = mesh_->quads[e];
     // classification
@@ -59,7 +59,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
       mu[e] = dc > 0 ? 1.0 : opt_.mu_min;
       continue;
     }
-    ++last_cut_;
+    ++cut;
     // sub-grid integration over the parent square, midpoint rule per sub-cell
     const Vec2 X0 = mesh_->nodes[q[0]], X1 = mesh_->nodes[q[1]], X2 = mesh_->nodes[q[2]], X3 = mesh_->nodes[q[3]];
     double H = 0, W = 0;
@@ -103,6 +103,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
     dmu_dp->resize(ne, nv);
     dmu_dp->setFromTriplets(kept.begin(), kept.end());
   }
+  last_cut_ = cut;
 }
 
 }  // namespace lsmbs

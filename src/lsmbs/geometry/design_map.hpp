@@ -1,4 +1,5 @@
 #pragma once
+#include <atomic>
 // DesignMap — the level set of one flexible body mapped onto its fixed mesh as element volume
 // fractions (§2.3, eqs. 3–5):
 //   μ_e = μ_min + (1 − μ_min) (1/V_e) ∫_e H*(D(x)) dV,   H*(D) = 1 / (1 + exp(−D/ε))   (eq. 5)
@@ -36,7 +37,7 @@ class DesignMap {
   /// μ (size n_e) and, if requested, ∂μ/∂p (n_e × n_v, sparse).
   void map(const Vec& p, Vec& mu, SpMat* dmu_dp = nullptr) const;
   /// Elements evaluated on the sub-grid at the last map() call (diagnostics).
-  int last_cut_count() const { return last_cut_; }
+  int last_cut_count() const { return last_cut_.load(); }
 
  private:
   const Mesh2D* mesh_;
@@ -44,7 +45,7 @@ class DesignMap {
   MappingOptions opt_;
   double eps_ = 0;
   std::vector<double> area_, radius_;
-  mutable int last_cut_ = 0;
+  mutable std::atomic<int> last_cut_{0};  ///< diagnostic; atomic: map() may run on two threads
 };
 
 }  // namespace lsmbs

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <thread>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/sensitivity/direct_observer.hpp"
@@ -207,16 +209,38 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
       const bool central = o.method == Method::kSemiAnalyticalCentral;
       std::vector<ModelParams> plus(nv, params), minus(central ? nv : 0, params);
       std::vector<double> delta(nv);
-      for (int i = 0; i < nv; ++i) {
-        delta[i] = o.step(d, p, i);
-        Vec pp = p;
-        pp[i] += delta[i];
-        d.apply(pp, plus[i]);
-        if (central) {
-          Vec pm = p;
-          pm[i] -= delta[i];
-          d.apply(pm, minus[i]);
+      for (int i = 0; i < nv; ++i) delta[i] = o.step(d, p, i);
+      // one volume-fraction map per set (the costly part of the set-up): split over the threads
+      auto perturb = [&](int first, int stride) {
+        for (int i = first; i < nv; i += stride) {
+          Vec pp = p;
+          pp[i] += delta[i];
+          d.apply(pp, plus[i]);
+          if (central) {
+            pp[i] = p[i] - delta[i];
+            d.apply(pp, minus[i]);
+          }
         }
+      };
+      if (o.threads > 1 && nv > 1) {
+        std::exception_ptr err;
+        std::thread second([&] {
+          try {
+            perturb(1, 2);
+          } catch (...) {
+            err = std::current_exception();
+          }
+        });
+        try {
+          perturb(0, 2);
+        } catch (...) {
+          second.join();
+          throw;
+        }
+        second.join();
+        if (err) std::rethrow_exception(err);
+      } else {
+        perturb(0, 1);
       }
       load = std::make_unique<SemiAnalyticalPseudoLoad>(*cs.model, params, std::move(plus), std::move(minus),
                                                         std::move(delta), central, dirs, o.full_residual);
