@@ -61,6 +61,15 @@ void expect_second_order(const json& c, const std::string& column, double h0, co
   EXPECT_LT(r2, 4.5);
 }
 
+// IDAS forward sensitivities at the tight tolerances of the sensitivity tests.
+SensitivityOptions tight_idas() {
+  SensitivityOptions o;
+  o.method = SensitivityOptions::Method::kIdas;
+  o.idas.rtol = 1e-10;
+  o.idas.atol = 1e-13;
+  return o;
+}
+
 // One IDAS run of the case with design variable i moved by dp (the parameters are restored).
 SimulationResult idas_run_at(Case& cs, const Vec& p, int i, double dp, const IdasOptions& io) {
   Vec pp = p;
@@ -86,10 +95,7 @@ TEST(Idas, GeneralizedAlphaConvergesToIdasAtSecondOrderOnAFlexibleModel) {
 
 TEST(Idas, ForwardSensitivitiesAgreeWithFiniteDifferencesOfIdasRuns) {
   Case cs = test::make_case(spring_crank());
-  SensitivityOptions o;
-  o.method = SensitivityOptions::Method::kIdas;
-  o.idas.rtol = 1e-10;
-  o.idas.atol = 1e-13;
+  const SensitivityOptions o = tight_idas();
   const Vec p = cs.design->initial();
   const auto s = compute_sensitivities(cs, p, o);
   ASSERT_TRUE(s.ok) << s.message;
@@ -115,10 +121,7 @@ TEST(Idas, ForwardSensitivitiesAgreeWithFiniteDifferencesOfIdasRuns) {
 TEST(Idas, GeneralizedAlphaGradientsConvergeToIdasGradientsAtSecondOrder) {
   json c = spring_crank();
   Case ci = test::make_case(c);
-  SensitivityOptions oi;
-  oi.method = SensitivityOptions::Method::kIdas;
-  oi.idas.rtol = 1e-10;
-  oi.idas.atol = 1e-13;
+  const SensitivityOptions oi = tight_idas();
   double d[3];
   const double h0 = 2e-3;
   std::vector<double> ref;
@@ -193,10 +196,7 @@ TEST(Idas, QuadratureOfTheDrivenPistonMatchesTheClosedForm) {
 TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
   json c = spring_crank();
   Case cs = test::make_case(c);
-  SensitivityOptions o;
-  o.method = SensitivityOptions::Method::kIdas;
-  o.idas.rtol = 1e-10;
-  o.idas.atol = 1e-13;
+  const SensitivityOptions o = tight_idas();
   const Vec p = cs.design->initial();
   const auto s = compute_sensitivities(cs, p, o);
   ASSERT_TRUE(s.ok) << s.message;
