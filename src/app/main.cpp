@@ -366,9 +366,10 @@ int main(int argc, char** argv) {
   double atol = 0;
   sim->add_option("--atol", atol, "IDAS absolute tolerance on positions, in units of the model's length scale "
                                   "(default: rtol)");
-  int max_order = 5;
-  sim->add_option("--max-order", max_order, "IDAS maximum BDF order (2: A-stable, for undamped flexible models)")
-      ->check(CLI::Range(1, 5))->capture_default_str();
+  int max_order = 0;
+  sim->add_option("--max-order", max_order, "IDAS maximum BDF order 1-5; 0 = auto (2, A-stable, for models with a "
+                                            "flexible body; 5 otherwise)")
+      ->check(CLI::Range(0, 5))->capture_default_str();
   std::string error_test = "auto";
   sim->add_option("--error-test", error_test, "IDAS error test: positions, positions+velocities, or auto (positions "
                                               "for models with a flexible body)")

@@ -153,9 +153,14 @@ s = json.load(open(sys.argv[1]))
 c, o = s["counts"], s["options"]["idas"]
 assert c["error_test"] == "positions" and c["steps"] > 0 and "nonlinear_convergence_failures" in c, c
 assert o["rtol"] == 1e-7 and o["atol"] == 1e-7 and o["max_order"] == 3 and o["error_test"] == "positions", o
+assert o["klu_pivot_tolerance"] == 1.0 and c["max_order"] == 3, (o, c)
 assert "energy_integral" in s["quadratures"]
 print("idas simulate ok")
 PY
+# Without --max-order the order is resolved from the model: 5 for the rigid spring crank.
+"$exe" simulate "$spring" --integrator idas --rtol 1e-6 -o "$tmp/sim_idas_auto" -q || fail "simulate --integrator idas (auto order)"
+python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); assert s["options"]["idas"]["max_order"] == "auto" and s["counts"]["max_order"] == 5, s["counts"]' \
+  "$tmp/sim_idas_auto/summary.json" || fail "idas auto order"
 # Progress (issue 9): not on a terminal, optimize prints its final summary only (no row per
 # evaluation, no progress line); --verbose adds the rows; on a terminal (a pseudo-terminal from
 # script(1)) a self-overwriting progress line with time, step and Newton iterations appears.

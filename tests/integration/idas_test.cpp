@@ -61,6 +61,13 @@ void expect_second_order(const json& c, const std::string& column, double h0, co
   EXPECT_LT(r2, 4.5);
 }
 
+// Relative step of the central differences of IDAS runs. Each run's adaptive step sequence
+// differs, which puts a noise of ~1e-9 on the responses: at 1e-4 it reached 1.4e-4 of the
+// smallest derivative (d/dp0 ≈ 4e-4) and moved by 3.5e-5 when only KLU's pivoting changed,
+// while IDAS's own sensitivities moved by 7e-8. At 1e-3 the noise is ten times smaller and
+// the O(h²) truncation error stays below 1e-6.
+constexpr double kFdStep = 1e-3;
+
 // IDAS forward sensitivities at the tight tolerances of the sensitivity tests.
 SensitivityOptions tight_idas() {
   SensitivityOptions o;
@@ -90,7 +97,7 @@ TEST(Idas, GeneralizedAlphaConvergesToIdasAtSecondOrderOnARigidMechanism) {
 }
 
 TEST(Idas, GeneralizedAlphaConvergesToIdasAtSecondOrderOnAFlexibleModel) {
-  expect_second_order(flexible_arm(), "tip.x", 0.01, "flexible robot arm, final tip x", 1e-7);
+  expect_second_order(flexible_arm(), "tip.x", 0.01, "flexible robot arm, final tip x", 1e-9);
 }
 
 TEST(Idas, ForwardSensitivitiesAgreeWithFiniteDifferencesOfIdasRuns) {
@@ -103,7 +110,7 @@ TEST(Idas, ForwardSensitivitiesAgreeWithFiniteDifferencesOfIdasRuns) {
   const char* resp[] = {"final_crank_angle", "mean_piston_x", "energy_integral"};
   double worst = 0;
   for (int i = 0; i < 2; ++i) {
-    const double h = 1e-4 * std::abs(p[i]);
+    const double h = kFdStep * std::abs(p[i]);
     const auto plus = idas_run_at(cs, p, i, h, o.idas), minus = idas_run_at(cs, p, i, -h, o.idas);
     for (int r = 0; r < 3; ++r) {
       const double fd = (plus.responses.at(resp[r]) - minus.responses.at(resp[r])) / (2 * h);
@@ -203,7 +210,7 @@ TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
   ASSERT_EQ(s.quadratures.size(), 2u);  // mean_piston_x (average), energy_integral (integral)
   double worst = 0;
   for (int i = 0; i < 2; ++i) {
-    const double h = 1e-4 * std::abs(p[i]);
+    const double h = kFdStep * std::abs(p[i]);
     const auto plus = idas_run_at(cs, p, i, h, o.idas).quadratures, minus = idas_run_at(cs, p, i, -h, o.idas).quadratures;
     for (size_t k = 0; k < 2; ++k) {
       const double fd = (plus[k].value - minus[k].value) / (2 * h), an = s.quadratures[k].gradient[i];
@@ -235,4 +242,41 @@ TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
   EXPECT_LT(d[0] / d[1], 4.5);
   EXPECT_GT(d[1] / d[2], 3.5);
   EXPECT_LT(d[1] / d[2], 4.5);
+}
+
+// The flexible connecting rod (coarse mesh, gas load, speed ramp), which IDAS could not integrate
+// before KLU's pivot tolerance was raised (0.001 → 1: the first Newton correction was wrong by
+// 300×) and BDF limited to order 2 on flexible models (order 5 forced h = 5e-8 s). The reference
+// preset must now complete the first 10 ms, and its elongation history must agree with
+// generalized-α's. The two differ in the rod's high-frequency vibration, which the start
+// excites and which generalized-α damps (ρ∞ = 0.8) and cannot resolve at any practical h
+// (periods of a few µs): measured 1.9 % of the peak elongation over these 10 ms, and no
+// improvement from h = 0.25 ms to 0.03 ms over 20 ms against IDAS at rtol 1e-10. The bound
+// (5 %) checks the deformation history, not the vibration.
+TEST(Idas, ReferencePresetIntegratesTheFlexibleConnectingRod) {
+  const std::string dir = std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank/";
+  json c = json::parse(std::ifstream(dir + "slider_crank_1hole_coarse.json"));
+  c["bodies"][2]["mesh"]["file"] = dir + "rod_coarse.msh";
+  c["forces"][0]["table"]["file"] = dir + "pressure.csv";
+  c["output"]["vtu_stride"] = 0;
+  c["simulation"]["t_end"] = 0.01;
+  c.erase("optimization");
+  Case cs = test::make_case(c);
+  RunOptions ro;
+  ro.idas = true;
+  ro.idas_options = IdasOptions::reference();
+  const auto ri = run_simulation(cs, ro);
+  ASSERT_TRUE(ri.integrator.ok) << ri.integrator.message;
+  EXPECT_EQ(ri.idas.max_order, 2);
+  const auto rg = run_simulation(cs, RunOptions{});
+  ASSERT_TRUE(rg.integrator.ok);
+  const auto& ei = ri.column("elongation");
+  const auto& eg = rg.column("elongation");
+  ASSERT_EQ(ei.size(), eg.size());
+  double dev = 0, peak = 0;
+  for (size_t k = 0; k < ei.size(); ++k) dev = std::max(dev, std::abs(ei[k] - eg[k])), peak = std::max(peak, std::abs(ei[k]));
+  std::printf("coarse rod, 10 ms: IDAS %ld steps, %ld Jacobians; max |elongation GA - IDAS| = %.3e of the peak %.3e m\n",
+              ri.idas.steps, ri.idas.jacobian_evaluations, dev / peak, peak);
+  EXPECT_GT(peak, 1e-6);
+  EXPECT_LT(dev / peak, 5e-2);
 }

@@ -26,7 +26,9 @@ IdasOptions IdasOptions::reference() {
 }
 
 nlohmann::json IdasOptions::to_json() const {
-  return {{"rtol", rtol}, {"atol", atol}, {"h_out", h_out}, {"t_end", t_end}, {"max_steps", max_steps}, {"max_order", max_order},
+  return {{"rtol", rtol}, {"atol", atol}, {"h_out", h_out}, {"t_end", t_end}, {"max_steps", max_steps},
+          {"max_order", max_order > 0 ? nlohmann::json(max_order) : nlohmann::json("auto")},
+          {"klu_pivot_tolerance", klu_pivot_tolerance},
           {"corrector", staggered ? "staggered" : "simultaneous"},
           {"error_test", error_test == ErrorTest::kPositions                ? "positions"
                          : error_test == ErrorTest::kPositionsAndVelocities ? "positions+velocities"
@@ -39,7 +41,7 @@ nlohmann::json IdasStats::to_json() const {
           {"jacobian_evaluations", jacobian_evaluations}, {"nonlinear_iterations", nonlinear_iterations},
           {"error_test_failures", error_test_failures}, {"nonlinear_convergence_failures", nonlinear_convergence_failures},
           {"sensitivity_residual_evaluations", sensitivity_residual_evaluations}, {"wall_seconds", wall_seconds},
-          {"error_test", error_test}};
+          {"error_test", error_test}, {"max_order", max_order}};
 }
 
 struct IdasGGL::Impl {
@@ -339,6 +341,7 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
   const bool positions_only = im.o.error_test == IdasOptions::ErrorTest::kPositions ||
                               (im.o.error_test == IdasOptions::ErrorTest::kAuto && !m.flexible_bodies().empty());
   st.error_test = positions_only ? "positions" : "positions+velocities";
+  st.max_order = im.o.max_order > 0 ? im.o.max_order : m.flexible_bodies().empty() ? 5 : 2;
   // velocities out of the error test: an absolute tolerance so large that their weight vanishes
   atol << Vec::Constant(nq, im.o.atol * L), Vec::Constant(nq, positions_only ? 1e30 : im.o.atol * L / T),
       Vec::Constant(2 * nc, 1.0);
@@ -346,11 +349,12 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
   if (!sd.mem) return fail("IDACreate failed");
   if (IDAInit(sd.mem, res_tramp, 0.0 + s0.t, sd.y, sd.yp) || IDASVtolerances(sd.mem, im.o.rtol, sd.atol) ||
       IDASetUserData(sd.mem, &im) || IDASetId(sd.mem, sd.id) || IDASetSuppressAlg(sd.mem, SUNTRUE) ||
-      IDASetMaxNumSteps(sd.mem, im.o.max_steps) || IDASetMaxOrd(sd.mem, im.o.max_order))
+      IDASetMaxNumSteps(sd.mem, im.o.max_steps) || IDASetMaxOrd(sd.mem, st.max_order))
     return fail("IDAS set-up failed");
   const SpMat J0 = im.jacobian(s0.t, 1.0, y.data(), yp.data());
   sd.A = SUNSparseMatrix(N, N, J0.nonZeros(), CSC_MAT, sd.ctx);
   sd.LS = SUNLinSol_KLU(sd.y, sd.A, sd.ctx);
+  if (sd.LS) SUNLinSol_KLUGetCommon(sd.LS)->tol = im.o.klu_pivot_tolerance;
   if (!sd.A || !sd.LS || IDASetLinearSolver(sd.mem, sd.LS, sd.A) || IDASetJacFn(sd.mem, jac_tramp))
     return fail("IDAS linear solver set-up failed");
   std::vector<double> pbar;
