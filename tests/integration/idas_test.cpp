@@ -280,3 +280,18 @@ TEST(Idas, ReferencePresetIntegratesTheFlexibleConnectingRod) {
   EXPECT_GT(peak, 1e-6);
   EXPECT_LT(dev / peak, 5e-2);
 }
+
+// Out-of-range IDAS options are refused with a message naming the option (no silent clamp).
+TEST(Idas, RefusesOutOfRangeOrderAndPivotTolerance) {
+  Case cs = test::make_case(spring_crank());
+  for (int k = 0; k < 2; ++k) {
+    RunOptions ro;
+    ro.idas = true;
+    if (k == 0) ro.idas_options.max_order = 6;
+    else ro.idas_options.klu_pivot_tolerance = 0;
+    const auto r = run_simulation(cs, ro);
+    EXPECT_FALSE(r.integrator.ok);
+    EXPECT_NE(r.integrator.message.find(k == 0 ? "max_order" : "klu_pivot_tolerance"), std::string::npos)
+        << r.integrator.message;
+  }
+}

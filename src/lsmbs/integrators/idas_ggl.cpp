@@ -283,6 +283,10 @@ IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const 
     st.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     return st;
   };
+  if (!(im.o.klu_pivot_tolerance > 0 && im.o.klu_pivot_tolerance <= 1))
+    return fail("IdasOptions::klu_pivot_tolerance must be in (0, 1], got " + std::to_string(im.o.klu_pivot_tolerance));
+  if (im.o.max_order < 0 || im.o.max_order > 5)
+    return fail("IdasOptions::max_order must be 0 (auto) or 1-5, got " + std::to_string(im.o.max_order));
   const Model& m = im.m;
   const int nq = im.nq, nc = im.nc, N = im.N;
   const int nv = design.size();
