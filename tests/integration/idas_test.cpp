@@ -34,6 +34,14 @@ json flexible_arm() {
   return c;
 }
 
+// A simulation of the case by IDAS with the given options (default: the reference preset).
+SimulationResult run_idas(const Case& cs, const IdasOptions& io = IdasOptions::reference()) {
+  RunOptions ro;
+  ro.idas = true;
+  ro.idas_options = io;
+  return run_simulation(cs, ro);
+}
+
 // Final value of a measure column with generalized-α at step h, or with IDAS on the grid h.
 double final_value(json c, double h, const std::string& column, bool idas, double rtol) {
   c["simulation"]["h"] = h;
@@ -82,10 +90,7 @@ SimulationResult idas_run_at(Case& cs, const Vec& p, int i, double dp, const Ida
   Vec pp = p;
   pp[i] += dp;
   cs.design->apply(pp, cs.model->params());
-  RunOptions ro;
-  ro.idas = true;
-  ro.idas_options = io;
-  auto res = run_simulation(cs, ro);
+  auto res = run_idas(cs, io);
   cs.design->apply(p, cs.model->params());
   return res;
 }
@@ -168,10 +173,7 @@ TEST(Idas, QuadratureOfTheDrivenPistonMatchesTheClosedForm) {
        json{{"name", "mean_x"}, {"measure", "piston.x"}, {"aggregate", "average"}, {"window", {{"t0", a}, {"t1", b}}}},
        json{{"name", "rms_x"}, {"measure", "piston.x"}, {"aggregate", "rms"}, {"window", {{"t0", a}, {"t1", b}}}}});
   Case cs = test::make_case(c);
-  RunOptions ro;
-  ro.idas = true;
-  ro.idas_options = IdasOptions::reference();
-  const auto r = run_simulation(cs, ro);
+  const auto r = run_idas(cs);
   ASSERT_TRUE(r.integrator.ok) << r.integrator.message;
   ASSERT_EQ(r.quadratures.size(), 3u);
   const double rc = 0.045, l = 0.1356, w = 418.87902047863906, T = 0.01;
@@ -262,10 +264,7 @@ TEST(Idas, ReferencePresetIntegratesTheFlexibleConnectingRod) {
   c["simulation"]["t_end"] = 0.01;
   c.erase("optimization");
   Case cs = test::make_case(c);
-  RunOptions ro;
-  ro.idas = true;
-  ro.idas_options = IdasOptions::reference();
-  const auto ri = run_simulation(cs, ro);
+  const auto ri = run_idas(cs);
   ASSERT_TRUE(ri.integrator.ok) << ri.integrator.message;
   EXPECT_EQ(ri.idas.max_order, 2);
   const auto rg = run_simulation(cs, RunOptions{});
@@ -285,11 +284,10 @@ TEST(Idas, ReferencePresetIntegratesTheFlexibleConnectingRod) {
 TEST(Idas, RefusesOutOfRangeOrderAndPivotTolerance) {
   Case cs = test::make_case(spring_crank());
   for (int k = 0; k < 2; ++k) {
-    RunOptions ro;
-    ro.idas = true;
-    if (k == 0) ro.idas_options.max_order = 6;
-    else ro.idas_options.klu_pivot_tolerance = 0;
-    const auto r = run_simulation(cs, ro);
+    IdasOptions io;
+    if (k == 0) io.max_order = 6;
+    else io.klu_pivot_tolerance = 0;
+    const auto r = run_idas(cs, io);
     EXPECT_FALSE(r.integrator.ok);
     EXPECT_NE(r.integrator.message.find(k == 0 ? "max_order" : "klu_pivot_tolerance"), std::string::npos)
         << r.integrator.message;
