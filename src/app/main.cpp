@@ -205,7 +205,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     for (const auto& v : d.variables) names.push_back(v.name);
     S["quadratures"] = lsmbs::ResponseQuadrature::to_json(res.quadratures, names);
   }
-  if (so.method == lsmbs::SensitivityOptions::Method::kIdas) S["idas"] = res.idas.to_json();
+  if (so.is_idas()) S["idas"] = res.idas.to_json();
   std::filesystem::create_directories(out);
   {
     // the CSV names responses by index (numbers only); the mapping is in the header comment
@@ -237,6 +237,11 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
       std::printf("  %-24s %.10g\n", rs.name.c_str(), rs.values.empty() ? NAN : rs.values[0]);
       for (int i = 0; i < d.size() && rs.gradient.rows(); ++i)
         std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), rs.gradient(0, i));
+    }
+    for (const auto& q : res.quadratures) {
+      std::printf("  %-24s %.10g (IDAS quadrature on [%g, %g])\n", q.name.c_str(), q.value, q.t0, q.t1);
+      for (int i = 0; i < d.size() && i < q.gradient.size(); ++i)
+        std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), q.gradient[i]);
     }
     std::printf("  results in %s\n", out.c_str());
   }
@@ -392,7 +397,8 @@ int main(int argc, char** argv) {
   sen->add_option("case", case_file, "case file (JSON) with design variables and responses")->required()->check(CLI::ExistingFile);
   sen->add_option("-o,--output", out, "output folder")->capture_default_str();
   sen->add_option("--method", method,
-                  "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | fd-central | idas")
+                  "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | fd-central | idas | "
+                  "idas-adjoint (time-integral responses only)")
       ->capture_default_str();
   sen->add_option("--delta", delta, "perturbation Δp (semi-analytical) or finite-difference step")->capture_default_str();
   sen->add_flag("--absolute", absolute, "Δp absolute instead of relative to max(|p_i|, 1e-2 (upper - lower))");
@@ -404,8 +410,8 @@ int main(int argc, char** argv) {
                   "matrix of the back-solves: last (last Newton iteration, the paper's), converged (refactorized), "
                   "refined (last LU + iterative refinement)")->capture_default_str();
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
-  sen->add_option("--rtol", rtol, "--method idas: IDAS relative tolerance")->capture_default_str();
-  sen->add_option("--atol", atol, "--method idas: IDAS absolute tolerance in units of the length scale (default: rtol)");
+  sen->add_option("--rtol", rtol, "--method idas, idas-adjoint: IDAS relative tolerance")->capture_default_str();
+  sen->add_option("--atol", atol, "--method idas, idas-adjoint: IDAS absolute tolerance in units of the length scale (default: rtol)");
   int threads = 2;
   sen->add_option("--threads", threads,
                   "2: the sensitivity update of each step runs on a second thread while the next step is computed; "

@@ -145,6 +145,26 @@ q = s["quadratures"]["energy_integral"]
 assert q["value"] > 0 and set(q["gradient"]) == {"k", "c"}, q
 print("idas sensitivity ok")
 PY
+# IDAS adjoint sensitivities: the quadratures' gradients agree with the forward ones above; the
+# grid responses carry no gradient; a case without a time-integral response is refused.
+"$exe" sensitivity "$spring" --method idas-adjoint --rtol 1e-8 -o "$tmp/sens_adj" -q || fail "sensitivity --method idas-adjoint"
+python3 - "$tmp/sens_idas/summary.json" "$tmp/sens_adj/summary.json" <<'PY' || fail "idas-adjoint summary.json"
+import json, sys
+f, a = (json.load(open(x)) for x in sys.argv[1:3])
+assert a["options"]["sensitivity"]["method"] == "idas-adjoint"
+ad = a["idas"]["adjoint"]
+assert ad["backward_problems"] == 2 and ad["steps"] > 0 and ad["residual_evaluations"] > 0, ad
+for name in ("energy_integral", "mean_piston_x"):
+    for v, g in f["quadratures"][name]["gradient"].items():
+        ga = a["quadratures"][name]["gradient"][v]
+        assert abs(ga - g) <= 1e-4 * abs(g), (name, v, ga, g)
+assert a["gradients"]["final_crank_angle"]["k"] is None, a["gradients"]["final_crank_angle"]
+print("idas adjoint ok")
+PY
+python3 -c 'import json,sys; c=json.load(open(sys.argv[1])); c["output"]["responses"]=[r for r in c["output"]["responses"] if r["aggregate"] not in ("average","integral")]; json.dump(c,open(sys.argv[2],"w"))' \
+  "$spring" "$tmp/no_integrals.json"
+! "$exe" sensitivity "$tmp/no_integrals.json" --method idas-adjoint -o "$tmp/sens_adj_bad" -q 2> "$tmp/adj_err.txt" || fail "idas-adjoint without integrals accepted"
+grep -q "no_integrals.json: /output/responses: the idas-adjoint method" "$tmp/adj_err.txt" || fail "idas-adjoint refusal: $(cat "$tmp/adj_err.txt")"
 # IDAS simulation options reach IDAS and summary.json.
 "$exe" simulate "$spring" --integrator idas --rtol 1e-7 --error-test positions --max-order 3 -o "$tmp/sim_idas" -q || fail "simulate --integrator idas"
 python3 - "$tmp/sim_idas/summary.json" <<'PY' || fail "idas simulate summary.json"

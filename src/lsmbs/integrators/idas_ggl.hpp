@@ -39,8 +39,20 @@ class IdasQuadrature {
   /// dg_k/dp_i = ∂g/∂y y_,i + ∂g/∂ẏ ẏ_,i + ∂g/∂p_i for all k (rows) and design variables i (columns).
   virtual void integrand_sensitivity(const State& s, const ModelParams& p, const Mat& dq, const Mat& dv,
                                      const Mat& da, const Mat& dl, Mat& dg) = 0;
-  /// Q(t) (size()) and, with sensitivities, dQ/dp (size() × n_v; null otherwise).
+  /// Q(t) (size()) and, with sensitivities, dQ/dp (size() × n_v; null otherwise). After an
+  /// adjoint run, the rows of dQ that were not asked for (needs_gradient) are NaN.
   virtual void on_breakpoint(double t, const Vec& Q, const Mat* dQ) = 0;
+  /// Adjoint path: the partial derivatives of g_k at s, ∂g_k/∂q and ∂g_k/∂q̇ (dense, size nq),
+  /// and the explicit ∂g_k/∂p (1 × n_v). False (with a reason in `why`) if g_k depends on q̈
+  /// or λ, which the adjoint path does not support.
+  virtual bool integrand_gradient(int /*k*/, const State& /*s*/, const ModelParams& /*p*/, Vec& /*gq*/,
+                                  Vec& /*gv*/, Eigen::RowVectorXd& /*gp*/, std::string& why) {
+    why = "this quadrature has no state gradient";
+    return false;
+  }
+  /// Adjoint path: whether dQ_k(t)/dp is needed at breakpoint (or final time) t. Each (k, t)
+  /// asked for costs one backward problem.
+  virtual bool needs_gradient(int /*k*/, double /*t*/) const { return true; }
 };
 
 struct IdasOptions {
@@ -76,6 +88,9 @@ struct IdasOptions {
   /// true (default): the model's analytic partials; false: IDAS's own difference quotients on p
   /// (these fail with corrector-convergence failures at rtol <= 1e-8 on the slider-crank)
   bool analytic_sensitivity_residual = true;
+  /// Adjoint runs: forward steps between two checkpoints (IDAAdjInit, Hermite interpolation of
+  /// the forward solution in the backward pass); memory ~ this × 2 state vectors.
+  long adjoint_checkpoint_steps = 200;
   static IdasOptions reference();               ///< rtol = atol = 1e-9
   nlohmann::json to_json() const;
 };
@@ -87,6 +102,11 @@ struct IdasStats {
   long error_test_failures = 0, nonlinear_convergence_failures = 0, sensitivity_residual_evaluations = 0;
   std::string error_test;           ///< resolved: "positions" or "positions+velocities"
   int max_order = 0;                ///< resolved maximum BDF order
+  /// Adjoint runs: backward problems (one per quadrature and time asked for), their steps,
+  /// residual and Jacobian evaluations summed, and the checkpoints of the forward pass.
+  long adjoint_problems = 0, adjoint_steps = 0, adjoint_residual_evaluations = 0, adjoint_jacobian_evaluations = 0;
+  long checkpoints = 0;
+  double adjoint_wall_seconds = 0;  ///< backward pass (included in wall_seconds)
   double wall_seconds = 0;
   nlohmann::json to_json() const;
 };
@@ -105,10 +125,24 @@ class IdasGGL {
   IdasStats run(State s0, const Output& out);
   /// With forward sensitivities with respect to the design variables at p.
   IdasStats run_with_sensitivities(State s0, const Design& design, const Vec& p, const Output& out);
+  /// Adjoint sensitivities (IDAAdjInit, IDASolveF, IDASolveB with IDAQuadInitB) of the
+  /// quadratures Q_k(t) = ∫_{t0}^{t} g_k dt at the breakpoints and t_end where needs_gradient(k,
+  /// t), with respect to the design variables at p. The forward pass is a primal run (outputs
+  /// without derivatives); each (k, t) is one backward problem started at t on the adjoint of
+  /// the GGL system,
+  ///   d/dt(F_ẏᵀ ξ) − F_yᵀ ξ = −∂g_kᵀ/∂y,  ξ_q(t) = ξ_v(t) = 0,
+  /// with consistent algebraic final values from its hidden constraints (see the .cpp), and
+  ///   dQ_k(t)/dp = ∫_{t0}^{t} (∂g_k/∂p − ξᵀ F_p) dt
+  /// (the boundary term ξᵀF_ẏ y_p vanishes at t by the final values and at t0 because the
+  /// initial positions and velocities do not depend on p). The backward cost does not grow with
+  /// the number of design variables; only the quadrature ξᵀ F_p (element-local) does.
+  IdasStats run_adjoint(State s0, const Design& design, const Vec& p, const Output& out);
 
   struct Impl;  ///< defined in the .cpp (reached by the C callbacks only)
 
  private:
+  enum class Mode { kPrimal, kForward, kAdjoint };
+  IdasStats run_mode(State s0, const Design& design, const Vec& p, const Output& out, Mode mode);
   std::unique_ptr<Impl> impl_;
 };
 

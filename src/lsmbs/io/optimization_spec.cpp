@@ -42,6 +42,9 @@ OptimizationSpec parse_optimization(const Case& cs) {
       for (const auto& n : SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
       so->fail("method", "expected one of " + all);
     }
+    if (s.sensitivity.method == SensitivityOptions::Method::kIdasAdjoint)
+      so->fail("method", "idas-adjoint gives gradients of the time-integral quadratures only, not of the grid "
+                         "responses the optimizer uses; expected another method");
     s.sensitivity.delta = so->positive("delta", s.sensitivity.delta);
     s.sensitivity.relative = so->one_of("delta_mode", {"relative", "absolute"}, "relative") == "relative";
     if (!SensitivityOptions::parse_matrix(so->string("matrix", "last"), s.sensitivity.matrix))

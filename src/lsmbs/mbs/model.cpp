@@ -426,6 +426,32 @@ void Model::element_mass_damping_product(int e, const State& s, const ModelParam
   out = M.topLeftCorner(nd, nd) * a + C.topLeftCorner(nd, nd) * v;
 }
 
+void Model::mass_rate_product(const State& s, const ModelParams& p, const Vec& w, Vec& out) const {
+  out.setZero(nq_);
+  LocalState ls;
+  ls.t = s.t;
+  LocalVec r, v;
+  LocalMat S1, S0;
+  const Coefficients tangent{0, 0, 1};
+  for (const auto& f : forces_) {
+    if (!f->mass_depends_on_q()) continue;
+    const auto d = f->dofs();
+    const auto nd = static_cast<Eigen::Index>(d.size());
+    gather(s.q, d, ls.q);
+    ls.v.setZero(nd);  // at q̇ = 0 the velocity terms drop out of both tangents
+    gather(w, d, ls.a);
+    r.setZero(nd);
+    S1.setZero(nd, nd);
+    f->evaluate(ls, p, r, &tangent, &S1);
+    ls.a.setZero(nd);
+    S0.setZero(nd, nd);
+    f->evaluate(ls, p, r, &tangent, &S0);
+    gather(s.v, d, v);
+    const LocalVec dm = (S1 - S0) * v;
+    for (Eigen::Index i = 0; i < nd; ++i) out[d[i]] += dm[i];
+  }
+}
+
 std::vector<int> Model::forces_touched_by(const ParamDirection& dir) const {
   std::vector<char> mark(forces_.size(), 0);
   for (const auto& f : dir.fields)

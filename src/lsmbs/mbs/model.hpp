@@ -125,6 +125,11 @@ class Model {
                                  Vec& out) const;
   /// Residual contribution of one force element (local vector over its dofs()).
   void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
+  /// Ṁ w = Σ_e [∂(M_e(q) w_e)/∂q_e] q̇_e (size nq): the rate of the mass matrix along the motion
+  /// applied to w. Only elements whose mass depends on q contribute (rigid bodies with an offset
+  /// centre of mass); each is evaluated exactly as the difference of its tangents at q̈ = w and
+  /// q̈ = 0 (r is linear in q̈). The adjoint of M(q) v̇ needs it (d/dt(Mᵀξ), idas_ggl.cpp).
+  void mass_rate_product(const State& s, const ModelParams& p, const Vec& w, Vec& out) const;
   /// M_e q̈ + C_e q̇ of one force element for global vectors qdd, vd (local result).
   void element_mass_damping_product(int force, const State& s, const ModelParams& p, const Vec& qdd, const Vec& vd,
                                     LocalVec& out) const;

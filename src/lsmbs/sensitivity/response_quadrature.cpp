@@ -40,6 +40,31 @@ void ResponseQuadrature::integrand_sensitivity(const State& s, const ModelParams
   }
 }
 
+bool ResponseQuadrature::integrand_gradient(int k, const State& s, const ModelParams& p, Vec& gq, Vec& gv,
+                                            Eigen::RowVectorXd& gp, std::string& why) {
+  const Item& it = responses_[static_cast<size_t>(k)];
+  const double f = tracker_.response_partials(it.response, s, p, partials_, gp);
+  if (!partials_.da.empty() || !partials_.dl.empty()) {
+    why = "response '" + cs_.responses[it.response].name + "' measures " + cs_.measure_columns()[cs_.responses[it.response].column] +
+          ", which depends on accelerations or constraint forces: the adjoint path supports integrands of "
+          "positions, velocities and parameters only";
+    return false;
+  }
+  const double w = it.square ? 2 * f : 1.0;  // rms: g = f²
+  gq.setZero(s.q.size());
+  gv.setZero(s.q.size());
+  for (const auto& [j, d] : partials_.dq) gq[j] += w * d;
+  for (const auto& [j, d] : partials_.dv) gv[j] += w * d;
+  gp *= w;
+  return true;
+}
+
+bool ResponseQuadrature::needs_gradient(int k, double t) const {
+  const Item& it = responses_[static_cast<size_t>(k)];
+  auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(a)); };
+  return !same(t, t_start_) && (same(t, it.a) || same(t, it.b));
+}
+
 void ResponseQuadrature::on_breakpoint(double t, const Vec& Q, const Mat* dQ) {
   at_[t] = {Q, dQ ? *dQ : Mat()};
 }

@@ -30,6 +30,12 @@ class ResponseQuadrature : public IdasQuadrature {
   void integrand_sensitivity(const State& s, const ModelParams& p, const Mat& dq, const Mat& dv, const Mat& da,
                              const Mat& dl, Mat& dg) override;
   void on_breakpoint(double t, const Vec& Q, const Mat* dQ) override;
+  /// Adjoint path: ∂g/∂q, ∂g/∂q̇ (2 f ∂f for rms) and the explicit ∂g/∂p; refuses measures of
+  /// accelerations or multipliers (constraint forces).
+  bool integrand_gradient(int k, const State& s, const ModelParams& p, Vec& gq, Vec& gv, Eigen::RowVectorXd& gp,
+                          std::string& why) override;
+  /// dQ_k/dp at the window's ends (not at the run's start, where Q = 0).
+  bool needs_gradient(int k, double t) const override;
 
   /// The responses from the recorded Q (call after the run).
   std::vector<QuadratureResponse> results() const;
@@ -48,6 +54,7 @@ class ResponseQuadrature : public IdasQuadrature {
   int nv_;
   std::map<double, std::pair<Vec, Mat>> at_;  ///< t → (Q, dQ/dp)
   Eigen::RowVectorXd row_;
+  MeasureGradient partials_;
 };
 
 }  // namespace lsmbs

@@ -47,6 +47,23 @@ double ResponseTracker::response_measure(size_t r, const State& s, const ModelPa
   return evaluate(c.measure, c.component, s, p, dq, dv, da, dl, grad);
 }
 
+double ResponseTracker::response_partials(size_t r, const State& s, const ModelParams& p, MeasureGradient& g,
+                                          Eigen::RowVectorXd& gp) {
+  const auto& c = cols_[response_column_[r]];
+  const auto nv = static_cast<Eigen::Index>(dirs_.size());
+  double value;
+  gp.setZero(nv);
+  if (c.measure->depends_on_params()) {
+    if (zero_q_.rows() != s.q.size()) zero_q_.setZero(s.q.size(), nv), zero_l_.setZero(s.lambda.size(), nv);
+    value = evaluate(c.measure, c.component, s, p, &zero_q_, &zero_q_, &zero_q_, &zero_l_, &gp);
+  } else {
+    value = evaluate(c.measure, c.component, s, p, nullptr, nullptr, nullptr, nullptr, nullptr);
+  }
+  g.clear();
+  c.measure->gradient(*cs_.model, s, p, c.component, g);
+  return value;
+}
+
 double ResponseTracker::evaluate(const Measure* measure, int component, const State& s, const ModelParams& p,
                                  const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad) {
   buf_.resize(measure->components().size());

@@ -23,6 +23,9 @@ class ResponseTracker {
   /// derivative (eq. 24) in `grad` (1 × n_v). Not recorded.
   double response_measure(size_t r, const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
                           const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad);
+  /// Value of response r's measure component at s, its state partials in `g` and its explicit
+  /// ∂f/∂p in `gp` (1 × n_v) — the pieces of an adjoint source term. Not recorded.
+  double response_partials(size_t r, const State& s, const ModelParams& p, MeasureGradient& g, Eigen::RowVectorXd& gp);
 
  private:
   const Case& cs_;
@@ -40,6 +43,7 @@ class ResponseTracker {
   std::vector<int> response_column_;
   std::vector<double> times_;
   ModelParams scratch_;
+  Mat zero_q_, zero_l_;  // zero state derivatives: the explicit ∂f/∂p alone
   mutable std::vector<double> buf_;
 };
 

@@ -19,7 +19,8 @@ const std::pair<const char*, Method> kNames[] = {{"semi-analytical", Method::kSe
                                                  {"direct-analytic", Method::kDirectAnalytic},
                                                  {"fd-forward", Method::kFdForward},
                                                  {"fd-central", Method::kFdCentral},
-                                                 {"idas", Method::kIdas}};
+                                                 {"idas", Method::kIdas},
+                                                 {"idas-adjoint", Method::kIdasAdjoint}};
 }  // namespace
 
 bool SensitivityOptions::parse(const std::string& s, Method& m) {
@@ -58,7 +59,7 @@ double SensitivityOptions::step(const Design& d, const Vec& p, int i) const {
 }
 
 nlohmann::json SensitivityOptions::to_json() const {
-  if (method == Method::kIdas) return {{"method", name(method)}, {"idas", idas.to_json()}};
+  if (is_idas()) return {{"method", name(method)}, {"idas", idas.to_json()}};
   return {{"method", name(method)}, {"delta", delta}, {"delta_mode", relative ? "relative" : "absolute"},
           {"matrix", matrix_name(matrix)}, {"refinement_steps", refinement_steps},
           {"pseudo_load", full_residual ? "full_residual" : "element_local"}, {"threads", threads}};
@@ -130,7 +131,8 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
   SensitivityResult res;
   ModelParams& params = cs.model->params();
 
-  if (o.method == Method::kIdas) {
+  if (o.is_idas()) {
+    const bool adjoint = o.method == Method::kIdasAdjoint;
     ResponseTracker tracker(cs, d.apply_with_directions(p, params));
     tracker.set_scaling(1.0);  // IDAS carries the physical multipliers
     IdasOptions io = o.idas;
@@ -138,12 +140,16 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     io.t_end = cs.simulation.t_end;
     IdasGGL idas(*cs.model, params, io);
     ResponseQuadrature quad(cs, d.apply_with_directions(p, params), cs.initial.t, io.t_end);
+    if (adjoint && quad.empty())
+      throw Error(cs.file, "/output/responses",
+                  "the idas-adjoint method differentiates time-integral responses (aggregate integral, average, "
+                  "average_eq45 or rms), and the case has none");
     if (!quad.empty()) idas.set_quadrature(&quad);
-    const auto st = idas.run_with_sensitivities(cs.initial, d, p, [&](const State& s, const Mat* dq, const Mat* dv,
-                                                                       const Mat* da, const Mat* dl) {
+    const IdasGGL::Output out = [&](const State& s, const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl) {
       tracker.record(s, params, dq, dv, da, dl);
       if (o.progress) o.progress->update(false, " IDAS t = %.5f s (%3.0f %%)", s.t, 100.0 * s.t / io.t_end);
-    });
+    };
+    const auto st = adjoint ? idas.run_adjoint(cs.initial, d, p, out) : idas.run_with_sensitivities(cs.initial, d, p, out);
     res.ok = st.ok;
     res.message = st.message;
     res.idas = st;
@@ -153,6 +159,8 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     res.counts.factorizations = st.jacobian_evaluations;
     res.counts.newton_iterations = st.nonlinear_iterations;
     res.responses = tracker.results();
+    if (adjoint)  // values only: the adjoint differentiates the quadratures, not the grid aggregates
+      for (auto& r : res.responses) r.gradient.setConstant(NAN);
     if (!quad.empty()) res.quadratures = quad.results();
     res.counts.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return res;

@@ -8,7 +8,12 @@
 //                           (element-local, from ∂μ_e/∂p_i) plus M q̈*_i + C q̇*_i — no Δp;
 //  fd-forward, fd-central   whole re-simulations per design variable;
 //  idas                     SUNDIALS IDAS forward sensitivities on the GGL index-2 form
-//                           (independent reference, integrators/idas_ggl.hpp).
+//                           (independent reference, integrators/idas_ggl.hpp);
+//  idas-adjoint             IDAS adjoint sensitivities (IDASolveB) of the time-integral
+//                           responses only (integral, average, average_eq45, rms, as IDAS
+//                           quadratures): one backward problem per window end, whatever the
+//                           number of design variables. The grid responses get values only
+//                           (gradients NaN); the gradients are in `quadratures`.
 // Responses are the case's output.responses; their gradients follow eq. (24) at every grid
 // step and the aggregation (average eq. 45, per-step eq. 42, max, KS, integral, …).
 #include <string>
@@ -23,7 +28,8 @@
 namespace lsmbs {
 
 struct SensitivityOptions {
-  enum class Method { kSemiAnalytical, kSemiAnalyticalCentral, kDirectAnalytic, kFdForward, kFdCentral, kIdas };
+  enum class Method { kSemiAnalytical, kSemiAnalyticalCentral, kDirectAnalytic, kFdForward, kFdCentral, kIdas, kIdasAdjoint };
+  bool is_idas() const { return method == Method::kIdas || method == Method::kIdasAdjoint; }
   Method method = Method::kDirectAnalytic;
   /// Δp of the semi-analytical methods and step of the finite differences:
   /// relative: Δp_i = delta · max(|p_i|, 1e-2 (upper_i − lower_i)); absolute: Δp_i = delta.
@@ -93,9 +99,10 @@ struct SensitivityResult {
   std::vector<ResponseSensitivity> responses;
   SensitivityCounts counts;
   IntegratorSummary primal;
-  IdasStats idas;  ///< method idas only
-  /// Method idas: the time-integral responses from IDAS quadratures with their gradients
-  /// (IDAQuadSensInit), the continuous-time counterparts of the grid aggregates.
+  IdasStats idas;  ///< methods idas and idas-adjoint only
+  /// Methods idas and idas-adjoint: the time-integral responses from IDAS quadratures with
+  /// their gradients (IDAQuadSensInit, or the backward problems), the continuous-time
+  /// counterparts of the grid aggregates.
   std::vector<QuadratureResponse> quadratures;
 };
 

@@ -180,3 +180,24 @@ TEST_F(Fixture, KineticEnergyIsHalfVtMv) {
                  test::dense_iteration_matrix(m, s, {0, 0, 0}, k, zeta)).topLeftCorner(m.nq(), m.nq());
   EXPECT_NEAR(m.kinetic_energy(s, m.params()), 0.5 * s.v.dot(M * s.v), 1e-12 * s.v.dot(M * s.v));
 }
+
+TEST_F(Fixture, MassRateProductIsTheDerivativeOfMAlongTheMotion) {
+  // Ṁ w = d/dτ [M(q + τ q̇) w] at τ = 0 (the adjoint's d/dt(Mᵀξ), idas_ggl.cpp): central
+  // differences of the mass block along q̇; offset centres of mass make M depend on θ.
+  std::mt19937 g(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Vec w = Vec::NullaryExpr(m.nq(), [&] { return u(g); });
+  Vec out;
+  m.mass_rate_product(s, m.params(), w, out);
+  auto mass_times_w = [&](double tau) {
+    State x = s;
+    x.q += tau * s.v;
+    const Mat M = (test::dense_iteration_matrix(m, x, {1, 0, 0}, k, zeta) -
+                   test::dense_iteration_matrix(m, x, {0, 0, 0}, k, zeta)).topLeftCorner(m.nq(), m.nq());
+    return Vec(M * w);
+  };
+  const double h = 1e-5;
+  const Vec ref = (mass_times_w(h) - mass_times_w(-h)) / (2 * h);
+  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-3) << "the case must have a mass matrix that depends on q";
+  EXPECT_LT((out - ref).lpNorm<Eigen::Infinity>(), 1e-7 * ref.lpNorm<Eigen::Infinity>());
+}
