@@ -99,6 +99,21 @@ TEST(Optimization, ResumeRefusesACheckpointOfAnotherCase) {
   }
 }
 
+// The optimizer differentiates the grid responses; idas-adjoint gives gradients of the IDAS
+// quadratures only and is refused with the JSON path.
+TEST(Optimization, RefusesTheAdjointSensitivityMethod) {
+  json j = tiny_robot_arm();
+  j["optimization"]["sensitivity"] = {{"method", "idas-adjoint"}};
+  Case cs = test::make_case(j);
+  try {
+    parse_optimization(cs);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/optimization/sensitivity/method"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("idas-adjoint"), std::string::npos) << e.what();
+  }
+}
+
 namespace {
 
 // One-hole connecting rod of §5.2 on the 3 mm mesh, with Svanberg's classic MMA.

@@ -220,8 +220,7 @@ struct IdasGGL::Impl {
   std::string adj_error;  // why a backward callback failed (reported by run_adjoint)
 
   bool adjoint_integrand(int k, const State& s) {
-    if (quad->integrand_gradient(k, s, nominal, adj_gq, adj_gv, adj_gp, adj_error)) return true;
-    return false;
+    return quad->integrand_gradient(k, s, nominal, adj_gq, adj_gv, adj_gp, adj_error);
   }
 
   // y = Sᵀ x for S given by its values on the model's pattern (no assembly of a matrix)
