@@ -73,6 +73,13 @@ TEST(NewtonOptions, ModifiedNewtonAcrossStepsReachesTheFullNewtonSolutionWithFew
               b.integrator.factorizations, b.integrator.newton_iterations, a.integrator.factorizations,
               a.integrator.newton_iterations);
   EXPECT_LT(b.integrator.factorizations, b.integrator.steps / 2);
+  // the wall-time split (summary.json "seconds") is timed inside the run's wall time
+  const auto& t = b.integrator.seconds;
+  EXPECT_GT(t.setup, 0);
+  EXPECT_GT(t.residual, 0);
+  EXPECT_GT(t.factor, 0);
+  EXPECT_GT(t.solve, 0);
+  EXPECT_LE(t.setup + t.residual + t.matrix + t.factor + t.solve, b.integrator.wall_seconds);
   // with the halving test's too-small max_iter, steps that fail with an old factorization are
   // redone with a fresh one before any halving, and the run still ends on the reference
   json jh = pendulum(0.1);

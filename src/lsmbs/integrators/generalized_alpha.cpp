@@ -60,7 +60,10 @@ nlohmann::json IntegratorSummary::to_json() const {
           {"steps", steps}, {"newton_iterations", newton_iterations}, {"factorizations", factorizations},
           {"residual_evaluations", residual_evaluations}, {"matrix_evaluations", matrix_evaluations},
           {"halvings", halvings}, {"halving_times", halving_times},
-          {"fresh_factor_retries", fresh_factor_retries}, {"k", k}, {"zeta", zeta},
+          {"fresh_factor_retries", fresh_factor_retries},
+          {"seconds", {{"setup", seconds.setup}, {"residual", seconds.residual}, {"matrix", seconds.matrix},
+                       {"factor", seconds.factor}, {"solve", seconds.solve}}},
+          {"k", k}, {"zeta", zeta},
           {"residual_floor_N", force_floor},
           {"wall_seconds", wall_seconds}};
 }
@@ -89,6 +92,19 @@ struct Workspace {
   Vec a_cur, a_prev;
   Vec R, r_abs, dx;
   std::vector<double> vals;
+};
+
+// Adds the wall time of its lifetime to `acc` (IntegratorSummary::seconds).
+class ScopedSeconds {
+ public:
+  explicit ScopedSeconds(double& acc) : acc_(acc), t0_(std::chrono::steady_clock::now()) {}
+  ~ScopedSeconds() { acc_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
+  ScopedSeconds(const ScopedSeconds&) = delete;
+  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
+
+ private:
+  double& acc_;
+  std::chrono::steady_clock::time_point t0_;
 };
 
 // Runs the concurrent observers on one worker thread, one step behind the integrator. One job
@@ -257,6 +273,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   bool have_factor = false, retried_fresh = false;
   double factor_h = 0;
 
+  sum.seconds.setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   while (grid < n_steps) {
     const double t_n = w.prev.t;
     const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, h_try);
@@ -277,7 +294,10 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     double rn = 0, pn = 0, prev_err = INFINITY;
     const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
     for (;; ++it) {
-      model.residual(x, p, k, zeta, w.R, &w.r_abs);
+      {
+        ScopedSeconds timer(sum.seconds.residual);
+        model.residual(x, p, k, zeta, w.R, &w.r_abs);
+      }
       ++sum.residual_evaluations;
       if (!w.R.allFinite()) {
         why = "non-finite residual (NaN or Inf)";
@@ -298,9 +318,16 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       const double err = std::max(rn / std::max(opt_.tol_r * scale, sum.force_floor), pn / tol_phi);
       const bool refactor = opt_.newton == Newton::kFull || !have_factor || err > 0.25 * prev_err;
       if (refactor) {
-        model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
+        {
+          ScopedSeconds timer(sum.seconds.matrix);
+          model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
+        }
         ++sum.matrix_evaluations;
-        const Status st = step_lu->factor(w.vals);
+        Status st;
+        {
+          ScopedSeconds timer(sum.seconds.factor);
+          st = step_lu->factor(w.vals);
+        }
         ++sum.factorizations;
         if (!st.ok()) {
           why = "singular iteration matrix: the motion of " + model.describe_unknown(step_lu->singular_column()) +
@@ -313,7 +340,10 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       }
       prev_err = err;
       w.dx = -w.R;
-      step_lu->solve(w.dx);
+      {
+        ScopedSeconds timer(sum.seconds.solve);
+        step_lu->solve(w.dx);
+      }
       x.q += w.dx.head(nq);
       x.v += c.gamma_p * w.dx.head(nq);
       x.a += c.beta_p * w.dx.head(nq);
@@ -357,10 +387,18 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       return finish(sum);
     }
     if (opt_.refactor_converged && !observers.empty()) {
-      model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
+      {
+        ScopedSeconds timer(sum.seconds.matrix);
+        model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
+      }
       ++sum.matrix_evaluations;
       ++sum.factorizations;
-      if (!step_lu->factor(w.vals).ok()) {
+      bool factored = false;
+      {
+        ScopedSeconds timer(sum.seconds.factor);
+        factored = step_lu->factor(w.vals).ok();
+      }
+      if (!factored) {
         sum.ok = false;
         sum.message = "t = " + std::to_string(x.t) + ": singular iteration matrix at the converged state";
         sum.t_reached = w.prev.t;

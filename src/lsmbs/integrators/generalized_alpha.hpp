@@ -71,6 +71,11 @@ struct IntegratorSummary {
   long steps = 0, newton_iterations = 0, factorizations = 0, residual_evaluations = 0;
   long matrix_evaluations = 0, halvings = 0;
   long fresh_factor_retries = 0;  ///< steps redone with a fresh factorization (modified_across_steps)
+  /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
+  /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations, back-solves.
+  struct Seconds {
+    double setup = 0, residual = 0, matrix = 0, factor = 0, solve = 0;
+  } seconds;
   std::vector<double> halving_times;
   double k = 0, zeta = 0;
   double force_floor = 0;  ///< absolute residual floor used [N]
