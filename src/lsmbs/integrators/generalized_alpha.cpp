@@ -94,18 +94,16 @@ struct Workspace {
   std::vector<double> vals;
 };
 
-// Adds the wall time of its lifetime to `acc` (IntegratorSummary::seconds).
-class ScopedSeconds {
- public:
-  explicit ScopedSeconds(double& acc) : acc_(acc), t0_(std::chrono::steady_clock::now()) {}
-  ~ScopedSeconds() { acc_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
-  ScopedSeconds(const ScopedSeconds&) = delete;
-  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
-
- private:
-  double& acc_;
-  std::chrono::steady_clock::time_point t0_;
-};
+// Returns f() and adds its wall time to `acc` (IntegratorSummary::seconds).
+template <class F>
+decltype(auto) timed(double& acc, F&& f) {
+  struct AddOnExit {
+    double& acc;
+    std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+    ~AddOnExit() { acc += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); }
+  } add{acc};
+  return f();
+}
 
 // Runs the concurrent observers on one worker thread, one step behind the integrator. One job
 // slot: post() copies the step (no allocation once the slot has its sizes) after wait_idle()
@@ -294,10 +292,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     double rn = 0, pn = 0, prev_err = INFINITY;
     const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
     for (;; ++it) {
-      {
-        ScopedSeconds timer(sum.seconds.residual);
-        model.residual(x, p, k, zeta, w.R, &w.r_abs);
-      }
+      timed(sum.seconds.residual, [&] { model.residual(x, p, k, zeta, w.R, &w.r_abs); });
       ++sum.residual_evaluations;
       if (!w.R.allFinite()) {
         why = "non-finite residual (NaN or Inf)";
@@ -318,16 +313,9 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       const double err = std::max(rn / std::max(opt_.tol_r * scale, sum.force_floor), pn / tol_phi);
       const bool refactor = opt_.newton == Newton::kFull || !have_factor || err > 0.25 * prev_err;
       if (refactor) {
-        {
-          ScopedSeconds timer(sum.seconds.matrix);
-          model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
-        }
+        timed(sum.seconds.matrix, [&] { model.iteration_matrix(x, p, coeffs, k, zeta, w.vals); });
         ++sum.matrix_evaluations;
-        Status st;
-        {
-          ScopedSeconds timer(sum.seconds.factor);
-          st = step_lu->factor(w.vals);
-        }
+        const Status st = timed(sum.seconds.factor, [&] { return step_lu->factor(w.vals); });
         ++sum.factorizations;
         if (!st.ok()) {
           why = "singular iteration matrix: the motion of " + model.describe_unknown(step_lu->singular_column()) +
@@ -340,10 +328,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       }
       prev_err = err;
       w.dx = -w.R;
-      {
-        ScopedSeconds timer(sum.seconds.solve);
-        step_lu->solve(w.dx);
-      }
+      timed(sum.seconds.solve, [&] { step_lu->solve(w.dx); });
       x.q += w.dx.head(nq);
       x.v += c.gamma_p * w.dx.head(nq);
       x.a += c.beta_p * w.dx.head(nq);
@@ -387,18 +372,10 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
       return finish(sum);
     }
     if (opt_.refactor_converged && !observers.empty()) {
-      {
-        ScopedSeconds timer(sum.seconds.matrix);
-        model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
-      }
+      timed(sum.seconds.matrix, [&] { model.iteration_matrix(x, p, coeffs, k, zeta, w.vals); });
       ++sum.matrix_evaluations;
       ++sum.factorizations;
-      bool factored = false;
-      {
-        ScopedSeconds timer(sum.seconds.factor);
-        factored = step_lu->factor(w.vals).ok();
-      }
-      if (!factored) {
+      if (!timed(sum.seconds.factor, [&] { return step_lu->factor(w.vals); }).ok()) {
         sum.ok = false;
         sum.message = "t = " + std::to_string(x.t) + ": singular iteration matrix at the converged state";
         sum.t_reached = w.prev.t;
