@@ -9,10 +9,9 @@ out="$root/verification/reports"
 rc=0
 # rigid spring slider-crank: all methods incl. IDAS
 "$exe" verify "$root/data/slider_crank_rigid/slider_crank_spring.json" -o "$out/slider_crank_spring" || rc=1
-# robot arm with five super-ellipses (verification size); geometric fd steps absolute (m). The
-# reports predate IDAS's reach on flexible models (session 5: BDF2, KLU pivoting; docs/methods.md):
-# its study (three runs at rtol 1e-10 with sensitivities) is left out here to keep this script short
-"$exe" verify "$root/data/robot_arm/robot_arm_verify.json" -o "$out/robot_arm" --no-idas --fd-delta 1e-5 --fd-absolute || rc=1
+# robot arm with five super-ellipses (verification size); geometric fd steps absolute (m); with
+# IDAS (an IDAS gradient column and the h study against IDAS at rtol 1e-10: ~11 of its ~13 minutes)
+"$exe" verify "$root/data/robot_arm/robot_arm_verify.json" -o "$out/robot_arm" --fd-delta 1e-5 --fd-absolute || rc=1
 # connecting rod of section 5 (3 mm mesh), one and three elliptical holes, at interior design points:
 # at the start (d = 0.001) the holes are far below a sub-cell and every gradient is ~0. IDAS on the
 # rod is checked in test_idas (the rod's µs vibration keeps the h-study from being clean).
