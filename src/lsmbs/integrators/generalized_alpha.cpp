@@ -94,13 +94,17 @@ struct Workspace {
   std::vector<double> vals;
 };
 
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 // Returns f() and adds its wall time to `acc` (IntegratorSummary::seconds).
 template <class F>
 decltype(auto) timed(double& acc, F&& f) {
   struct AddOnExit {
     double& acc;
     std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-    ~AddOnExit() { acc += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); }
+    ~AddOnExit() { acc += seconds_since(t0); }
   } add{acc};
   return f();
 }
@@ -192,7 +196,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   std::optional<ObserverWorker> worker;
   auto finish = [&](IntegratorSummary& s) -> IntegratorSummary& {
     if (worker && !worker->wait_idle()) s.aborted = true;  // the last step's observers complete
-    s.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    s.wall_seconds = seconds_since(t_start);
     return s;
   };
   if (auto msg = opt_.validate(); !msg.empty()) {
@@ -271,7 +275,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   bool have_factor = false, retried_fresh = false;
   double factor_h = 0;
 
-  sum.seconds.setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  sum.seconds.setup = seconds_since(t_start);
   while (grid < n_steps) {
     const double t_n = w.prev.t;
     const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, h_try);
