@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/version.hpp"
@@ -24,6 +25,7 @@
 #include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
+#include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/verify_run.hpp"
@@ -131,9 +133,22 @@ int geometry(const std::string& case_file, const std::string& out, const std::ve
   return 0;
 }
 
+void print_gradient_check(const lsmbs::GradientCheckResult& c, const lsmbs::GradientCheckOptions& o) {
+  std::printf("  gradient check (central differences along a random direction, 2 simulations): %s\n",
+              c.verdict(o).c_str());
+  if (!c.ok) {
+    std::printf("    %s\n", c.message.c_str());
+    return;
+  }
+  for (const auto& e : c.entries)
+    std::printf("    %-24s fd %+.6e  method %+.6e  relative disagreement %.2e\n", e.response.c_str(),
+                e.finite_difference, e.method, e.relative_error);
+}
+
 int sensitivity(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets,
                 const std::string& method, double delta, bool absolute, const std::string& matrix, bool full_residual,
-                double rtol, double atol, int threads, bool quiet, const std::string& cmdline) {
+                double rtol, double atol, int threads, bool quiet, const std::string& cmdline,
+                const lsmbs::GradientCheckOptions* check) {
   lsmbs::SensitivityOptions so;
   so.threads = threads;
   if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
@@ -158,6 +173,8 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   lsmbs::ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
   so.progress = &line;
   const auto res = lsmbs::compute_sensitivities(cs, p, so);
+  std::optional<lsmbs::GradientCheckResult> checked;
+  if (check && res.ok) checked = lsmbs::check_gradients(cs, p, res.responses, *check);
   line.clear();
   const auto& d = *cs.design;
   // summary.json and gradients.csv
@@ -197,6 +214,9 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   S["options"] = {{"sensitivity", so.to_json()}, {"generalized_alpha", cs.simulation.to_json()}};
   S["counts"] = res.counts.to_json();
   S["primal"] = res.primal.to_json();
+  S["warnings"] = res.warnings;
+  if (checked) S["gradient_check"] = checked->to_json(*check);
+  for (const auto& w : res.warnings) std::fprintf(stderr, "lsmbs sensitivity: warning: %s\n", w.c_str());
   S["wall_seconds"] = res.counts.wall_seconds;
   S["responses"] = responses;
   S["gradients"] = grads;
@@ -243,10 +263,18 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
       for (int i = 0; i < d.size() && i < q.gradient.size(); ++i)
         std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), q.gradient[i]);
     }
+    if (checked) print_gradient_check(*checked, *check);
     std::printf("  results in %s\n", out.c_str());
   }
   if (!res.ok) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", res.message.c_str());
+    return 1;
+  }
+  if (checked && checked->verdict(*check) == "fail") {
+    std::fprintf(stderr, "lsmbs: gradient check failed: %s\n",
+                 checked->ok ? ("response '" + checked->worst_response + "' disagrees with central differences by " +
+                                std::to_string(checked->worst)).c_str()
+                             : checked->message.c_str());
     return 1;
   }
   return 0;
@@ -273,7 +301,7 @@ bool plot_history(const std::string& out) {
 // On a terminal: a table row per evaluation and a progress line of the running simulation; not on
 // a terminal: the final summary only (history.csv has every evaluation), unless --verbose.
 int optimize(const std::string& case_file, const std::string& out, bool resume, const std::string& optimizer,
-             bool quiet, bool verbose, const std::string& cmdline) {
+             bool quiet, bool verbose, const std::string& cmdline, const lsmbs::GradientCheckOptions* check) {
   lsmbs::Case cs = lsmbs::load_case(case_file);
   lsmbs::OptimizationSpec spec = lsmbs::parse_optimization(cs);  // validated before anything is written
   if (!optimizer.empty()) {
@@ -301,6 +329,43 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
     if (table) std::printf("%6d %16.9g %14.4e %10.2f\n", k, e.objective, e.max_violation, e.wall_seconds);
     std::fflush(stdout);
   };
+  // Gradient check at the initial design (not on resume: the first run did it)
+  std::optional<lsmbs::GradientCheckResult> checked;
+  if (check && !resume) {
+    const lsmbs::Vec p0 = d.initial();
+    const auto sres = lsmbs::compute_sensitivities(cs, p0, spec.sensitivity);
+    if (sres.ok) {
+      std::vector<lsmbs::ResponseSensitivity> used;
+      for (const auto& r : sres.responses) {
+        bool use = r.name == spec.objective;
+        for (const auto& c : spec.constraints) use |= r.name == c.response;
+        if (use) used.push_back(r);
+      }
+      checked = lsmbs::check_gradients(cs, p0, used, *check);
+      line.clear();
+      const std::string verdict = checked->verdict(*check);
+      if (verdict != "pass") {
+        const std::string what = checked->ok ? "response '" + checked->worst_response +
+                                                   "': the gradient disagrees with central differences by " +
+                                                   std::to_string(checked->worst) + " (relative)"
+                                             : checked->message;
+        if (verdict == "fail") {
+          nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+          S["case_name"] = cs.name;
+          S["status"] = "refused";
+          S["failure"] = "gradient check at the initial design failed: " + what;
+          S["options"] = {{"optimization", spec.to_json()}, {"generalized_alpha", cs.simulation.to_json()}};
+          S["gradient_check"] = checked->to_json(*check);
+          lsmbs::write_json_atomic(out + "/summary.json", S);
+          std::fprintf(stderr,
+                       "lsmbs optimize: refused: gradient check at the initial design failed: %s (above %g; "
+                       "--no-check skips the check)\n", what.c_str(), check->fail);
+          return 1;
+        }
+        if (!quiet) std::fprintf(stderr, "lsmbs optimize: warning: gradient check at the initial design: %s\n", what.c_str());
+      }
+    }
+  }
   const auto res = lsmbs::optimize(prob, o);
   line.clear();
   // final design pictures and summary
@@ -327,6 +392,7 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   S["converged"] = res.converged;
   const auto kkt = lsmbs::kkt_report(prob, res.final);
   S["kkt"] = kkt.to_json();
+  S["gradient_check"] = checked ? checked->to_json(*check) : nlohmann::json(nullptr);
   S["counts"] = {{"evaluations", res.evaluations}, {"simulations_this_run", res.simulations},
                  {"cache_hits", prob.cache_hits()}};
   S["wall_seconds"] = res.wall_seconds;
@@ -402,13 +468,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sen->add_option("--delta", delta, "perturbation Δp (semi-analytical) or finite-difference step")->capture_default_str();
   sen->add_flag("--absolute", absolute, "Δp absolute instead of relative to max(|p_i|, 1e-2 (upper - lower))");
-  std::string matrix = "last";
+  std::string matrix = "refined";
   bool full_residual = false;
   sen->add_flag("--full-residual", full_residual,
                 "semi-analytical pseudo-loads from whole-residual evaluations (Algorithm 2 literally) instead of element-local ones");
   sen->add_option("--matrix", matrix,
-                  "matrix of the back-solves: last (last Newton iteration, the paper's), converged (refactorized), "
-                  "refined (last LU + iterative refinement)")->capture_default_str();
+                  "matrix of the back-solves: refined (default: S_t at the converged state, exact), converged "
+                  "(refactorized by the integrator, exact), last (the last Newton iteration's, Algorithm 2 literally; "
+                  "not exact where a step converged in one iteration)")->capture_default_str();
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
   sen->add_option("--rtol", rtol, "--method idas, idas-adjoint: IDAS relative tolerance")->capture_default_str();
   sen->add_option("--atol", atol, "--method idas, idas-adjoint: IDAS absolute tolerance in units of the length scale (default: rtol)");
@@ -417,6 +484,15 @@ int main(int argc, char** argv) {
                   "2: the sensitivity update of each step runs on a second thread while the next step is computed; "
                   "1: one thread (same results to round-off)")->capture_default_str()->check(CLI::Range(1, 2));
   sen->add_flag("-q,--quiet", quiet, "print nothing but errors");
+  bool check = false;
+  lsmbs::GradientCheckOptions check_opt;
+  sen->add_flag("--check", check,
+                "gradient check: central differences of 2 more simulations along a random direction against the "
+                "gradient; per-response disagreement in summary.json (exit 1 above --check-fail)");
+  sen->add_option("--check-delta", check_opt.delta, "--check: relative step along the direction")->capture_default_str();
+  sen->add_option("--check-seed", check_opt.seed, "--check: seed of the random direction")->capture_default_str();
+  sen->add_option("--check-warn", check_opt.warn, "--check: warn above this relative disagreement")->capture_default_str();
+  sen->add_option("--check-fail", check_opt.fail, "--check: fail above this relative disagreement")->capture_default_str();
 
   bool resume = false;
   auto* opt = app.add_subcommand("optimize", "fully coupled optimization of the case's design (NLopt MMA/CCSAQ/SLSQP)");
@@ -429,6 +505,15 @@ int main(int argc, char** argv) {
   opt->add_option("--optimizer", optimizer, "override the case's optimizer")
       ->check(CLI::IsMember({"mma", "ccsaq", "slsqp", "mma-svanberg"}));
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
+  bool no_check = false;
+  lsmbs::GradientCheckOptions opt_check;
+  opt->add_flag("--no-check", no_check,
+                "skip the gradient check at the initial design (default: central differences along a random "
+                "direction, 2 simulations; warns above --check-warn, refuses above --check-fail)");
+  opt->add_option("--check-warn", opt_check.warn, "gradient check: warn above this relative disagreement")
+      ->capture_default_str();
+  opt->add_option("--check-fail", opt_check.fail, "gradient check: refuse above this relative disagreement")
+      ->capture_default_str();
   opt->add_flag("-v,--verbose", verbose, "a row per evaluation also when not on a terminal (default there: final summary only)");
 
   lsmbs::VerifyOptions vo;
@@ -472,7 +557,9 @@ int main(int argc, char** argv) {
     if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, error_test,
                                 joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
-    if (*opt) return optimize(case_file, out, resume, optimizer, quiet, verbose, joined_args(argc, argv));
+    if (*opt)
+      return optimize(case_file, out, resume, optimizer, quiet, verbose, joined_args(argc, argv),
+                      no_check ? nullptr : &opt_check);
     if (*ben) {
       bo.out_dir = out;
       bo.command_line = joined_args(argc, argv);
@@ -501,7 +588,7 @@ int main(int argc, char** argv) {
     }
     if (*sen)
       return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, rtol, atol, threads, quiet,
-                         joined_args(argc, argv));
+                         joined_args(argc, argv), check ? &check_opt : nullptr);
     std::cout << app.help();
     return 2;
   } catch (const lsmbs::Error& e) {

@@ -104,6 +104,29 @@ rows = list(csv.reader(l for l in open(os.path.join(out, "gradients.csv")) if no
 assert rows[0][:4] == ["response", "index", "t", "value"] and rows[0][4:] == ["d/dk", "d/dc"]
 print("sensitivity ok")
 PY
+# The default matrix is the exact one; --check adds a directional central difference (2 runs).
+"$exe" sensitivity "$spring" --check -o "$tmp/sens_check" -q || fail "sensitivity --check"
+python3 - "$tmp/sens_check/summary.json" "$tmp/sens/summary.json" <<'PY' || fail "gradient check in summary.json"
+import json, sys
+s, r = (json.load(open(f)) for f in sys.argv[1:3])
+assert s["options"]["sensitivity"]["matrix"] == "refined", s["options"]["sensitivity"]
+assert s["gradients"] == r["gradients"], "default options = --matrix refined"
+c = s["gradient_check"]
+assert c["verdict"] == "pass" and c["simulations"] == 2 and c["worst"] < 1e-5, c
+assert set(c["responses"]) == set(s["responses"]), c["responses"]
+assert abs(sum(x * x for x in c["direction"]) - 1) < 1e-12
+print("gradient check ok: worst", c["worst"], c["worst_response"])
+PY
+# --matrix last (the paper's Algorithm 2 literally) warns where steps took one Newton iteration.
+python3 -c "
+import json
+c=json.load(open('$spring')); c['simulation'].pop('tol_r'); c['simulation']['h']=6.25e-5
+json.dump(c,open('$tmp/spring_fine.json','w'))"
+"$exe" sensitivity "$tmp/spring_fine.json" --matrix last -o "$tmp/sens_last" -q 2> "$tmp/err_last.txt" || fail "--matrix last"
+grep -q "warning: --matrix last:" "$tmp/err_last.txt" || fail "no warning for --matrix last: $(cat "$tmp/err_last.txt")"
+python3 -c "
+import json; s=json.load(open('$tmp/sens_last/summary.json'))
+assert s['counts']['predictor_matrix_steps'] > 0 and len(s['warnings']) == 1, s['counts']" || fail "last: counts"
 "$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
 [ $rc -eq 2 ] || fail "unknown method returned $rc"
 grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(cat "$tmp/err4.txt")"
@@ -131,7 +154,9 @@ a, b = (json.load(open(f)) for f in sys.argv[1:3])
 assert a["final"]["design"] == b["final"]["design"], (a["final"]["design"], b["final"]["design"])
 assert a["final"]["objective"] == b["final"]["objective"]
 assert b["counts"]["simulations_this_run"] < a["counts"]["simulations_this_run"]
-print("kill/resume ok:", b["counts"])
+gc = a["gradient_check"]  # optimize checks the gradient at the initial design by default
+assert gc["verdict"] == "pass" and set(gc["responses"]) == {"plate_mass", "average_tip_deviation"}, gc
+print("kill/resume ok:", b["counts"], "gradient check", gc["worst"], gc["worst_response"])
 PY
 # IDAS sensitivities from the command line: statistics, quadratures with gradients, options as run.
 "$exe" sensitivity "$spring" --method idas --rtol 1e-8 -o "$tmp/sens_idas" -q || fail "sensitivity --method idas"

@@ -43,7 +43,7 @@ double worst_relative(const SensitivityResult& a, const SensitivityResult& ref, 
 }
 
 SensitivityResult run(Case& cs, Method m, double delta = 1e-6, bool relative = true,
-                      SensitivityOptions::Matrix mx = SensitivityOptions::Matrix::kLastIteration) {
+                      SensitivityOptions::Matrix mx = SensitivityOptions{}.matrix) {
   SensitivityOptions o;
   o.method = m;
   o.delta = delta;
@@ -147,14 +147,17 @@ TEST(Sensitivity, ModifiedNewtonAcrossStepsNeedsAnExactSensitivityMatrix) {
   cs.simulation.newton = GeneralizedAlphaOptions::Newton::kModifiedAcrossSteps;
   SensitivityOptions o;
   o.method = Method::kDirectAnalytic;
+  o.matrix = SensitivityOptions::Matrix::kLastIteration;
   try {
     compute_sensitivities(cs, cs.design->initial(), o);
     ADD_FAILURE() << "expected an error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("/simulation/newton"), std::string::npos) << e.what();
   }
-  for (int threads : {1, 2}) {
-    o.matrix = SensitivityOptions::Matrix::kConverged;
+  for (auto [threads, mx] : {std::pair{1, SensitivityOptions::Matrix::kConverged},
+                             std::pair{2, SensitivityOptions::Matrix::kConverged},
+                             std::pair{2, SensitivityOptions::Matrix::kRefined}}) {
+    o.matrix = mx;
     o.threads = threads;
     const auto r = compute_sensitivities(cs, cs.design->initial(), o);
     ASSERT_TRUE(r.ok) << r.message;
@@ -170,9 +173,10 @@ TEST(Sensitivity, LastIterationMatrixErrorShrinksWithTighterNewtonIterations) {
   // Newton increment vanishes. Forcing more iterations per step (min_iter) tightens it.
   Case cs = slider_crank_case();
   const auto fd = run(cs, Method::kFdCentral, 1e-5);
-  const double e2 = worst_relative(run(cs, Method::kDirectAnalytic), fd);
+  using M = SensitivityOptions::Matrix;
+  const double e2 = worst_relative(run(cs, Method::kDirectAnalytic, 1e-6, true, M::kLastIteration), fd);
   cs.simulation.min_iter = 3;
-  const double e3 = worst_relative(run(cs, Method::kDirectAnalytic), fd);
+  const double e3 = worst_relative(run(cs, Method::kDirectAnalytic, 1e-6, true, M::kLastIteration), fd);
   std::printf("last-iteration matrix: worst vs fd-central %.2e (2 Newton iterations/step), %.2e (min_iter 3)\n", e2, e3);
   EXPECT_GT(e2, 1e-5) << "the approximation is visible on this fast mechanism";
   EXPECT_LT(e3, 1e-6) << "down to the finite-difference floor";

@@ -26,10 +26,11 @@ struct GeneralizedAlphaOptions {
   double h = 1e-3;        ///< time step
   double t_end = 1.0;     ///< final time
   double rho_inf = 0.8;   ///< spectral radius at infinite frequency, eq. (11)
-  double tol_r = 1e-9;    ///< ‖r‖∞ ≤ tol_r · (force scale of the residual's terms)
+  double tol_r = 1e-9;    ///< |r_i| ≤ tol_r · s_i + (round-off floor of row i) for every row i,
+                          ///< s_i the sum of the absolute force terms of row i
   double tol_phi = 1e-12; ///< ‖Φ‖∞ ≤ tol_phi · (model length scale)
-  double force_floor = 1e-10;  ///< absolute residual floor [N]; the round-off floor
-                               ///< 100 ε (k + ζ) L is used when larger
+  double tol_q = 1e-12;   ///< last Newton correction ‖Δq‖∞ ≤ tol_q · (model length scale)
+  double force_floor = 0; ///< absolute residual tolerance [N] added to every row (0: none)
   int max_iter = 25;
   int min_iter = 1;       ///< ≥ 1: every step factorizes S_t at least once (Algorithm 2 needs it)
   bool consistent_start = true;  ///< false: q̈0 = a0 = 0, λ0 = 0 as Algorithm 1
@@ -70,7 +71,8 @@ struct IntegratorSummary {
   double t_reached = 0;
   long steps = 0, newton_iterations = 0, factorizations = 0, residual_evaluations = 0;
   long matrix_evaluations = 0, halvings = 0;
-  long fresh_factor_retries = 0;  ///< steps redone with a fresh factorization (modified_across_steps)
+  long fresh_factor_retries = 0;
+  long increment_rejections = 0;   ///< residual test passed, Newton correction still above tol_q  ///< steps redone with a fresh factorization (modified_across_steps)
   /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
   /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations, back-solves.
   struct Seconds {
@@ -78,7 +80,7 @@ struct IntegratorSummary {
   } seconds;
   std::vector<double> halving_times;
   double k = 0, zeta = 0;
-  double force_floor = 0;  ///< absolute residual floor used [N]
+  double force_floor = 0;  ///< largest per-row round-off floor met [N] (residual_floor_N)
   double wall_seconds = 0;
   nlohmann::json to_json() const;
 };

@@ -402,8 +402,11 @@ struct Loader {
     const std::string type = r.one_of("type", {"position", "angle", "distance", "elongation", "path_deviation",
                                                "constraint_force", "kinetic_energy", "strain_energy", "mass"});
     const std::string name = r.string("name");
+    // constraint_force measures are placeholders (null) until finalize: their names are pending
     for (const auto& m : cs.measures)
-      if (m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
+      if (m && m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
+    for (const auto& pending : pending_forces)
+      if (pending.first == name) r.fail("name", "duplicate measure name '" + name + "'");
     std::unique_ptr<Measure> m;
     if (type == "position") m = std::make_unique<PositionMeasure>(name, point(r.child("point")));
     else if (type == "angle") m = std::make_unique<AngleMeasure>(name, rigid(r, "body").dof0 + 2);
@@ -517,6 +520,7 @@ struct Loader {
     o.rho_inf = r.number("rho_inf", o.rho_inf);
     o.tol_r = r.positive("tol_r", o.tol_r);
     o.tol_phi = r.positive("tol_phi", o.tol_phi);
+    o.tol_q = r.positive("tol_q", o.tol_q);
     o.max_iter = r.integer("max_iter", o.max_iter, 1);
     o.min_iter = r.integer("min_iter", o.min_iter, 0);
     o.max_halvings = r.integer("max_halvings", o.max_halvings, 0);

@@ -1,6 +1,9 @@
 #include "lsmbs/sensitivity/direct_observer.hpp"
 
 #include <algorithm>
+#include <cmath>
+
+#include "lsmbs/core/error.hpp"
 
 namespace lsmbs {
 
@@ -106,8 +109,8 @@ void SemiAnalyticalPseudoLoad::compute(const State& s, const Mat& dv_star, const
 
 DirectSensitivityObserver::DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv, PseudoLoad& load,
                                                      ResponseTracker& tracker, SensitivityCounts& counts,
-                                                     int refinement_steps)
-    : m_(m), p_(p), nv_(nv), load_(load), tracker_(tracker), counts_(counts), refine_(refinement_steps) {}
+                                                     BackSolveOptions back_solve)
+    : m_(m), p_(p), nv_(nv), load_(load), tracker_(tracker), counts_(counts), bs_(back_solve) {}
 
 void DirectSensitivityObserver::on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double zeta,
                                          const SparseLU* start_factor) {
@@ -144,22 +147,13 @@ bool DirectSensitivityObserver::on_step(const StepInfo& info) {
   // pseudo-loads and one back-solve for all variables (37)
   load_.compute(*info.state, dvs_, dqdds_, info.k, info.zeta, B_, counts_);
   B_ = -B_;
-  if (refine_ > 0) rhs_ = B_;
-  info.factor->solve(B_);
-  ++counts_.back_solves;
-  counts_.back_solve_rhs += nv_;
-  if (refine_ > 0) {
-    // X ← X + S_last⁻¹ (b − S_conv X): converges to the solution with the converged matrix
-    m_.iteration_matrix(*info.state, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, info.k, info.zeta, svals_);
-    ++counts_.sensitivity_matrix_assemblies;
-    for (int it = 0; it < refine_; ++it) {
-      m_.assembler().multiply(svals_, B_, SX_);
-      SX_ = rhs_ - SX_;
-      info.factor->solve(SX_);
-      B_ += SX_;
-      ++counts_.back_solves;
-      counts_.back_solve_rhs += nv_;
-    }
+  if (info.newton_iterations <= 1) ++counts_.predictor_matrix_steps;
+  if (bs_.mode == BackSolveOptions::Mode::kExact) {
+    exact_solve(info);
+  } else {
+    info.factor->solve(B_);
+    ++counts_.back_solves;
+    counts_.back_solve_rhs += nv_;
   }
   // updates (38)–(40)
   dq_ = B_.topRows(nq);
@@ -169,6 +163,75 @@ bool DirectSensitivityObserver::on_step(const StepInfo& info) {
   da_ = das_ + dq_ / bh2;
   if (info.grid_point) tracker_.record(*info.state, p_, &dq_, &dv_, &dqdd_, &dl_);
   return true;
+}
+
+namespace {
+// max over columns of ‖D_j‖∞ / ‖X_j‖∞ (columns with X_j = 0: ‖D_j‖∞)
+double relative_correction(const Mat& D, const Mat& X) {
+  double r = 0;
+  for (Eigen::Index j = 0; j < D.cols(); ++j) {
+    const double x = X.col(j).lpNorm<Eigen::Infinity>(), d = D.col(j).lpNorm<Eigen::Infinity>();
+    r = std::max(r, x > 0 ? d / x : d);
+  }
+  return r;
+}
+}  // namespace
+
+// Solves S_t(converged) X = B_ (rhs in B_, solution left in B_). The step's factorization was
+// computed at an earlier Newton iterate (the predictor when the step took one iteration), so it
+// is used as the preconditioner of iterative refinement X ← X + S_f⁻¹ (b − S_t X), which
+// converges to the solution with the converged-state matrix at the rate ‖I − S_f⁻¹ S_t‖. When
+// that rate is poor, S_t is factorized (the shared symbolic analysis, a numeric factorization of
+// the observer's own), which is exact whatever the step's iterations were.
+void DirectSensitivityObserver::exact_solve(const StepInfo& info) {
+  const auto& c = info.coef;
+  rhs_ = B_;
+  m_.iteration_matrix(*info.state, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, info.k, info.zeta, svals_);
+  ++counts_.sensitivity_matrix_assemblies;
+  const SparseLU* lu = info.factor;
+  bool accepted = false;
+  {
+    lu->solve(B_);
+    ++counts_.back_solves;
+    counts_.back_solve_rhs += nv_;
+    double prev = INFINITY;
+    for (int it = 0; it < bs_.max_refinement; ++it) {
+      m_.assembler().multiply(svals_, B_, SX_);
+      SX_ = rhs_ - SX_;
+      lu->solve(SX_);
+      B_ += SX_;
+      ++counts_.refinement_solves;
+      counts_.back_solve_rhs += nv_;
+      const double r = relative_correction(SX_, B_);
+      if (!(r == r)) break;  // NaN: factorize
+      if (r <= bs_.accept || (r > 0.5 * prev && r <= bs_.round_off)) {
+        accepted = true;
+        break;
+      }
+      if (r > 0.5 * prev) break;  // not contracting: factorize
+      prev = r;
+    }
+  }
+  if (accepted) return;
+  if (!own_lu_shares_) {
+    own_lu_.share_analysis(*lu);
+    own_lu_shares_ = true;
+  }
+  if (!own_lu_.factor(svals_).ok())
+    throw NumericalFailure("t = " + std::to_string(info.state->t) +
+                           ": the iteration matrix at the converged state is singular (sensitivity back-solve)");
+  ++counts_.sensitivity_factorizations;
+  B_ = rhs_;
+  own_lu_.solve(B_);
+  ++counts_.back_solves;
+  counts_.back_solve_rhs += nv_;
+  // one step of classical refinement with the exact factorization
+  m_.assembler().multiply(svals_, B_, SX_);
+  SX_ = rhs_ - SX_;
+  own_lu_.solve(SX_);
+  B_ += SX_;
+  ++counts_.refinement_solves;
+  counts_.back_solve_rhs += nv_;
 }
 
 }  // namespace lsmbs

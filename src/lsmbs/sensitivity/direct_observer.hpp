@@ -2,7 +2,8 @@
 // DirectSensitivityObserver — Algorithm 2 run alongside the generalized-α primal solve. After
 // each converged step it forms the predictors (33)–(35) for all design variables at once,
 // computes the pseudo-loads, back-solves all of them with the factorization of the step's last
-// Newton iteration (one call, no new factorization), and applies the updates (38)–(40):
+// Newton iteration (one call, no new factorization) — by default refined against, or
+// refactorized at, the converged state (BackSolveOptions) — and applies the updates (38)–(40):
 //   a*_{n+1,i}  = −((½−β)h² a_{n,i} + h q̇_{n,i} + q_{n,i}) / (βh²)                     (35)
 //   q̇*_{n+1,i} = q̇_{n,i} + h(1−γ) a_{n,i} + hγ a*_{n+1,i}                               (33)
 //   q̈*_{n+1,i} = ((1−α_m) a*_{n+1,i} + α_m a_{n,i} − α_f q̈_{n,i}) / (1−α_f)             (34)
@@ -71,12 +72,23 @@ class SemiAnalyticalPseudoLoad : public PseudoLoad {
   Mat MC_;
 };
 
+/// Which matrix the back-solves (37) use. kStepFactor: the factorization handed over by the
+/// integrator as it is (the last Newton iteration's, Algorithm 2 literally, or the converged
+/// state's when the integrator refactorizes). kExact: S_t assembled at the converged state;
+/// the step's factorization serves as a preconditioner of iterative refinement, and when that
+/// does not contract to round-off (or the step's only factorization is the predictor's), S_t
+/// is factorized anew into the observer's own numeric factorization of the shared analysis.
+struct BackSolveOptions {
+  enum class Mode { kStepFactor, kExact } mode = Mode::kExact;
+  int max_refinement = 6;        ///< refinement iterations before falling back to a factorization
+  double accept = 1e-13;         ///< correction/solution (max over columns, ∞-norms) accepted as converged
+  double round_off = 1e-9;       ///< stagnation below this level is accepted as round-off
+};
+
 class DirectSensitivityObserver : public StepObserver {
  public:
-  /// refinement_steps > 0: iterative refinement of the back-solves against S_t assembled at
-  /// the converged state (the factorization stays the last Newton iteration's).
   DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv, PseudoLoad& load, ResponseTracker& tracker,
-                            SensitivityCounts& counts, int refinement_steps = 0);
+                            SensitivityCounts& counts, BackSolveOptions back_solve = {});
   void on_start(const State& s0, const Vec& a0, const AlphaCoefficients& c, double k, double zeta,
                 const SparseLU* start_factor) override;
   bool on_step(const StepInfo& info) override;
@@ -91,7 +103,10 @@ class DirectSensitivityObserver : public StepObserver {
   PseudoLoad& load_;
   ResponseTracker& tracker_;
   SensitivityCounts& counts_;
-  int refine_;
+  BackSolveOptions bs_;
+  SparseLU own_lu_;  // S_t at the converged state when refinement does not contract
+  bool own_lu_shares_ = false;
+  void exact_solve(const StepInfo& info);
   Mat dq_, dv_, dqdd_, da_, dl_;  // at t_n
   Mat dvs_, dqdds_, das_, B_;     // workspace
   Mat rhs_, SX_;

@@ -77,6 +77,9 @@ nlohmann::json SensitivityCounts::to_json() const {
           {"back_solves", back_solves},
           {"back_solve_rhs", back_solve_rhs},
           {"sensitivity_matrix_assemblies", sensitivity_matrix_assemblies},
+          {"refinement_solves", refinement_solves},
+          {"sensitivity_factorizations", sensitivity_factorizations},
+          {"predictor_matrix_steps", predictor_matrix_steps},
           {"wall_seconds", wall_seconds},
           {"primal_wall_seconds", primal_wall_seconds}};
 }
@@ -96,7 +99,9 @@ std::string run_label(long k, long n) {
   return n > 1 ? "simulation " + std::to_string(k) + "/" + std::to_string(n) : std::string();
 }
 
-std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal,
+}  // namespace
+
+std::vector<ResponseSensitivity> simulate_responses_at_current_design(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal,
                                             ProgressLine* line, long n_runs) {
   ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()));
   struct Obs : StepObserver {
@@ -120,7 +125,12 @@ std::vector<ResponseSensitivity> run_values(Case& cs, SensitivityCounts& counts,
   return tr.results();
 }
 
-}  // namespace
+
+std::vector<ResponseSensitivity> simulate_responses(Case& cs, const Vec& p, SensitivityCounts& counts,
+                                                    ProgressLine* line) {
+  cs.design->apply(p, cs.model->params());
+  return simulate_responses_at_current_design(cs, counts, nullptr, line, 1);
+}
 
 SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const SensitivityOptions& o) {
   if (!cs.design) throw Error(cs.file, "/design", "sensitivities need a design section (design variables)");
@@ -169,7 +179,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     d.apply(p, params);
     try {
       const long n_runs = 1 + (o.method == Method::kFdCentral ? 2 : 1) * nv;
-      const auto base = run_values(cs, res.counts, &res.primal, o.progress, n_runs);
+      const auto base = simulate_responses_at_current_design(cs, res.counts, &res.primal, o.progress, n_runs);
       res.counts.primal_wall_seconds = res.primal.wall_seconds;
       res.responses = base;
       for (auto& r : res.responses) r.gradient.setZero(static_cast<Eigen::Index>(r.values.size()), nv);
@@ -178,13 +188,13 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
         Vec pp = p;
         pp[i] += h;
         d.apply(pp, params);
-        const auto plus = run_values(cs, res.counts, nullptr, o.progress, n_runs);
+        const auto plus = simulate_responses_at_current_design(cs, res.counts, nullptr, o.progress, n_runs);
         std::vector<ResponseSensitivity> minus;
         if (o.method == Method::kFdCentral) {
           Vec pm = p;
           pm[i] -= h;
           d.apply(pm, params);
-          minus = run_values(cs, res.counts, nullptr, o.progress, n_runs);
+          minus = simulate_responses_at_current_design(cs, res.counts, nullptr, o.progress, n_runs);
         }
         for (size_t r = 0; r < res.responses.size(); ++r) {
           if (plus[r].values.size() != base[r].values.size())
@@ -201,12 +211,13 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     }
     d.apply(p, params);
   } else {
-    if (cs.simulation.newton == GeneralizedAlphaOptions::Newton::kModifiedAcrossSteps &&
+    if (cs.simulation.newton != GeneralizedAlphaOptions::Newton::kFull &&
         o.matrix == SensitivityOptions::Matrix::kLastIteration)
       throw Error(cs.file, "/simulation/newton",
-                  "\"modified_across_steps\" keeps factorizations of earlier steps, which Algorithm 2 cannot "
-                  "back-solve with: use the sensitivity matrix \"converged\" or \"refined\" (--matrix), or another "
-                  "newton option");
+                  std::string("\"") + GeneralizedAlphaOptions::newton_name(cs.simulation.newton) +
+                      "\" keeps factorizations of earlier iterations or steps, which the last-iteration matrix of "
+                      "Algorithm 2 cannot back-solve with: use the sensitivity matrix \"refined\" (the default) or "
+                      "\"converged\" (--matrix), or \"newton\": \"full\"");
     auto dirs = d.apply_with_directions(p, params);
     ResponseTracker tracker(cs, dirs);
     std::unique_ptr<PseudoLoad> load;
@@ -253,8 +264,11 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
       load = std::make_unique<SemiAnalyticalPseudoLoad>(*cs.model, params, std::move(plus), std::move(minus),
                                                         std::move(delta), central, dirs, o.full_residual);
     }
-    DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts,
-                                  o.matrix == SensitivityOptions::Matrix::kRefined ? o.refinement_steps : 0);
+    BackSolveOptions bs;
+    bs.mode = o.matrix == SensitivityOptions::Matrix::kRefined ? BackSolveOptions::Mode::kExact
+                                                               : BackSolveOptions::Mode::kStepFactor;
+    bs.max_refinement = o.refinement_steps;
+    DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts, bs);
     GeneralizedAlphaOptions go = cs.simulation;
     go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
     go.threads = o.threads;
@@ -264,6 +278,12 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
     res.ok = res.primal.ok;
     res.message = res.primal.message;
     res.responses = tracker.results();
+    if (o.matrix == SensitivityOptions::Matrix::kLastIteration && res.counts.predictor_matrix_steps > 0)
+      res.warnings.push_back(
+          "--matrix last: " + std::to_string(res.counts.predictor_matrix_steps) + " of " +
+          std::to_string(res.counts.steps) +
+          " steps converged in one Newton iteration, so their back-solves used the predictor's matrix (q̈ = 0, "
+          "λ = 0): the gradients are not the derivative of the discrete solution (the default --matrix refined is)");
   }
   res.counts.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

@@ -35,13 +35,17 @@ struct SensitivityOptions {
   /// relative: Δp_i = delta · max(|p_i|, 1e-2 (upper_i − lower_i)); absolute: Δp_i = delta.
   double delta = 1e-6;
   bool relative = true;
-  /// Matrix of the back-solves (37): the LU of the step's last Newton iteration (the paper's
-  /// choice, free), a new factorization of S_t at the converged state (exact), or the last LU
-  /// with iterative refinement against S_t assembled at the converged state (exact to
-  /// `refinement_steps` corrections, no new factorization).
+  /// Matrix of the back-solves (37). `refined` (default, exact): S_t at the converged state, by
+  /// iterative refinement with the step's last factorization as preconditioner, or a new
+  /// factorization when that does not contract to round-off (always when the step converged in
+  /// one Newton iteration: its only factorization is then the predictor's, q̈ = 0, λ = 0).
+  /// `converged`: the integrator refactorizes S_t at every converged state (exact, one more
+  /// factorization per step on the integrator's thread). `last`: the factorization of the step's
+  /// last Newton iteration as it is — the paper's Algorithm 2 literally, for comparisons; not the
+  /// derivative of the discrete solution (docs/methods.md, "Which matrix").
   enum class Matrix { kLastIteration, kConverged, kRefined };
-  Matrix matrix = Matrix::kLastIteration;
-  int refinement_steps = 2;
+  Matrix matrix = Matrix::kRefined;
+  int refinement_steps = 6;  ///< `refined`: refinement iterations before a new factorization
   /// Semi-analytical pseudo-loads evaluated on the whole residual (Algorithm 2 literally) instead
   /// of element-locally (same result up to round-off, far cheaper; see direct_observer.hpp).
   bool full_residual = false;
@@ -89,6 +93,11 @@ struct SensitivityCounts {
   long mass_damping_products = 0;      ///< M q̈* + C q̇* block products (direct-analytic)
   long back_solves = 0, back_solve_rhs = 0;
   long sensitivity_matrix_assemblies = 0;  ///< S_t at the converged state (refined)
+  long refinement_solves = 0;              ///< refined: back-solves of the iterative refinement
+  long sensitivity_factorizations = 0;     ///< refined: S_t factorized anew at the converged state
+  /// steps whose Newton iteration took one iteration: their last factorization is the
+  /// predictor's (what `--matrix last` back-solves with there)
+  long predictor_matrix_steps = 0;
   double wall_seconds = 0, primal_wall_seconds = 0;
   nlohmann::json to_json() const;
 };
@@ -96,6 +105,8 @@ struct SensitivityCounts {
 struct SensitivityResult {
   bool ok = true;
   std::string message;
+  /// Conditions the user should know about, e.g. inexact back-solves with `--matrix last`.
+  std::vector<std::string> warnings;
   std::vector<ResponseSensitivity> responses;
   SensitivityCounts counts;
   IntegratorSummary primal;
@@ -105,6 +116,15 @@ struct SensitivityResult {
   /// counterparts of the grid aggregates.
   std::vector<QuadratureResponse> quadratures;
 };
+
+/// Response values of one generalized-α simulation at design p (gradients empty); the case's
+/// model parameters are left at p. Throws NumericalFailure when the simulation fails.
+std::vector<ResponseSensitivity> simulate_responses(Case& cs, const Vec& p, SensitivityCounts& counts,
+                                                    ProgressLine* line = nullptr);
+/// The same at the case's current parameters; `primal` receives the integrator summary.
+std::vector<ResponseSensitivity> simulate_responses_at_current_design(Case& cs, SensitivityCounts& counts,
+                                                                      IntegratorSummary* primal, ProgressLine* line,
+                                                                      long n_runs);
 
 /// Sensitivities at design p (the case's model parameters are left at p).
 SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const SensitivityOptions& o);
