@@ -468,14 +468,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sen->add_option("--delta", delta, "perturbation Δp (semi-analytical) or finite-difference step")->capture_default_str();
   sen->add_flag("--absolute", absolute, "Δp absolute instead of relative to max(|p_i|, 1e-2 (upper - lower))");
-  std::string matrix = "refined";
+  std::string matrix = lsmbs::SensitivityOptions::matrix_name(lsmbs::SensitivityOptions{}.matrix);
   bool full_residual = false;
   sen->add_flag("--full-residual", full_residual,
                 "semi-analytical pseudo-loads from whole-residual evaluations (Algorithm 2 literally) instead of element-local ones");
   sen->add_option("--matrix", matrix,
-                  "matrix of the back-solves: refined (default: S_t at the converged state, exact), converged "
-                  "(refactorized by the integrator, exact), last (the last Newton iteration's, Algorithm 2 literally; "
-                  "not exact where a step converged in one iteration)")->capture_default_str();
+                  "matrix of the back-solves: converged (default: S_t refactorized at the converged state, exact), "
+                  "refined (S_t at the converged state by iterative refinement, exact), last (the last Newton "
+                  "iteration's, Algorithm 2 literally; not exact where a step converged in one iteration)")->capture_default_str();
   sen->add_option("--set", sets, "design variable override name=value (repeatable)");
   sen->add_option("--rtol", rtol, "--method idas, idas-adjoint: IDAS relative tolerance")->capture_default_str();
   sen->add_option("--atol", atol, "--method idas, idas-adjoint: IDAS absolute tolerance in units of the length scale (default: rtol)");
@@ -538,6 +538,8 @@ int main(int argc, char** argv) {
   ben->add_option("-o,--output", out, "output folder (bench.json, summary.json)")->capture_default_str();
   ben->add_option("--methods", bench_methods, "sensitivity methods to time (default: direct-analytic "
                                               "semi-analytical-central; 'none' for none)");
+  ben->add_option("--matrices", bo.matrices, "back-solve matrices timed besides the default for the direct methods "
+                                             "(last, converged, refined; 'none' for none)")->capture_default_str();
   ben->add_option("--repetitions", bo.repetitions, "repetitions of the floor measurements")->capture_default_str()
       ->check(CLI::Range(1, 100000));
   ben->add_option("--threads", bo.threads, "threads of the sensitivity runs (see sensitivity --threads)")
@@ -565,6 +567,16 @@ int main(int argc, char** argv) {
       bo.command_line = joined_args(argc, argv);
       if (!bench_methods.empty()) bo.methods = bench_methods;
       if (bo.methods.size() == 1 && bo.methods[0] == "none") bo.methods.clear();
+      if (bo.matrices.size() == 1 && bo.matrices[0] == "none") bo.matrices.clear();
+      for (const auto& m : bo.methods) {
+        lsmbs::SensitivityOptions::Method mm;
+        if (!lsmbs::SensitivityOptions::parse(m, mm)) throw lsmbs::Error("--methods " + m + ": unknown sensitivity method");
+      }
+      for (const auto& m : bo.matrices) {
+        lsmbs::SensitivityOptions::Matrix mm;
+        if (!lsmbs::SensitivityOptions::parse_matrix(m, mm))
+          throw lsmbs::Error("--matrices " + m + ": expected last, converged or refined");
+      }
       const auto J = lsmbs::run_bench(case_file, bo);
       std::printf("lsmbs bench: step %.3f ms, floor %.3f ms (residual %.3f + matrix %.3f + KLU %.3f): ratio %.2f\n",
                   1e3 * J["primal"]["seconds_per_step"].get<double>(), 1e3 * J["floor_seconds"]["total"].get<double>(),

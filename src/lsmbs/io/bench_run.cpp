@@ -98,18 +98,39 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
                    {"solve", ps.solve / steps}}}};
   nlohmann::json sens = nlohmann::json::object();
   for (const auto& name : o.methods) {
-    Case cm = load_case(file);
-    SensitivityOptions so;
-    SensitivityOptions::parse(name, so.method);
-    so.threads = o.threads;
-    t = now();
-    const auto r = compute_sensitivities(cm, cm.design->initial(), so);
-    const double w = now() - t;
-    sens[name] = {{"wall_seconds", w}, {"over_primal", w / t_primal}, {"ok", r.ok}, {"variables", cm.design->size()}};
+    SensitivityOptions probe;
+    SensitivityOptions::parse(name, probe.method);
+    const bool direct = !probe.is_idas() && probe.method != SensitivityOptions::Method::kFdForward &&
+                        probe.method != SensitivityOptions::Method::kFdCentral;
+    // the default matrix under the method's name; the others (direct methods) as "method/matrix"
+    std::vector<std::string> matrices = {SensitivityOptions::matrix_name(probe.matrix)};
+    if (direct)
+      for (const auto& m : o.matrices)
+        if (m != matrices[0]) matrices.push_back(m);
+    for (const auto& mx : matrices) {
+      Case cm = load_case(file);
+      SensitivityOptions so = probe;
+      SensitivityOptions::parse_matrix(mx, so.matrix);
+      so.threads = o.threads;
+      t = now();
+      const auto r = compute_sensitivities(cm, cm.design->initial(), so);
+      const double w = now() - t;
+      sens[mx == matrices[0] ? name : name + "/" + mx] = {
+          {"wall_seconds", w},
+          {"over_primal", w / t_primal},
+          {"ok", r.ok},
+          {"variables", cm.design->size()},
+          {"matrix", mx},
+          {"factorizations", r.counts.factorizations},
+          {"sensitivity_factorizations", r.counts.sensitivity_factorizations},
+          {"refinement_solves", r.counts.refinement_solves},
+          {"predictor_matrix_steps", r.counts.predictor_matrix_steps},
+          {"steps", r.counts.steps}};
+    }
   }
   J["sensitivities"] = sens;
   J["peak_rss_kb"] = peak_rss_kb();
-  J["options"] = {{"repetitions", o.repetitions}, {"methods", o.methods}, {"threads", o.threads}};
+  J["options"] = {{"repetitions", o.repetitions}, {"methods", o.methods}, {"matrices", o.matrices}, {"threads", o.threads}};
   J["responses"] = nlohmann::json::object();
   write_json_atomic(o.out_dir + "/bench.json", J);
   write_json_atomic(o.out_dir + "/summary.json", J);

@@ -15,6 +15,8 @@ namespace lsmbs {
 struct BenchOptions {
   std::string out_dir;
   std::vector<std::string> methods = {"direct-analytic", "semi-analytical-central"};
+  /// Back-solve matrices timed for the direct methods besides the default (--matrix values)
+  std::vector<std::string> matrices = {"last"};
   int repetitions = 20;
   int threads = 2;  ///< SensitivityOptions::threads of the timed sensitivity runs
   std::string command_line;

@@ -47,7 +47,7 @@ OptimizationSpec parse_optimization(const Case& cs) {
                          "responses the optimizer uses; expected another method");
     s.sensitivity.delta = so->positive("delta", s.sensitivity.delta);
     s.sensitivity.relative = so->one_of("delta_mode", {"relative", "absolute"}, "relative") == "relative";
-    if (!SensitivityOptions::parse_matrix(so->string("matrix", "refined"), s.sensitivity.matrix))
+    if (!SensitivityOptions::parse_matrix(so->string("matrix", SensitivityOptions::matrix_name(SensitivityOptions{}.matrix)), s.sensitivity.matrix))
       so->fail("matrix", "expected last, converged or refined");
     s.sensitivity.threads = so->integer("threads", s.sensitivity.threads, 1);
     if (s.sensitivity.threads > 2) so->fail("threads", "expected 1 or 2");

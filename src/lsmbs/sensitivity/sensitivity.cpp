@@ -216,8 +216,8 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
       throw Error(cs.file, "/simulation/newton",
                   std::string("\"") + GeneralizedAlphaOptions::newton_name(cs.simulation.newton) +
                       "\" keeps factorizations of earlier iterations or steps, which the last-iteration matrix of "
-                      "Algorithm 2 cannot back-solve with: use the sensitivity matrix \"refined\" (the default) or "
-                      "\"converged\" (--matrix), or \"newton\": \"full\"");
+                      "Algorithm 2 cannot back-solve with: use the sensitivity matrix \"converged\" (the default) or "
+                      "\"refined\" (--matrix), or \"newton\": \"full\"");
     auto dirs = d.apply_with_directions(p, params);
     ResponseTracker tracker(cs, dirs);
     std::unique_ptr<PseudoLoad> load;
@@ -283,7 +283,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
           "--matrix last: " + std::to_string(res.counts.predictor_matrix_steps) + " of " +
           std::to_string(res.counts.steps) +
           " steps converged in one Newton iteration, so their back-solves used the predictor's matrix (q̈ = 0, "
-          "λ = 0): the gradients are not the derivative of the discrete solution (the default --matrix refined is)");
+          "λ = 0): the gradients are not the derivative of the discrete solution (the default --matrix converged is)");
   }
   res.counts.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

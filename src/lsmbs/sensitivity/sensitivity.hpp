@@ -35,16 +35,17 @@ struct SensitivityOptions {
   /// relative: Δp_i = delta · max(|p_i|, 1e-2 (upper_i − lower_i)); absolute: Δp_i = delta.
   double delta = 1e-6;
   bool relative = true;
-  /// Matrix of the back-solves (37). `refined` (default, exact): S_t at the converged state, by
-  /// iterative refinement with the step's last factorization as preconditioner, or a new
-  /// factorization when that does not contract to round-off (always when the step converged in
-  /// one Newton iteration: its only factorization is then the predictor's, q̈ = 0, λ = 0).
-  /// `converged`: the integrator refactorizes S_t at every converged state (exact, one more
-  /// factorization per step on the integrator's thread). `last`: the factorization of the step's
-  /// last Newton iteration as it is — the paper's Algorithm 2 literally, for comparisons; not the
-  /// derivative of the discrete solution (docs/methods.md, "Which matrix").
+  /// Matrix of the back-solves (37). `converged` (default, exact): the integrator refactorizes
+  /// S_t at every converged state (one more numeric factorization per step). `refined` (exact):
+  /// S_t assembled at the converged state, solved by iterative refinement with the step's last
+  /// factorization as preconditioner, or by a new factorization on the sensitivity thread when
+  /// that does not contract to round-off (cheaper only with few variables). `last`: the
+  /// factorization of the step's last Newton iteration as it is — the paper's Algorithm 2
+  /// literally, for comparisons; where a step converged in one Newton iteration it is the
+  /// predictor's (q̈ = 0, λ = 0), and the gradient is not the derivative of the discrete solution
+  /// (docs/methods.md, "Which matrix").
   enum class Matrix { kLastIteration, kConverged, kRefined };
-  Matrix matrix = Matrix::kRefined;
+  Matrix matrix = Matrix::kConverged;
   int refinement_steps = 6;  ///< `refined`: refinement iterations before a new factorization
   /// Semi-analytical pseudo-loads evaluated on the whole residual (Algorithm 2 literally) instead
   /// of element-locally (same result up to round-off, far cheaper; see direct_observer.hpp).
