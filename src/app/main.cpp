@@ -218,9 +218,19 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   if (checked) S["gradient_check"] = checked->to_json(*check);
   for (const auto& w : res.warnings) std::fprintf(stderr, "lsmbs sensitivity: warning: %s\n", w.c_str());
   S["wall_seconds"] = res.counts.wall_seconds;
-  S["responses"] = responses;
-  S["gradients"] = grads;
-  if (!res.quadratures.empty()) {
+  if (res.ok) {
+    S["responses"] = responses;
+    S["gradients"] = grads;
+  } else {
+    // a failed run's aggregates cover only the steps before the failure: not reported as the
+    // responses (null), but apart, under a name that says so
+    nlohmann::json nulls = nlohmann::json::object();
+    for (const auto& [name, v] : responses.items()) nulls[name] = nullptr;
+    S["responses"] = nulls;
+    S["gradients"] = nulls;
+    S["partial_responses_until_failure"] = responses;
+  }
+  if (!res.quadratures.empty() && res.ok) {
     std::vector<std::string> names;
     for (const auto& v : d.variables) names.push_back(v.name);
     S["quadratures"] = lsmbs::ResponseQuadrature::to_json(res.quadratures, names);
@@ -242,7 +252,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
       }
       csv += "\n";
     }
-    lsmbs::write_file_atomic(out + "/gradients.csv", csv);
+    if (res.ok) lsmbs::write_file_atomic(out + "/gradients.csv", csv);  // a failed run has no gradients
   }
   lsmbs::write_json_atomic(out + "/summary.json", S);
   if (!quiet) {
@@ -250,6 +260,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
                 method.c_str(), res.ok ? "complete" : "FAILED", res.counts.simulations, res.counts.steps,
                 res.counts.factorizations, res.counts.back_solves, res.counts.back_solve_rhs, res.counts.wall_seconds);
     for (const auto& rs : res.responses) {
+      if (!res.ok) break;  // aggregates of a failed run are not responses
       if (!rs.times.empty()) {
         std::printf("  %-24s per-step, %zu values\n", rs.name.c_str(), rs.values.size());
         continue;

@@ -132,6 +132,22 @@ grep -q "warning: --matrix last:" "$tmp/err_last.txt" || fail "no warning for --
 python3 -c "
 import json; s=json.load(open('$tmp/sens_last/summary.json'))
 assert s['counts']['predictor_matrix_steps'] > 0 and len(s['warnings']) == 1, s['counts']" || fail "last: counts"
+# A failed run reports no responses (null) and writes no gradients.csv; what it aggregated before
+# the failure is kept apart.
+cat > "$tmp/fails.json" <<'JSON'
+{"bodies":[{"name":"bob","type":"rigid","position":[1,0],"mass":1,"inertia":0.1}],
+ "joints":[{"name":"pin","type":"revolute","a":{"body":"bob","at":[-1,0]},"b":"ground"}],
+ "forces":[{"name":"f","type":"point_force","point":{"body":"bob"},"force":[0,1e30]}],
+ "simulation":{"t_end":0.5,"h":0.01,"max_halvings":1},
+ "design":{"variables":[{"name":"m","initial":1,"lower":0.5,"upper":2}],"parameters":[{"parameter":"bob.mass","variable":"m"}]},
+ "output":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"fa","measure":"a","aggregate":"final"}]}}
+JSON
+"$exe" sensitivity "$tmp/fails.json" -o "$tmp/sens_fail" -q 2> /dev/null; rc=$?
+[ $rc -eq 1 ] || fail "failing sensitivity returned $rc"
+[ ! -e "$tmp/sens_fail/gradients.csv" ] || fail "a failed run wrote gradients.csv"
+python3 -c "
+import json; s=json.load(open('$tmp/sens_fail/summary.json'))
+assert s['status'] == 'partial' and s['responses'] == {'fa': None} and 'partial_responses_until_failure' in s, s" || fail "failed run summary"
 "$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
 [ $rc -eq 2 ] || fail "unknown method returned $rc"
 grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(cat "$tmp/err4.txt")"
