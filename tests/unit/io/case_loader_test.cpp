@@ -75,6 +75,7 @@ INSTANTIATE_TEST_SUITE_P(
                  "rigid body 'bob' has no mass and no joint"},
         BadInput{"no bodies", R"([{"op":"replace","path":"/bodies","value":[]}])", "/bodies: expected at least one body"},
         BadInput{"unknown joint type", R"([{"op":"replace","path":"/joints/0/type","value":"hinge"}])", "/joints/0/type: expected one of"},
+        BadInput{"t_end not a multiple of h", R"([{"op":"replace","path":"/simulation/h","value":0.03}])", "/simulation/h: t_end = "},
         BadInput{"unknown ordering", R"([{"op":"add","path":"/simulation/ordering","value":"metis"}])", "/simulation/ordering: expected one of \"amd\", \"nested_dissection\""},
         BadInput{"negative thickness", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":-0.001}}])",
                  "/bodies/1/thickness: expected a positive number"},
