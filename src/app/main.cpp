@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -46,10 +47,12 @@ std::string joined_args(int argc, char** argv) {
 }
 
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets);
+void check_idas_tolerances(double rtol, double atol);
 
 int simulate(const std::string& case_file, const std::string& out, const std::vector<std::string>& sets, bool quiet,
              bool verbose, const std::string& integrator, double rtol, double atol, int max_order,
              const std::string& error_test, const std::string& cmdline) {
+  check_idas_tolerances(rtol, atol);
   lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
   lsmbs::RunOptions ro;
   if (!sets.empty()) {
@@ -102,12 +105,43 @@ std::pair<std::string, double> parse_set(const std::string& s) {
   }
 }
 
+// The output folder (-o) must be a folder that exists or can be created, and be writable: checked
+// before anything runs, without creating it (nothing is written for invalid input).
+void check_output_folder(const std::string& out) {
+  namespace fs = std::filesystem;
+  if (out.empty()) throw lsmbs::Error("-o \"\": expected an output folder name");
+  std::error_code ec;
+  fs::path p = fs::absolute(out, ec);
+  if (ec) throw lsmbs::Error("-o " + out + ": not a usable path (" + ec.message() + ")");
+  if (fs::exists(p, ec) && !fs::is_directory(p, ec))
+    throw lsmbs::Error("-o " + out + ": exists and is not a folder");
+  // the nearest existing ancestor must be a writable folder
+  fs::path q = p;
+  while (!fs::exists(q, ec) && q.has_parent_path() && q.parent_path() != q) q = q.parent_path();
+  if (!fs::is_directory(q, ec)) throw lsmbs::Error("-o " + out + ": " + q.string() + " is not a folder");
+  if (::access(q.c_str(), W_OK) != 0 || q.string().rfind("/proc", 0) == 0 || q.string().rfind("/sys", 0) == 0)
+    throw lsmbs::Error("-o " + out + ": cannot create or write in " + q.string());
+}
+
+// IDAS tolerances from the command line: checked before anything runs
+void check_idas_tolerances(double rtol, double atol) {
+  if (!(rtol > 0) || !std::isfinite(rtol) || rtol >= 1)
+    throw lsmbs::Error("--rtol " + std::to_string(rtol) + ": expected a relative tolerance in (0, 1)");
+  if (!(atol >= 0) || !std::isfinite(atol))
+    throw lsmbs::Error("--atol " + std::to_string(atol) + ": expected a non-negative absolute tolerance (0: rtol)");
+}
+
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets) {
   lsmbs::Vec p = cs.design->initial();
   for (const auto& s : sets) {
     const auto [name, value] = parse_set(s);
     const int k = cs.design->variable_index(name);
     if (k < 0) throw lsmbs::Error("--set " + s + ": unknown design variable '" + name + "'");
+    const auto& v = cs.design->variables[k];
+    if (!(value >= v.lower && value <= v.upper))
+      throw lsmbs::Error("--set " + s + ": outside the bounds [" + std::to_string(v.lower) + ", " +
+                         std::to_string(v.upper) + "] of design variable '" + name +
+                         "' (the case validates its features over these bounds; widen them in the case to go further)");
     p[k] = value;
   }
   return p;
@@ -156,7 +190,8 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     for (const auto& n : lsmbs::SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
     throw lsmbs::Error("--method " + method + ": expected one of " + all);
   }
-  if (!(delta > 0)) throw lsmbs::Error("--delta: expected a positive step");
+  if (!(delta > 0) || !std::isfinite(delta)) throw lsmbs::Error("--delta: expected a positive step");
+  check_idas_tolerances(rtol, atol);
   if (!lsmbs::SensitivityOptions::parse_matrix(matrix, so.matrix))
     throw lsmbs::Error("--matrix " + matrix + ": expected last, converged or refined");
   so.delta = delta;
@@ -270,6 +305,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
         std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), rs.gradient(0, i));
     }
     for (const auto& q : res.quadratures) {
+      if (!res.ok) break;
       std::printf("  %-24s %.10g (IDAS quadrature on [%g, %g])\n", q.name.c_str(), q.value, q.t0, q.t1);
       for (int i = 0; i < d.size() && i < q.gradient.size(); ++i)
         std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), q.gradient[i]);
@@ -567,6 +603,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
+    if (*sim || *geo || *opt || *ben || *ver || *sen) check_output_folder(out);
     if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, error_test,
                                 joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));
@@ -620,6 +657,9 @@ int main(int argc, char** argv) {
   } catch (const lsmbs::NumericalFailure& e) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", e.what());
     return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::fprintf(stderr, "lsmbs: error: cannot write the output (-o %s): %s\n", out.c_str(), e.code().message().c_str());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lsmbs: internal error: %s\n", e.what());
     return 1;

@@ -57,6 +57,7 @@ python3 -c "import json; assert json.load(open('$tmp/fail_out/summary.json'))['s
 python3 -c "
 import json
 c=json.load(open('$src/data/robot_arm/robot_arm.json')); c['simulation']['t_end']=0.05; c['output']['vtu_stride']=5
+c['output']['responses']=[r for r in c['output']['responses'] if 'window' not in r]  # windows after 0.05 s are refused
 json.dump(c,open('$tmp/arm.json','w'))"
 "$exe" simulate "$tmp/arm.json" -o "$tmp/arm" -q || fail "robot arm short run"
 python3 - "$tmp/arm" <<'PY' || fail "VTU/PVD"
@@ -148,6 +149,21 @@ JSON
 python3 -c "
 import json; s=json.load(open('$tmp/sens_fail/summary.json'))
 assert s['status'] == 'partial' and s['responses'] == {'fa': None} and 'partial_responses_until_failure' in s, s" || fail "failed run summary"
+# Bad command-line values and pathological files: exit 2, a message naming the option or file.
+"$exe" sensitivity "$spring" --method idas --rtol nan -o "$tmp/bad1" 2> "$tmp/e1.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "^lsmbs: error: --rtol nan" "$tmp/e1.txt" && [ ! -e "$tmp/bad1" ] || fail "--rtol nan: rc $rc $(cat "$tmp/e1.txt")"
+"$exe" simulate "$spring" --rtol -1 --integrator idas -o "$tmp/bad2" 2> "$tmp/e2.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q -- "--rtol" "$tmp/e2.txt" || fail "--rtol -1: rc $rc $(cat "$tmp/e2.txt")"
+"$exe" simulate "$spring" --set k=-3 -o "$tmp/bad3" 2> "$tmp/e3.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "outside the bounds" "$tmp/e3.txt" && [ ! -e "$tmp/bad3" ] || fail "--set outside bounds: rc $rc"
+touch "$tmp/a_file"
+for o in "$tmp/a_file" /proc/x ""; do  # unusable output folders: exit 2 with a plain message
+  "$exe" simulate "$spring" -o "$o" 2> "$tmp/eo.txt"; rc=$?
+  [ $rc -eq 2 ] && grep -q "^lsmbs: error: -o" "$tmp/eo.txt" || fail "-o '$o': rc $rc $(cat "$tmp/eo.txt")"
+done
+python3 -c "print('[' * 200000 + ']' * 200000)" > "$tmp/deep.json"
+"$exe" simulate "$tmp/deep.json" -o "$tmp/bad4" 2> "$tmp/e4.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "nested deeper than" "$tmp/e4.txt" || fail "deeply nested JSON: rc $rc $(cat "$tmp/e4.txt")"
 "$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
 [ $rc -eq 2 ] || fail "unknown method returned $rc"
 grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(cat "$tmp/err4.txt")"

@@ -226,7 +226,7 @@ struct Loader {
       if (!ns->is_object()) ns->fail("expected an object {name: selector}");
       for (const auto& key : ns->keys()) {
         const JsonReader s = ns->child(key);
-        const double tol = s.number("tolerance", -1.0);
+        const double tol = s.has("tolerance") ? s.positive("tolerance") : -1.0;  // -1: the mesh's default
         std::vector<int> sel;
         if (s.has("line_x")) sel = b.mesh.nodes_on_line_x(s.number("line_x"), tol);
         else if (s.has("line_y")) sel = b.mesh.nodes_on_line_y(s.number("line_y"), tol);
@@ -781,6 +781,16 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
       for (int r = 0; r < cs.model->constraints()[k]->size(); ++r) rows.push_back(cs.model->constraint_offset(static_cast<int>(k)) + r);
     cs.joint_rows[jn] = rows;
   }
+  // every response window must contain a time step of the run [0, t_end]
+  for (size_t i = 0; i < cs.responses.size(); ++i) {
+    const auto& r = cs.responses[i];
+    const double h = cs.simulation.h, a = std::max(r.t0, 0.0), b = std::min(r.t1, cs.simulation.t_end);
+    const double k_first = std::ceil(a / h - 1e-9), k_last = std::floor(b / h + 1e-9);
+    if (b < a || k_last < k_first)
+      throw Error(file_label, "/output/responses/" + std::to_string(i) + (r.t0 > -1e299 || r.t1 < 1e299 ? "/window" : ""),
+                  "the window (" + r.window_text + ") contains no time step of the run [0, " +
+                      std::to_string(cs.simulation.t_end) + "] s with h = " + std::to_string(h));
+  }
   if (cs.design) cs.design->apply(cs.design->initial(), cs.model->params());
   cs.initial.t = 0;
   cs.initial.q = cs.model->initial_positions();
@@ -797,6 +807,28 @@ Case load_case(const std::string& path) {
   std::stringstream ss;
   ss << f.rdbuf();
   const std::string text = ss.str();
+  // nlohmann::json parses recursively: bound the nesting before it can exhaust the stack
+  {
+    constexpr int kMaxDepth = 256;
+    int depth = 0;
+    bool in_string = false, escaped = false;
+    for (size_t i = 0; i < text.size(); ++i) {
+      const char ch = text[i];
+      if (in_string) {
+        if (escaped) escaped = false;
+        else if (ch == '\\') escaped = true;
+        else if (ch == '"') in_string = false;
+      } else if (ch == '"') {
+        in_string = true;
+      } else if (ch == '[' || ch == '{') {
+        if (++depth > kMaxDepth)
+          throw Error(path, "byte " + std::to_string(i),
+                      "invalid case: JSON nested deeper than " + std::to_string(kMaxDepth) + " levels");
+      } else if (ch == ']' || ch == '}') {
+        --depth;
+      }
+    }
+  }
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);

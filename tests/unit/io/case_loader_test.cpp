@@ -34,6 +34,23 @@ std::string error_of(const json& j) {
 
 }  // namespace
 
+TEST(CaseLoader, ConstraintForceMeasureInAnyOrderLoadsAndDuplicatesAreRefused) {
+  // a constraint_force measure is a placeholder until the model is final: measures after it
+  // used to dereference it (segfault) while checking for duplicate names
+  for (int first : {0, 1}) {
+    json j = minimal();
+    json cf = {{"name", "pin_force"}, {"type", "constraint_force"}, {"joint", "pin"}};
+    json ang = {{"name", "theta"}, {"type", "angle"}, {"body", "bob"}};
+    json pos = {{"name", "p"}, {"type", "position"}, {"point", {{"body", "bob"}}}};
+    j["output"]["measures"] = first == 0 ? json::array({cf, ang, pos}) : json::array({ang, cf, pos});
+    const Case cs = test::make_case(j);
+    ASSERT_EQ(cs.measures.size(), 3u);
+    for (const auto& m : cs.measures) EXPECT_TRUE(m != nullptr);
+    j["output"]["measures"].push_back({{"name", "pin_force"}, {"type", "angle"}, {"body", "bob"}});
+    EXPECT_NE(error_of(j).find("duplicate measure name 'pin_force'"), std::string::npos) << error_of(j);
+  }
+}
+
 TEST(CaseLoader, MinimalCaseLoads) {
   const Case cs = test::make_case(minimal());
   EXPECT_EQ(cs.model->nq(), 3);
@@ -76,6 +93,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"no bodies", R"([{"op":"replace","path":"/bodies","value":[]}])", "/bodies: expected at least one body"},
         BadInput{"unknown joint type", R"([{"op":"replace","path":"/joints/0/type","value":"hinge"}])", "/joints/0/type: expected one of"},
         BadInput{"t_end not a multiple of h", R"([{"op":"replace","path":"/simulation/h","value":0.03}])", "/simulation/h: t_end = "},
+        BadInput{"response window after the run", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"r","measure":"a","aggregate":"average","window":{"t0":0.5,"t1":0.6}}]}}])",
+                 "/output/responses/0/window: the window"},
+        BadInput{"response window between two steps", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"r","measure":"a","aggregate":"max","window":{"t0":0.051,"t1":0.059}}]}}])",
+                 "contains no time step"},
+        BadInput{"negative node-set tolerance", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001,"node_sets":{"tip":{"line_x":1,"tolerance":-1}}}}])",
+                 "/bodies/1/node_sets/tip/tolerance: expected a positive number"},
         BadInput{"unknown ordering", R"([{"op":"add","path":"/simulation/ordering","value":"metis"}])", "/simulation/ordering: expected one of \"amd\", \"nested_dissection\""},
         BadInput{"negative thickness", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":-0.001}}])",
                  "/bodies/1/thickness: expected a positive number"},
