@@ -25,6 +25,7 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/io/plot.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
@@ -330,18 +331,19 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
 // Convergence plot (objective and maximum constraint violation per evaluation) with gnuplot,
 // when it is installed; returns false otherwise.
 bool plot_history(const std::string& out) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return false;
   const std::string script = out + "/convergence.gp";
   {
     std::ofstream g(script);
-    g << "set terminal pngcairo size 900,500 noenhanced\nset output '" << out << "/convergence.png'\n"
+    g << "set terminal pngcairo size 900,500 noenhanced\nset output " << lsmbs::gnuplot_quote(out + "/convergence.png") << "\n"
       << "set datafile separator ','\nset key autotitle columnhead\nset xlabel 'evaluation'\n"
       << "set ylabel 'objective'\nset y2label 'max. relative constraint violation'\nset y2tics\nset grid\n"
-      << "plot '" << out << "/history.csv' using 1:2 with linespoints title 'objective', "
+      << "plot " << lsmbs::gnuplot_quote(out + "/history.csv") << " using 1:2 with linespoints title 'objective', "
       << "'' using 1:3 axes x1y2 with linespoints title 'max constraint violation'\n";
   }
-  const bool ok = std::system(("gnuplot '" + script + "' >/dev/null 2>&1").c_str()) == 0;
+  const bool ok = lsmbs::run_gnuplot(script);
   std::filesystem::remove(script);
+  std::error_code ec;
+  if (!ok) std::filesystem::remove(out + "/convergence.png", ec);  // no 0-byte picture
   return ok;
 }
 

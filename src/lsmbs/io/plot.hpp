@@ -25,4 +25,10 @@ struct PlotSpec {
 
 bool plot(const PlotSpec& spec);
 
+/// Runs `gnuplot SCRIPT` without a shell (any path is safe), output discarded; false when gnuplot
+/// is missing or fails.
+bool run_gnuplot(const std::string& script);
+/// A gnuplot double-quoted string literal of s (backslashes and quotes escaped).
+std::string gnuplot_quote(const std::string& s);
+
 }  // namespace lsmbs
