@@ -197,9 +197,24 @@ a, b = (json.load(open(f)) for f in sys.argv[1:3])
 assert a["final"]["design"] == b["final"]["design"], (a["final"]["design"], b["final"]["design"])
 assert a["final"]["objective"] == b["final"]["objective"]
 assert b["counts"]["simulations_this_run"] < a["counts"]["simulations_this_run"]
+assert a["initial"] == b["initial"], (a["initial"], b["initial"])
+def rows(f):  # history.csv without the wall_seconds column (timing differs between runs)
+    lines = [l.split(",") for l in open(f.replace("summary.json", "history.csv")).read().splitlines()]
+    i = lines[0].index("wall_seconds")
+    return [l[:i] + l[i + 1:] for l in lines]
+assert rows(sys.argv[1]) == rows(sys.argv[2]), "the resumed run's history.csv differs from the uninterrupted run's"
 gc = a["gradient_check"]  # optimize checks the gradient at the initial design by default
 assert gc["verdict"] == "pass" and set(gc["responses"]) == {"plate_mass", "average_tip_deviation"}, gc
 print("kill/resume ok:", b["counts"], "gradient check", gc["worst"], gc["worst_response"])
+PY
+# Resuming a finished run replays it (no simulation) and leaves the same complete results.
+"$exe" optimize "$tmp/opt.json" -o "$tmp/opt_killed" --resume -q || fail "resume of a finished run"
+python3 - "$tmp/opt_full/summary.json" "$tmp/opt_killed/summary.json" <<'PY' || fail "resume of a finished run"
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+assert b["status"] == "complete" and b["final"] == a["final"] and b["counts"]["simulations_this_run"] == 0, b["counts"]
+ra, rb = (open(f.replace("summary.json", "history.csv")).read().splitlines() for f in sys.argv[1:3])
+assert len(ra) == len(rb) and [l.split(",")[:4] for l in ra] == [l.split(",")[:4] for l in rb]
 PY
 # IDAS sensitivities from the command line: statistics, quadratures with gradients, options as run.
 "$exe" sensitivity "$spring" --method idas --rtol 1e-8 -o "$tmp/sens_idas" -q || fail "sensitivity --method idas"

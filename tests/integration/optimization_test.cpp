@@ -81,6 +81,12 @@ TEST(Optimization, CoarseRobotArmConvergesToAFeasibleKktPointAndResumesToTheSame
   ASSERT_EQ(resumed.p.size(), full.p.size());
   for (Eigen::Index i = 0; i < full.p.size(); ++i) EXPECT_EQ(resumed.p[i], full.p[i]) << "variable " << i;
   EXPECT_EQ(resumed.final.objective, full.final.objective);
+  // the resumed run's history is the uninterrupted run's (replayed points included, numbered from 1)
+  ASSERT_EQ(resumed.history.size(), full.history.size());
+  for (size_t k = 0; k < full.history.size(); ++k) {
+    EXPECT_EQ(resumed.history[k].p, full.history[k].p) << "evaluation " << k + 1;
+    EXPECT_EQ(resumed.history[k].objective, full.history[k].objective) << "evaluation " << k + 1;
+  }
 }
 
 TEST(Optimization, ResumeRefusesACheckpointOfAnotherCase) {
@@ -177,4 +183,11 @@ TEST(Optimization, CoarseOneHoleRodReachesTheElongationBoundFoundByBisection) {
   EXPECT_EQ(resumed.simulations, full.evaluations - 2);
   EXPECT_EQ(resumed.p[0], full.p[0]);
   EXPECT_EQ(resumed.final.objective, full.final.objective);
+  ASSERT_EQ(resumed.history.size(), full.history.size());
+  for (size_t k = 0; k < full.history.size(); ++k) EXPECT_EQ(resumed.history[k].p, full.history[k].p);
+  // resuming a finished run replays it without a simulation and ends on the same design
+  const auto again = run_rod(coarse_rod(), dir + "/resumed", true, -1, nullptr);
+  EXPECT_EQ(again.simulations, 0);
+  EXPECT_EQ(again.p[0], full.p[0]);
+  EXPECT_EQ(again.history.size(), full.history.size());
 }

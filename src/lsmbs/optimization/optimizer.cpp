@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
@@ -23,7 +24,8 @@ struct Context {
   nlopt_opt opt = nullptr;
   Vec lower, range;
   double f0 = 1;
-  std::vector<Evaluation> history;
+  std::vector<Evaluation> history;  ///< every distinct point of this optimization, replayed ones too
+  std::set<std::vector<double>> seen;
   long new_sims = 0;
   bool interrupted = false;
   bool stop = false;  ///< set when the run must end (interrupted, failed simulation)
@@ -38,9 +40,11 @@ struct Context {
     const Vec p = to_p(x);
     const long before = prob.simulations();
     const std::vector<double> key(p.data(), p.data() + p.size());
-    const bool known = prob.cache().count(key) > 0;
+    // A point the optimizer has not visited in this run, whether simulated now or replayed from a
+    // checkpoint: the history of a resumed run is the uninterrupted run's, from evaluation 1.
+    const bool known = !seen.insert(key).second;
     const Evaluation& e = prob.evaluate(p);
-    if (!known) {  // a new point (simulated now, or replayed from a checkpoint)
+    if (!known) {
       history.push_back(e);
       if (prob.simulations() > before) {
         ++new_sims;
