@@ -399,14 +399,19 @@ struct Loader {
 
   // ---------------------------------------------------------------- measures and responses
   void measure(const JsonReader& r) {
-    const std::string type = r.one_of("type", {"position", "angle", "distance", "elongation", "path_deviation",
-                                               "constraint_force", "kinetic_energy", "strain_energy", "mass"});
+    const std::string type =
+        r.one_of("type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation", "path_deviation",
+                          "constraint_force", "kinetic_energy", "strain_energy", "mass"});
     const std::string name = r.string("name");
+    size_t pending = 0;  // constraint-force measures are null until finalize(): their names are in pending_forces
     for (const auto& m : cs.measures)
-      if (m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
+      if ((m ? m->name() : pending_forces[pending++].first) == name)
+        r.fail("name", "duplicate measure name '" + name + "'");
     std::unique_ptr<Measure> m;
     if (type == "position") m = std::make_unique<PositionMeasure>(name, point(r.child("point")));
+    else if (type == "velocity") m = std::make_unique<VelocityMeasure>(name, point(r.child("point")));
     else if (type == "angle") m = std::make_unique<AngleMeasure>(name, rigid(r, "body").dof0 + 2);
+    else if (type == "angular_velocity") m = std::make_unique<AngularVelocityMeasure>(name, rigid(r, "body").dof0 + 2);
     else if (type == "distance" || type == "elongation") {
       const PointRef a = point(r.child("a")), b = point(r.child("b"));
       const double ref = type == "elongation" ? (initial_position(b) - initial_position(a)).norm() : 0.0;

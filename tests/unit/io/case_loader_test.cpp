@@ -83,7 +83,15 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"unknown node set", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/joints/-","value":{"type":"clamp","flexible":"p","node_set":"middle"}}])",
                  "/joints/1/node_set: body 'p' has no node set 'middle'"},
         BadInput{"Poisson ratio", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.5,"rho":1000},"thickness":0.001}}])",
-                 "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"}),
+                 "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"},
+        BadInput{"angular velocity of a flexible body", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/output","value":{"measures":[{"name":"w","type":"angular_velocity","body":"p"}]}}])",
+                 "/output/measures/0/body: 'p' is a flexible body; a rigid body is expected here"},
+        BadInput{"velocity of a point on an unknown body", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","point":{"body":"rob"}}]}}])",
+                 "/output/measures/0/point/body: unknown body 'rob'"},
+        BadInput{"velocity measure with a misspelt key", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","piont":{"body":"bob"}}]}}])",
+                 "/output/measures/0: missing required key 'point'"},
+        BadInput{"duplicate measure name after a constraint force", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"f","type":"constraint_force","joint":"pin"},{"name":"f","type":"angular_velocity","body":"bob"}]}}])",
+                 "/output/measures/1/name: duplicate measure name 'f'"}),
     [](const auto& info) {
       std::string s = info.param.label;
       for (char& c : s)
