@@ -69,7 +69,11 @@ struct Loader {
     const double xs = r.number("x_scale", 1.0), ys = r.number("y_scale", 1.0);
     if (r.has("file")) {
       const std::string f = resolve(r.string("file"));
-      return Table1D::read_csv(f, interp, period, xs, ys);
+      try {
+        return Table1D::read_csv(f, interp, period, xs, ys);
+      } catch (const Error& e) {  // name the case's JSON path too (the message names the table file)
+        r.fail("file", e.what());
+      }
     }
     std::vector<double> x, y;
     for (const auto& p : r.items("points", true)) {

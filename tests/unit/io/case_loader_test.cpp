@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -108,6 +109,10 @@ INSTANTIATE_TEST_SUITE_P(
                  "/forces/0/stiffness: expected a non-negative number, got -1"},
         BadInput{"rotational spring with a misspelt key", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":1,"free_angel":0}]}])",
                  "/forces/0/free_angel: unknown key"},
+        BadInput{"periodic table whose ends differ", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[2,0.5]],"period":2}}]}])",
+                 "/forces/0/law/points: table: a periodic table must end with its first value: s(x0) = 0 but s(x0 + period) = 0.5"},
+        BadInput{"periodic table longer than its period", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[3,0]],"period":2}}]}])",
+                 "/forces/0/law/points: table: the points span 3, more than the period 2"},
         BadInput{"angular velocity of a flexible body", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/output","value":{"measures":[{"name":"w","type":"angular_velocity","body":"p"}]}}])",
                  "/output/measures/0/body: 'p' is a flexible body; a rigid body is expected here"},
         BadInput{"velocity of a point on an unknown body", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","point":{"body":"rob"}}]}}])",
@@ -210,4 +215,20 @@ TEST(CaseLoader, TorqueAndRotationalSpringParameters) {
   const int th = m.find_rigid("bob")->dof0 + 2, th_arm = m.find_rigid("arm")->dof0 + 2;
   EXPECT_NEAR(R[th], -(2 * 0.3 * 0.3 / (2 * 0.5)), 1e-15) << "the springs are at their free angles, bob has no load";
   EXPECT_NEAR(R[th_arm], 3 * 0.5 + 7 * (0.25 + 0.5), 1e-14);
+}
+
+TEST(CaseLoader, PeriodicTableFileErrorNamesTheJsonPathAndTheFile) {
+  const std::string f = testing::TempDir() + "bad_period.csv";
+  {
+    std::FILE* out = std::fopen(f.c_str(), "w");
+    std::fputs("0, 1\n1, 2\n2, 1.5\n", out);
+    std::fclose(out);
+  }
+  json j = minimal();
+  j["forces"] = json::array({{{"type", "torque"}, {"body", "bob"},
+                              {"law", {{"type", "table"}, {"file", f}, {"period", 2}}}}});
+  const std::string msg = error_of(j);
+  EXPECT_NE(msg.find("<test>: /forces/0/law/file: " + f + ": table: a periodic table must end with its first value"),
+            std::string::npos)
+      << msg;
 }
