@@ -30,6 +30,19 @@ Eigen::Matrix3d plane_stress(double E, double nu, bool normal, bool shear) {
   return D;
 }
 
+// ∂D/∂ν of plane_stress: c' = dc/dν = 2Eν/(1 − ν²)², ∂(cν)/∂ν = c'ν + c, and the shear modulus
+// c(1 − ν)/2 = E/(2(1 + ν)) has derivative −E/(2(1 + ν)²).
+Eigen::Matrix3d plane_stress_dnu(double E, double nu, bool normal, bool shear) {
+  Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
+  const double c = E / (1 - nu * nu), dc = 2 * E * nu / ((1 - nu * nu) * (1 - nu * nu));
+  if (normal) {
+    D(0, 0) = D(1, 1) = dc;
+    D(0, 1) = D(1, 0) = dc * nu + c;
+  }
+  if (shear) D(2, 2) = -E / (2 * (1 + nu) * (1 + nu));
+  return D;
+}
+
 }  // namespace
 
 QuadElement::QuadElement(const std::array<Vec2, 4>& X, QuadIntegration integration)
@@ -107,6 +120,14 @@ void QuadElement::internal_force(const Vec8& x, double E, double nu, double t, V
   const Eigen::Matrix3d D = plane_stress(E, nu, true, !sri);
   for (const auto& p : gauss_) add_point(p.G, t * p.w, x, D, f, K);
   if (sri) add_point(centre_.G, t * centre_.w, x, plane_stress(E, nu, false, true), f, K);
+}
+
+void QuadElement::internal_force_nu_derivative(const Vec8& x, double E, double nu, double t, Vec8& df) const {
+  df.setZero();
+  const bool sri = integration_ == QuadIntegration::kSelectiveShear;
+  const Eigen::Matrix3d D = plane_stress_dnu(E, nu, true, !sri);
+  for (const auto& p : gauss_) add_point<Vec8, Mat8>(p.G, t * p.w, x, D, df, nullptr);
+  if (sri) add_point<Vec8, Mat8>(centre_.G, t * centre_.w, x, plane_stress_dnu(E, nu, false, true), df, nullptr);
 }
 
 double QuadElement::strain_energy(const Vec8& x, double E, double nu, double t) const {

@@ -65,7 +65,6 @@ struct IdasGGL::Impl {
   std::vector<double> p;  // the array IDAS perturbs
   std::map<std::vector<double>, ModelParams> perturbed;
   std::vector<ParamDirection> dirs;
-  ModelParams scratch;
   // workspace
   Vec R, phi_t, gamma;
   std::vector<double> vals;
@@ -74,8 +73,7 @@ struct IdasGGL::Impl {
   Mat qs_dq, qs_dv, qs_da, qs_dl, qs_dg;
 
   Impl(const Model& model, const ModelParams& params, IdasOptions opt)
-      : m(model), nominal(params), o(opt), nq(model.nq()), nc(model.nc()), N(2 * model.nq() + 2 * model.nc()),
-        scratch(params) {}
+      : m(model), nominal(params), o(opt), nq(model.nq()), nc(model.nc()), N(2 * model.nq() + 2 * model.nc()) {}
 
   const ModelParams& params() {
     if (!design) return nominal;
@@ -201,7 +199,7 @@ struct IdasGGL::Impl {
       out.head(nq) += s1 * yps.head(nq);
       out.segment(nq, nq) += M * yps.segment(nq, nq);
       (void)C;
-      m.residual_param_derivative(s, nominal, dirs[i], scratch, dr);
+      m.residual_param_derivative(s, nominal, dirs[i], dr);
       out.segment(nq, nq) += dr.head(nq);
     }
     return 0;
@@ -273,7 +271,7 @@ struct IdasGGL::Impl {
     if (!adjoint_integrand(k, s)) return -1;
     const Eigen::Map<const Vec> xv(yB + nq, nq);
     for (size_t i = 0; i < dirs.size(); ++i) {
-      m.residual_param_derivative(s, nominal, dirs[i], scratch, adj_dr);  // F_p: only F2 depends on p
+      m.residual_param_derivative(s, nominal, dirs[i], adj_dr);  // F_p: only F2 depends on p
       qB[i] = xv.dot(adj_dr.head(nq)) - adj_gp[static_cast<Eigen::Index>(i)];
     }
     return 0;
@@ -336,7 +334,7 @@ struct IdasGGL::Impl {
     // gradient scale ~ ξ_v × |F_p| × (t_b − t0)
     double fp = 0;
     for (const auto& d : dirs) {
-      m.residual_param_derivative(s, nominal, d, scratch, adj_dr);
+      m.residual_param_derivative(s, nominal, d, adj_dr);
       fp = std::max(fp, adj_dr.head(nq).lpNorm<Eigen::Infinity>());
     }
     scale[4] = sv * (fp > 0 ? fp : 1.0) * W;
@@ -651,7 +649,7 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
     Mat B(m.n(), nv);
     Vec col;
     for (int i = 0; i < nv; ++i) {
-      m.residual_param_derivative(s0, im.nominal, im.dirs[i], im.scratch, col);
+      m.residual_param_derivative(s0, im.nominal, im.dirs[i], col);
       B.col(i) = -col;
     }
     lu.solve(B);  // still holds [M Φ_qᵀ; Φ_q 0] (k = 1) from consistent_accelerations

@@ -70,7 +70,11 @@ struct Loader {
     const double xs = r.number("x_scale", 1.0), ys = r.number("y_scale", 1.0);
     if (r.has("file")) {
       const std::string f = resolve(r.string("file"));
-      return Table1D::read_csv(f, interp, period, xs, ys);
+      try {
+        return Table1D::read_csv(f, interp, period, xs, ys);
+      } catch (const Error& e) {  // name the case's JSON path too (the message names the table file)
+        r.fail("file", e.what());
+      }
     }
     std::vector<double> x, y;
     for (const auto& p : r.items("points", true)) {
@@ -341,7 +345,8 @@ struct Loader {
 
   // ---------------------------------------------------------------- forces
   void force(const JsonReader& r, int index) {
-    const std::string type = r.one_of("type", {"point_force", "spring_damper", "pressure", "point_mass"});
+    const std::string type = r.one_of(
+        "type", {"point_force", "spring_damper", "pressure", "point_mass", "torque", "rotational_spring_damper"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
     unique_name(r, name);
     if (type == "point_mass") {
@@ -373,6 +378,29 @@ struct Loader {
       const int lp = param(name + ".free_length", r.non_negative("free_length", l_init));
       if (!(l_init > 0)) r.fail("the spring's end points coincide initially (direction undefined)");
       model().add_force(std::make_unique<SpringDamper>(a, b, kp, cp, lp, "spring '" + name + "'"));
+    } else if (type == "torque") {
+      const RigidBody& b = rigid(r, "body");
+      if (r.has("torque") == r.has("law")) r.fail("expected either \"torque\": T or \"law\": {...} (one of them)");
+      std::shared_ptr<const TimeLaw> l =
+          r.has("torque") ? std::make_shared<ConstantLaw>(r.number("torque")) : law(r.child("law"));
+      const int sp = param(name + ".scale", r.number("scale", 1.0));
+      model().add_force(std::make_unique<Torque>(b.dof0 + 2, l, sp, "torque '" + name + "'"));
+    } else if (type == "rotational_spring_damper") {
+      const RigidBody& a = rigid(r, "a");
+      int b_dof = -1;
+      double th_b = 0;
+      const std::string bn = r.string("b");
+      if (bn != "ground") {
+        const RigidBody& b = rigid(r, "b");
+        if (&b == &a) r.fail("b", "a rotational spring cannot connect a body to itself");
+        b_dof = b.dof0 + 2;
+        th_b = b.angle0;
+      }
+      const int kp = param(name + ".stiffness", r.non_negative("stiffness"));
+      const int cp = param(name + ".damping", r.non_negative("damping", 0.0));
+      const int tp = param(name + ".free_angle", r.number("free_angle", a.angle0 - th_b));
+      model().add_force(
+          std::make_unique<RotationalSpringDamper>(a.dof0 + 2, b_dof, kp, cp, tp, "rotational spring '" + name + "'"));
     } else {  // pressure
       const PointRef p = point(r.child("point"));
       if (p.kind == PointRef::Kind::kGround) r.fail("point", "a pressure force must act on a body");
@@ -400,8 +428,9 @@ struct Loader {
 
   // ---------------------------------------------------------------- measures and responses
   void measure(const JsonReader& r) {
-    const std::string type = r.one_of("type", {"position", "angle", "distance", "elongation", "path_deviation",
-                                               "constraint_force", "kinetic_energy", "strain_energy", "mass"});
+    const std::string type =
+        r.one_of("type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation", "path_deviation",
+                          "constraint_force", "kinetic_energy", "strain_energy", "mass"});
     const std::string name = r.string("name");
     // constraint_force measures are placeholders (null) until finalize: their names are pending
     for (const auto& m : cs.measures)
@@ -410,7 +439,9 @@ struct Loader {
       if (pending.first == name) r.fail("name", "duplicate measure name '" + name + "'");
     std::unique_ptr<Measure> m;
     if (type == "position") m = std::make_unique<PositionMeasure>(name, point(r.child("point")));
+    else if (type == "velocity") m = std::make_unique<VelocityMeasure>(name, point(r.child("point")));
     else if (type == "angle") m = std::make_unique<AngleMeasure>(name, rigid(r, "body").dof0 + 2);
+    else if (type == "angular_velocity") m = std::make_unique<AngularVelocityMeasure>(name, rigid(r, "body").dof0 + 2);
     else if (type == "distance" || type == "elongation") {
       const PointRef a = point(r.child("a")), b = point(r.child("b"));
       const double ref = type == "elongation" ? (initial_position(b) - initial_position(a)).norm() : 0.0;

@@ -45,6 +45,10 @@ class ForceElement {
   virtual std::string describe() const = 0;
   /// Whether the element reads scalar parameter j (for element-local pseudo-loads).
   virtual bool uses_parameter(int /*j*/) const { return false; }
+  /// Adds ∂r/∂p_j (local) at fixed state: the exact partial derivative of the element's residual
+  /// (eq. 7 without the constraint term) with respect to scalar parameter j. Nothing is added
+  /// when the element does not read p_j. Material fields μ_e are handled by the Model.
+  virtual void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const = 0;
   /// Whether ∂r/∂q̈ (the mass matrix) depends on q (rigid bodies with an offset centre of mass).
   virtual bool mass_depends_on_q() const { return false; }
   /// Whether r is linear in (q̇, q̈) at fixed q (then r(q̇ + δq̇, q̈ + δq̈) − r = M δq̈ + C δq̇

@@ -42,6 +42,8 @@ class QuadForce : public ForceElement {
   bool uses_parameter(int j) const override {
     return j == body_->E_param || j == body_->nu_param || j == body_->rho_param || j == body_->thickness_param;
   }
+  /// Exact: r is linear in E0, ρ0 and t; ν enters through D (QuadElement::internal_force_nu_derivative).
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
   /// Constant consistent mass μ_e ρ0 t ∫ N_I N_J, no damping.
   void mass_damping(const LocalState& s, const ModelParams& p, LocalMat& M, LocalMat& C) const override;
 

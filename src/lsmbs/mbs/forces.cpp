@@ -37,6 +37,19 @@ void RigidInertia::evaluate(const LocalState& s, const ModelParams& p, LocalVec&
   (*S)(2, 2) += cq * (-m * Rc.dot(axy - g));
 }
 
+void RigidInertia::param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const {
+  // r is linear in m and J_c: ∂r/∂J_c = (0, 0, θ̈), ∂r/∂m = r at m = 1, J_c = 0.
+  if (j == J_) dr[2] += s.a[2];
+  if (j != m_) return;
+  const double th = s.q[2], thd = s.v[2], thdd = s.a[2];
+  const Vec2 Rc = rotation(th) * c_, Rpc = rotation_derivative(th) * c_;
+  const Vec2 axy(s.a[0], s.a[1]), g = p.gravity;
+  const Vec2 dxy = axy + thdd * Rpc - thd * thd * Rc - g;
+  dr[0] += dxy.x();
+  dr[1] += dxy.y();
+  dr[2] += c_.squaredNorm() * thdd + Rpc.dot(axy - g);
+}
+
 // ------------------------------------------------------------------ NodeMass
 void NodeMass::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* co,
                         LocalMat* S) const {
@@ -47,6 +60,12 @@ void NodeMass::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, 
     (*S)(0, 0) += co->ca * m;
     (*S)(1, 1) += co->ca * m;
   }
+}
+
+void NodeMass::param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const {
+  if (j != m_) return;
+  dr[0] += s.a[0] - p.gravity.x();
+  dr[1] += s.a[1] - p.gravity.y();
 }
 
 // ------------------------------------------------------------------ SpringDamper
@@ -85,6 +104,27 @@ void SpringDamper::evaluate(const LocalState& s, const ModelParams& p, LocalVec&
   S->noalias() += co->cv * c * g * g.transpose();
 }
 
+void SpringDamper::param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const {
+  // r = T ∂l/∂q with T = k (l − l0) + c l̇: ∂r/∂k = (l − l0) ∂l/∂q, ∂r/∂c = l̇ ∂l/∂q,
+  // ∂r/∂l0 = −k ∂l/∂q.
+  if (!uses_parameter(j)) return;
+  const int na = a_.num_dofs(), nd = static_cast<int>(dofs_.size());
+  const Vec2 d = PointKinematics::position(b_, s.q.data() + na) - PointKinematics::position(a_, s.q.data());
+  Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, kMaxLocalDofs> D;
+  D.setZero(2, nd);
+  PointKinematics::jacobian(a_, s.q.data(), D, 0, 0, -1.0);
+  PointKinematics::jacobian(b_, s.q.data() + na, D, 0, na, 1.0);
+  const double l = d.norm();
+  if (!(l > 0)) return;  // as evaluate(): no force where the direction is undefined
+  const Vec2 n = d / l;
+  const LocalVec g = D.transpose() * n;
+  double w = 0;  // ∂T/∂p_j
+  if (j == k_) w += l - p.scalars[l0_];
+  if (j == c_) w += n.dot(D * s.v);
+  if (j == l0_) w -= p.scalars[k_];
+  dr += w * g;
+}
+
 // ------------------------------------------------------------------ PointForce
 PointForce::PointForce(PointRef a, std::shared_ptr<const TimeLaw> fx, std::shared_ptr<const TimeLaw> fy,
                        int scale_param, std::string what)
@@ -100,6 +140,14 @@ void PointForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r
   PointKinematics::jacobian(a_, s.q.data(), J, 0, 0, 1.0);
   for (size_t j = 0; j < dofs_.size(); ++j) r[j] -= F.dot(J.col(j));
   if (S && a_.kind == PointRef::Kind::kBody) (*S)(2, 2) -= co->cq * PointKinematics::hess_thetatheta(a_, s.q.data(), F);
+}
+
+void PointForce::param_derivative(const LocalState& s, const ModelParams&, int j, LocalVec& dr) const {
+  if (j != scale_) return;
+  const Vec2 F(fx_->value(s.t), fy_->value(s.t));  // ∂(scale F)/∂scale
+  Eigen::Matrix<double, 2, 3> J = Eigen::Matrix<double, 2, 3>::Zero();
+  PointKinematics::jacobian(a_, s.q.data(), J, 0, 0, 1.0);
+  for (size_t k = 0; k < dofs_.size(); ++k) dr[k] -= F.dot(J.col(k));
 }
 
 // ------------------------------------------------------------------ PressureForce
@@ -130,6 +178,62 @@ void PressureForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec
   if (a_.kind == PointRef::Kind::kBody) (*S)(2, 2) -= co->cq * PointKinematics::hess_thetatheta(a_, s.q.data(), F);
   if (angle_dof_ >= 0)
     for (int j = 0; j < na; ++j) (*S)(j, na) -= co->cq * A * dP * u_.dot(J.col(j));
+}
+
+void PressureForce::param_derivative(const LocalState& s, const ModelParams&, int j, LocalVec& dr) const {
+  if (j != area_) return;
+  const int na = a_.num_dofs();
+  const double P = table_.value(angle_dof_ >= 0 ? s.q[na] + offset_ : s.t + offset_);  // F = A P u
+  Eigen::Matrix<double, 2, 3> J = Eigen::Matrix<double, 2, 3>::Zero();
+  PointKinematics::jacobian(a_, s.q.data(), J, 0, 0, 1.0);
+  for (int k = 0; k < na; ++k) dr[k] -= P * u_.dot(J.col(k));
+}
+
+// ------------------------------------------------------------------ Torque
+Torque::Torque(int theta_dof, std::shared_ptr<const TimeLaw> law, int scale_param, std::string what)
+    : dofs_{theta_dof}, law_(std::move(law)), scale_(scale_param), what_(std::move(what)) {}
+
+void Torque::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients*, LocalMat*) const {
+  const double sc = scale_ >= 0 ? p.scalars[scale_] : 1.0;
+  r[0] -= sc * law_->value(s.t);
+}
+
+void Torque::param_derivative(const LocalState& s, const ModelParams&, int j, LocalVec& dr) const {
+  if (j == scale_) dr[0] -= law_->value(s.t);
+}
+
+// ------------------------------------------------------------------ RotationalSpringDamper
+RotationalSpringDamper::RotationalSpringDamper(int theta_a, int theta_b, int k_param, int c_param, int free_angle_param,
+                                               std::string what)
+    : dofs_{theta_a}, k_(k_param), c_(c_param), th0_(free_angle_param), what_(std::move(what)) {
+  if (theta_b >= 0) dofs_.push_back(theta_b);
+}
+
+void RotationalSpringDamper::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* co,
+                                      LocalMat* S) const {
+  const bool two = dofs_.size() == 2;
+  const double k = p.scalars[k_], c = c_ >= 0 ? p.scalars[c_] : 0.0, th0 = p.scalars[th0_];
+  const double rel = s.q[0] - (two ? s.q[1] : 0.0), rel_dot = s.v[0] - (two ? s.v[1] : 0.0);
+  const double M = k * (rel - th0) + c * rel_dot;
+  r[0] += M;
+  if (two) r[1] -= M;
+  if (!S) return;
+  const double w = co->cq * k + co->cv * c;  // ∂M/∂θa = k, ∂M/∂θ̇a = c
+  (*S)(0, 0) += w;
+  if (!two) return;
+  (*S)(0, 1) -= w;
+  (*S)(1, 0) -= w;
+  (*S)(1, 1) += w;
+}
+
+void RotationalSpringDamper::param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const {
+  const bool two = dofs_.size() == 2;
+  double w = 0;  // ∂M/∂p_j
+  if (j == k_) w += s.q[0] - (two ? s.q[1] : 0.0) - p.scalars[th0_];
+  if (j == c_) w += s.v[0] - (two ? s.v[1] : 0.0);
+  if (j == th0_) w -= p.scalars[k_];
+  dr[0] += w;
+  if (two) dr[1] -= w;
 }
 
 }  // namespace lsmbs

@@ -25,6 +25,7 @@ class RigidInertia : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == m_ || j == J_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
   bool mass_depends_on_q() const override { return c_.squaredNorm() > 0; }
   bool linear_in_rates() const override { return false; }
 
@@ -44,6 +45,7 @@ class NodeMass : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == m_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
 
  private:
   std::array<int, 2> dofs_;
@@ -60,6 +62,7 @@ class SpringDamper : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == k_ || j == c_ || j == l0_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
 
  private:
   PointRef a_, b_;
@@ -79,6 +82,7 @@ class PointForce : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == scale_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
 
  private:
   PointRef a_;
@@ -100,6 +104,7 @@ class PressureForce : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == area_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
   /// Pressure at the given state (for outputs).
   double pressure(double t, double angle) const;
 
@@ -111,6 +116,47 @@ class PressureForce : public ForceElement {
   int angle_dof_;  // < 0: pressure vs time
   double offset_;
   std::vector<int> dofs_;
+  std::string what_;
+};
+
+/// Torque T(t) on a rigid body, a time law (constant or tabulated) scaled by a parameter: a
+/// generalized force on the body's angle DOF, r_θ −= scale · T(t) (eq. 7: f_ext enters with a
+/// minus sign). The torque does not depend on the state: no tangent.
+class Torque : public ForceElement {
+ public:
+  Torque(int theta_dof, std::shared_ptr<const TimeLaw> law, int scale_param, std::string what);
+  std::span<const int> dofs() const override { return dofs_; }
+  void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
+                LocalMat* S) const override;
+  std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == scale_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+
+ private:
+  std::array<int, 1> dofs_;
+  std::shared_ptr<const TimeLaw> law_;
+  int scale_;
+  std::string what_;
+};
+
+/// Rotational spring–damper between the angles of two rigid bodies a and b (b may be ground,
+/// θ_b ≡ 0): moment M = k (θa − θb − θ0) + c (θ̇a − θ̇b), acting on a with −M and on b with +M,
+/// so that it resists the relative rotation. Residual (eq. 7, internal force): r_a += M,
+/// r_b −= M; K_t = k [1 −1; −1 1], C_t = c [1 −1; −1 1].
+class RotationalSpringDamper : public ForceElement {
+ public:
+  /// theta_b < 0: b is the ground.
+  RotationalSpringDamper(int theta_a, int theta_b, int k_param, int c_param, int free_angle_param, std::string what);
+  std::span<const int> dofs() const override { return dofs_; }
+  void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
+                LocalMat* S) const override;
+  std::string describe() const override { return what_; }
+  bool uses_parameter(int j) const override { return j == k_ || j == c_ || j == th0_; }
+  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+
+ private:
+  std::vector<int> dofs_;  // θa [, θb]
+  int k_, c_, th0_;
   std::string what_;
 };
 

@@ -467,9 +467,9 @@ std::vector<int> Model::forces_touched_by(const ParamDirection& dir) const {
 }
 
 void Model::residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& dir,
-                                      ModelParams& scratch, Vec& out) const {
+                                      Vec& out) const {
   out.setZero(n());
-  LocalVec r, rp, rm;
+  LocalVec r;
   // material fields: r_e linear in μ_e
   for (const auto& f : dir.fields) {
     const FlexibleBody* body = nullptr;
@@ -482,19 +482,19 @@ void Model::residual_param_derivative(const State& s, const ModelParams& p, cons
     const auto d = forces_[e]->dofs();
     for (size_t i = 0; i < d.size(); ++i) out[d[i]] += f.value * r[i] / mu;
   }
-  // scalar parameters: central difference on the elements that read them
+  // scalar parameters: each element that reads p_j adds its exact ∂r_e/∂p_j
+  LocalState ls;
+  ls.t = s.t;
   for (const auto& [j, dv] : dir.scalars) {
-    const double v0 = p.scalars[j];
-    const double h = 1e-6 * std::max(std::abs(v0), 1e-12);
-    for (size_t e = 0; e < forces_.size(); ++e) {
-      if (!forces_[e]->uses_parameter(j)) continue;
-      scratch.scalars[j] = v0 + h;
-      element_residual(static_cast<int>(e), s, scratch, rp);
-      scratch.scalars[j] = v0 - h;
-      element_residual(static_cast<int>(e), s, scratch, rm);
-      scratch.scalars[j] = v0;
-      const auto d = forces_[e]->dofs();
-      for (size_t i = 0; i < d.size(); ++i) out[d[i]] += dv * (rp[i] - rm[i]) / (2 * h);
+    for (const auto& f : forces_) {
+      if (!f->uses_parameter(j)) continue;
+      const auto d = f->dofs();
+      gather(s.q, d, ls.q);
+      gather(s.v, d, ls.v);
+      gather(s.a, d, ls.a);
+      r.setZero(static_cast<Eigen::Index>(d.size()));
+      f->param_derivative(ls, p, j, r);
+      for (size_t i = 0; i < d.size(); ++i) out[d[i]] += dv * r[i];
     }
   }
 }

@@ -116,13 +116,9 @@ class Model {
   void mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd, const Mat& Vd, Mat& out) const;
   /// ∂R/∂p along a parameter direction at fixed state (size n; the constraint rows are zero:
   /// constraints do not depend on design parameters). Only elements the direction touches are
-  /// evaluated. Material fields enter exactly (an element's residual is linear in μ_e, eq. 3:
-  /// ∂r_e/∂μ_e = r_e/μ_e); scalar parameters by a central difference with relative step 1e-6
-  /// (exact up to round-off for the parameters that enter linearly: masses, inertias,
-  /// stiffness, damping, E, ρ, thickness, area, force scale; O(1e-12) for ν and free length).
-  /// `scratch` is a copy of p that is modified temporarily and restored.
-  void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d, ModelParams& scratch,
-                                 Vec& out) const;
+  /// evaluated. Exact: material fields through the linearity of an element's residual in μ_e
+  /// (eq. 3: ∂r_e/∂μ_e = r_e/μ_e), scalar parameters through ForceElement::param_derivative.
+  void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d, Vec& out) const;
   /// Residual contribution of one force element (local vector over its dofs()).
   void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
   /// Ṁ w = Σ_e [∂(M_e(q) w_e)/∂q_e] q̇_e (size nq): the rate of the mass matrix along the motion

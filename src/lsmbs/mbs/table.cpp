@@ -2,12 +2,90 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
 
 namespace lsmbs {
+
+namespace {
+
+// Solves the tridiagonal system (sub-diagonal a, diagonal b, super-diagonal c) in place of d
+// (Thomas algorithm; a[0] and c[n−1] are not read).
+void thomas(const std::vector<double>& a, std::vector<double> b, const std::vector<double>& c, std::vector<double>& d) {
+  const size_t n = b.size();
+  for (size_t i = 1; i < n; ++i) {
+    const double w = a[i] / b[i - 1];
+    b[i] -= w * c[i - 1];
+    d[i] -= w * d[i - 1];
+  }
+  d[n - 1] /= b[n - 1];
+  for (size_t i = n - 1; i-- > 0;) d[i] = (d[i] - c[i] * d[i + 1]) / b[i];
+}
+
+// Second derivatives m of the natural cubic spline through (x, y): m_0 = m_{n−1} = 0 and the
+// continuity of the first derivative at the interior knots.
+std::vector<double> natural_spline(const std::vector<double>& x, const std::vector<double>& y) {
+  const size_t n = x.size();
+  if (n <= 2) return std::vector<double>(n, 0.0);
+  std::vector<double> a(n, 0), b(n, 1), c(n, 0), d(n, 0);
+  for (size_t i = 1; i + 1 < n; ++i) {
+    const double h0 = x[i] - x[i - 1], h1 = x[i + 1] - x[i];
+    a[i] = h0 / 6;
+    b[i] = (h0 + h1) / 3;
+    c[i] = h1 / 6;
+    d[i] = (y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0;
+  }
+  thomas(a, b, c, d);
+  return d;
+}
+
+// Second derivatives of the periodic cubic spline through (x, y) with x_{n−1} = x0 + period and
+// y_{n−1} = y0: the N = n − 1 unknowns m_0 … m_{N−1} (m_{n−1} = m_0) satisfy the continuity of
+// the first derivative at every knot, knot 0 included (its left neighbour is knot N − 1, one
+// period earlier). The system is cyclic tridiagonal, symmetric and diagonally dominant; it is
+// solved by the Sherman–Morrison correction of the Thomas algorithm (Numerical Recipes §2.7).
+std::vector<double> periodic_spline(const std::vector<double>& x, const std::vector<double>& y) {
+  const size_t n = x.size(), N = n - 1;
+  std::vector<double> m(n, 0.0);
+  if (N < 2) return m;  // one interval with equal end values: the constant y0
+  std::vector<double> a(N), b(N), c(N), d(N);
+  for (size_t i = 0; i < N; ++i) {
+    const size_t im = (i + N - 1) % N;  // left neighbour of knot i
+    const double h0 = x[im + 1] - x[im], h1 = x[i + 1] - x[i];
+    a[i] = h0 / 6;
+    b[i] = (h0 + h1) / 3;
+    c[i] = h1 / 6;
+    d[i] = (y[i + 1] - y[i]) / h1 - (y[im + 1] - y[im]) / h0;
+  }
+  if (N == 2) {  // both neighbours of each knot are the other knot: a 2 × 2 system
+    const double a01 = a[0] + c[0], a10 = a[1] + c[1], det = b[0] * b[1] - a01 * a10;
+    m[0] = (d[0] * b[1] - a01 * d[1]) / det;
+    m[1] = (b[0] * d[1] - a10 * d[0]) / det;
+    m[2] = m[0];
+    return m;
+  }
+  // The corners are A(0, N−1) = β = a_0 and A(N−1, 0) = α = c_{N−1}. A = T + u vᵀ with
+  // u = (γ, 0, …, 0, α), v = (1, 0, …, 0, β/γ) and T tridiagonal with the diagonal ends changed
+  // by −γ and −αβ/γ; x = T⁻¹d − (vᵀT⁻¹d)/(1 + vᵀT⁻¹u) T⁻¹u.
+  const double alpha = c[N - 1], beta = a[0], gamma = -b[0];
+  std::vector<double> bb = b;
+  bb[0] -= gamma;
+  bb[N - 1] -= alpha * beta / gamma;
+  std::vector<double> u(N, 0.0);
+  u[0] = gamma;
+  u[N - 1] = alpha;
+  thomas(a, bb, c, d);
+  thomas(a, bb, c, u);
+  const double fact = (d[0] + beta * d[N - 1] / gamma) / (1 + u[0] + beta * u[N - 1] / gamma);
+  for (size_t i = 0; i < N; ++i) m[i] = d[i] - fact * u[i];
+  m[N] = m[0];
+  return m;
+}
+
+}  // namespace
 
 Table1D::Table1D(std::vector<double> x, std::vector<double> y, Interp interp, double period)
     : x_(std::move(x)), y_(std::move(y)), interp_(interp), period_(period) {
@@ -17,24 +95,35 @@ Table1D::Table1D(std::vector<double> x, std::vector<double> y, Interp interp, do
     if (!(x_[i + 1] > x_[i])) throw Error("table: x values must be strictly increasing");
   for (size_t i = 0; i < n; ++i)
     if (!std::isfinite(x_[i]) || !std::isfinite(y_[i])) throw Error("table: non-finite value");
-  m_.assign(n, 0.0);
-  if (interp_ == Interp::kCubic && n > 2) {  // natural spline: tridiagonal solve (Thomas)
-    std::vector<double> a(n, 0), b(n, 1), c(n, 0), d(n, 0);
-    for (size_t i = 1; i + 1 < n; ++i) {
-      const double h0 = x_[i] - x_[i - 1], h1 = x_[i + 1] - x_[i];
-      a[i] = h0 / 6;
-      b[i] = (h0 + h1) / 3;
-      c[i] = h1 / 6;
-      d[i] = (y_[i + 1] - y_[i]) / h1 - (y_[i] - y_[i - 1]) / h0;
+  if (period_ > 0) {
+    // One period [x0, x0 + period]: the closing point is the first point one period later.
+    const double x_end = x_.front() + period_, tol_x = 1e-9 * period_;
+    double y_max = 0;
+    for (double v : y_) y_max = std::max(y_max, std::abs(v));
+    char buf[200];
+    if (x_.back() > x_end + tol_x) {
+      std::snprintf(buf, sizeof buf, "table: the points span %.17g, more than the period %.17g (x0 = %.17g)",
+                    x_.back() - x_.front(), period_, x_.front());
+      throw Error(buf);
     }
-    for (size_t i = 1; i < n; ++i) {
-      const double w = a[i] / b[i - 1];
-      b[i] -= w * c[i - 1];
-      d[i] -= w * d[i - 1];
+    if (x_.back() >= x_end - tol_x) {
+      if (std::abs(y_.back() - y_.front()) > 1e-9 * y_max) {
+        std::snprintf(buf, sizeof buf,
+                      "table: a periodic table must end with its first value: s(x0) = %.17g but s(x0 + period) = "
+                      "%.17g",
+                      y_.front(), y_.back());
+        throw Error(buf);
+      }
+      if (x_[x_.size() - 2] >= x_end) throw Error("table: x values must be strictly increasing");
+      x_.back() = x_end;
+      y_.back() = y_.front();
+    } else {
+      x_.push_back(x_end);
+      y_.push_back(y_.front());
     }
-    m_[n - 1] = d[n - 1] / b[n - 1];
-    for (size_t i = n - 1; i-- > 0;) m_[i] = (d[i] - c[i] * m_[i + 1]) / b[i];
   }
+  if (interp_ == Interp::kCubic) m_ = period_ > 0 ? periodic_spline(x_, y_) : natural_spline(x_, y_);
+  else m_.assign(x_.size(), 0.0);
 }
 
 Table1D Table1D::read_csv(const std::string& path, Interp interp, double period, double xs, double ys) {

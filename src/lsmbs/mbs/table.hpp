@@ -1,7 +1,9 @@
 #pragma once
-// Table1D — tabulated function y(x) with smooth (natural cubic spline, C²) or linear
-// interpolation, first and second derivatives, optional periodic wrap of x. Used for
-// tabulated driver laws, forces and pressure curves.
+// Table1D — tabulated function y(x) with smooth (cubic spline, C²) or linear interpolation,
+// first and second derivatives, optional periodic wrap of x. Used for tabulated driver laws,
+// forces and pressure curves. Without a period the cubic spline is natural (zero second
+// derivative at both ends); with a period it is the periodic spline (equal first and second
+// derivatives at x0 and x0 + period), so that the wrapped function is C² everywhere.
 #include <string>
 #include <vector>
 
@@ -11,7 +13,10 @@ class Table1D {
  public:
   enum class Interp { kCubic, kLinear };
   Table1D() = default;
-  /// x strictly increasing, at least 2 points. period > 0 wraps x into [x0, x0 + period).
+  /// x strictly increasing, at least 2 points. period > 0 wraps x into [x0, x0 + period): the
+  /// points must then lie within one period; the last point may be x0 + period (within 1e-9 of
+  /// the period), in which case its value must equal y0 (within 1e-9 of the largest |y|),
+  /// otherwise the point (x0 + period, y0) is appended. Violations throw Error.
   Table1D(std::vector<double> x, std::vector<double> y, Interp interp = Interp::kCubic, double period = 0);
   /// Reads two columns (x, y) from a CSV file; '#' starts a comment; an optional header line.
   static Table1D read_csv(const std::string& path, Interp interp = Interp::kCubic, double period = 0,

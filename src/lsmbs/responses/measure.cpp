@@ -33,6 +33,24 @@ void PositionMeasure::gradient(const Model&, const State& s, const ModelParams&,
   point_row(pt_, s.q, c == 0 ? Vec2(1, 0) : Vec2(0, 1), g.dq);
 }
 
+void VelocityMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+  Vec2 v = Vec2::Zero();
+  if (pt_.kind != PointRef::Kind::kGround) v = s.v.segment<2>(pt_.dof0);
+  if (pt_.kind == PointRef::Kind::kBody)
+    v += s.v[pt_.dof0 + 2] * (rotation_derivative(s.q[pt_.dof0 + 2]) * pt_.local);
+  out[0] = v.x();
+  out[1] = v.y();
+}
+
+void VelocityMeasure::gradient(const Model&, const State& s, const ModelParams&, int c, MeasureGradient& g) const {
+  const Vec2 w = c == 0 ? Vec2(1, 0) : Vec2(0, 1);
+  point_row(pt_, s.q, w, g.dv);  // ∂ṗ/∂q̇ = ∂p/∂q
+  if (pt_.kind == PointRef::Kind::kBody) {
+    const double th = s.q[pt_.dof0 + 2];  // ∂(θ̇ R′(θ) d)/∂θ = θ̇ R″(θ) d = −θ̇ R(θ) d
+    g.dq.emplace_back(pt_.dof0 + 2, -s.v[pt_.dof0 + 2] * w.dot(rotation(th) * pt_.local));
+  }
+}
+
 void DistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int, MeasureGradient& g) const {
   const Vec2 d = point_position(b_, s.q) - point_position(a_, s.q);
   const double l = d.norm();

@@ -3,7 +3,8 @@
 // aggregated into responses: a point's position, a body angle, the distance or elongation
 // between two points (deformed minus undeformed distance, positive in tension, §5.2), the
 // deviation of a point from a prescribed path (eq. 44), a constraint force, energies, the mass
-// of a flexible body. (Partial derivatives come with the sensitivity issue.)
+// of a flexible body, a body's angular velocity, a point's velocity. Each provides its partial
+// derivatives with respect to the state for the sensitivity tracker (eq. 24).
 #include <memory>
 #include <string>
 #include <vector>
@@ -58,6 +59,32 @@ class AngleMeasure : public Measure {
 
  private:
   int dof_;
+};
+
+/// Angular velocity θ̇ of a rigid body.
+class AngularVelocityMeasure : public Measure {
+ public:
+  AngularVelocityMeasure(std::string name, int theta_dof) : Measure(std::move(name)), dof_(theta_dof) {}
+  void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override { *out = s.v[dof_]; }
+  void gradient(const Model&, const State&, const ModelParams&, int, MeasureGradient& g) const override {
+    g.dv.emplace_back(dof_, 1.0);
+  }
+
+ private:
+  int dof_;
+};
+
+/// Velocity of a material point: ṗ = ∂p/∂q q̇ (a node: its velocity; a rigid-body point at
+/// body-frame offset d: (ẋ, ẏ) + θ̇ R′(θ) d). ∂ṗ/∂q̇ = ∂p/∂q; ∂ṗ/∂θ = −θ̇ R(θ) d.
+class VelocityMeasure : public Measure {
+ public:
+  VelocityMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
+  std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+
+ private:
+  PointRef pt_;
 };
 
 /// Distance |p_B − p_A| minus `reference` (0 for a distance; the undeformed distance for an

@@ -8,7 +8,7 @@
 namespace lsmbs {
 
 AnalyticPseudoLoad::AnalyticPseudoLoad(const Model& m, const ModelParams& p, std::vector<ParamDirection> dirs)
-    : m_(m), p_(p), dirs_(std::move(dirs)), scratch_(p) {}
+    : m_(m), p_(p), dirs_(std::move(dirs)) {}
 
 void AnalyticPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double, double, Mat& B,
                                  SensitivityCounts& counts) {
@@ -21,7 +21,7 @@ void AnalyticPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& 
   }
   for (int i = 0; i < nv; ++i) {
     if (dirs_[i].empty()) continue;
-    m_.residual_param_derivative(s, p_, dirs_[i], scratch_, col_);
+    m_.residual_param_derivative(s, p_, dirs_[i], col_);
     B.col(i) += col_;
     counts.element_pseudo_loads += static_cast<long>(dirs_[i].fields.size() + dirs_[i].scalars.size());
   }

@@ -28,7 +28,7 @@ class PseudoLoad {
                        Mat& B, SensitivityCounts& counts) = 0;
 };
 
-/// Exact: b_i = [∂r/∂p_i (element-local, exact in μ) + M q̈*_i + C q̇*_i ; 0].
+/// Exact: b_i = [∂r/∂p_i (element-local, exact in μ and the scalar parameters) + M q̈*_i + C q̇*_i ; 0].
 class AnalyticPseudoLoad : public PseudoLoad {
  public:
   AnalyticPseudoLoad(const Model& m, const ModelParams& p, std::vector<ParamDirection> dirs);
@@ -39,7 +39,6 @@ class AnalyticPseudoLoad : public PseudoLoad {
   const Model& m_;
   const ModelParams& p_;
   std::vector<ParamDirection> dirs_;
-  ModelParams scratch_;
   Mat MC_;
   Vec col_;
 };

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -107,7 +108,43 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"unknown node set", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/joints/-","value":{"type":"clamp","flexible":"p","node_set":"middle"}}])",
                  "/joints/1/node_set: body 'p' has no node set 'middle'"},
         BadInput{"Poisson ratio", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.5,"rho":1000},"thickness":0.001}}])",
-                 "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"}),
+                 "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"},
+        BadInput{"torque on a flexible body", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/forces","value":[{"type":"torque","body":"p","torque":1}]}])",
+                 "/forces/0/body: 'p' is a flexible body; a rigid body is expected here"},
+        BadInput{"torque on an unknown body", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bobb","torque":1}]}])",
+                 "/forces/0/body: unknown rigid body 'bobb'"},
+        BadInput{"torque and law both given", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":1,"law":{"type":"constant","value":2}}]}])",
+                 "/forces/0: expected either \"torque\": T or \"law\": {...} (one of them)"},
+        BadInput{"torque without torque or law", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob"}]}])",
+                 "/forces/0: expected either \"torque\": T or \"law\""},
+        BadInput{"torque given as a string", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":"big"}]}])",
+                 "/forces/0/torque: expected a number, got string"},
+        BadInput{"torque with a misspelt key", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":1,"sacle":2}]}])",
+                 "/forces/0/sacle: unknown key"},
+        BadInput{"torque law of unknown type", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"sine"}}]}])",
+                 "/forces/0/law/type: expected one of \"trapezoid\", \"ramp\", \"table\", \"constant\""},
+        BadInput{"rotational spring to an unknown body", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"rob","stiffness":1}]}])",
+                 "/forces/0/b: unknown rigid body 'rob'"},
+        BadInput{"rotational spring on itself", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"bob","stiffness":1}]}])",
+                 "/forces/0/b: a rotational spring cannot connect a body to itself"},
+        BadInput{"rotational spring without b", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","stiffness":1}]}])",
+                 "/forces/0: missing required key 'b'"},
+        BadInput{"rotational spring with negative stiffness", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":-1}]}])",
+                 "/forces/0/stiffness: expected a non-negative number, got -1"},
+        BadInput{"rotational spring with a misspelt key", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":1,"free_angel":0}]}])",
+                 "/forces/0/free_angel: unknown key"},
+        BadInput{"periodic table whose ends differ", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[2,0.5]],"period":2}}]}])",
+                 "/forces/0/law/points: table: a periodic table must end with its first value: s(x0) = 0 but s(x0 + period) = 0.5"},
+        BadInput{"periodic table longer than its period", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[3,0]],"period":2}}]}])",
+                 "/forces/0/law/points: table: the points span 3, more than the period 2"},
+        BadInput{"angular velocity of a flexible body", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/output","value":{"measures":[{"name":"w","type":"angular_velocity","body":"p"}]}}])",
+                 "/output/measures/0/body: 'p' is a flexible body; a rigid body is expected here"},
+        BadInput{"velocity of a point on an unknown body", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","point":{"body":"rob"}}]}}])",
+                 "/output/measures/0/point/body: unknown body 'rob'"},
+        BadInput{"velocity measure with a misspelt key", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","piont":{"body":"bob"}}]}}])",
+                 "/output/measures/0: missing required key 'point'"},
+        BadInput{"duplicate measure name after a constraint force", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"f","type":"constraint_force","joint":"pin"},{"name":"f","type":"angular_velocity","body":"bob"}]}}])",
+                 "/output/measures/1/name: duplicate measure name 'f'"}),
     [](const auto& info) {
       std::string s = info.param.label;
       for (char& c : s)
@@ -167,4 +204,55 @@ TEST(Sha256, MatchesTheFipsTestVectors) {
   EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   EXPECT_EQ(sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
             "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+}
+
+TEST(CaseLoader, TorqueAndRotationalSpringParameters) {
+  json j = minimal();
+  j["bodies"].push_back(R"({"name": "arm", "type": "rigid", "position": [0, 1], "angle": 0.25, "mass": 1, "inertia": 0.1})"_json);
+  j["bodies"][0]["angle"] = 1.0;
+  j["forces"] = R"([
+    {"name": "motor", "type": "torque", "body": "bob", "law": {"type": "ramp", "speed": 2, "ramp_time": 0.5}},
+    {"name": "fixed", "type": "torque", "body": "arm", "torque": -3, "scale": 0.5},
+    {"name": "shaft", "type": "rotational_spring_damper", "a": "bob", "b": "arm", "stiffness": 10, "damping": 0.5},
+    {"name": "anchor", "type": "rotational_spring_damper", "a": "arm", "b": "ground", "stiffness": 7, "free_angle": -0.5}
+  ])"_json;
+  const Case cs = test::make_case(j);
+  const Model& m = *cs.model;
+  auto par = [&](const std::string& n) {
+    const int i = m.parameter_index(n);
+    EXPECT_GE(i, 0) << n;
+    return i >= 0 ? m.params().scalars[i] : NAN;
+  };
+  EXPECT_EQ(par("motor.scale"), 1.0);
+  EXPECT_EQ(par("fixed.scale"), 0.5);
+  EXPECT_EQ(par("shaft.stiffness"), 10.0);
+  EXPECT_EQ(par("shaft.damping"), 0.5);
+  EXPECT_EQ(par("shaft.free_angle"), 1.0 - 0.25) << "default: the initial relative angle θa − θb";
+  EXPECT_EQ(par("anchor.damping"), 0.0);
+  EXPECT_EQ(par("anchor.free_angle"), -0.5);
+  // the torque law: r_θ = −scale T(t), T = speed·t²/(2 ramp_time) during the ramp
+  State s = cs.initial;
+  s.t = 0.3;
+  Vec R;
+  const double k = 1;
+  m.residual(s, m.params(), k, 0, R);
+  const int th = m.find_rigid("bob")->dof0 + 2, th_arm = m.find_rigid("arm")->dof0 + 2;
+  EXPECT_NEAR(R[th], -(2 * 0.3 * 0.3 / (2 * 0.5)), 1e-15) << "the springs are at their free angles, bob has no load";
+  EXPECT_NEAR(R[th_arm], 3 * 0.5 + 7 * (0.25 + 0.5), 1e-14);
+}
+
+TEST(CaseLoader, PeriodicTableFileErrorNamesTheJsonPathAndTheFile) {
+  const std::string f = testing::TempDir() + "bad_period.csv";
+  {
+    std::FILE* out = std::fopen(f.c_str(), "w");
+    std::fputs("0, 1\n1, 2\n2, 1.5\n", out);
+    std::fclose(out);
+  }
+  json j = minimal();
+  j["forces"] = json::array({{{"type", "torque"}, {"body", "bob"},
+                              {"law", {{"type", "table"}, {"file", f}, {"period", 2}}}}});
+  const std::string msg = error_of(j);
+  EXPECT_NE(msg.find("<test>: /forces/0/law/file: " + f + ": table: a periodic table must end with its first value"),
+            std::string::npos)
+      << msg;
 }

@@ -3,7 +3,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
+#include "lsmbs/core/error.hpp"
 #include "lsmbs/mbs/time_law.hpp"
 
 using namespace lsmbs;
@@ -64,4 +66,138 @@ TEST(Table1D, ReadsCsvWithHeaderCommentsAndScales) {
   const Table1D t = Table1D::read_csv(p, Table1D::Interp::kLinear, 0, 1e-3, M_PI / 180);
   EXPECT_NEAR(t.value(0.015), 0.75 * M_PI, 1e-14);
   EXPECT_NEAR(t.x_max(), 0.02, 1e-16);
+}
+
+namespace {
+
+// Largest errors of a table's value, first and second derivatives against cos over [0, 2π]
+// (10001 points), and the jumps of value, first and second derivative across the period
+// boundary: |f⁽ᵏ⁾(x0 + δ) − f⁽ᵏ⁾(x0 + P − δ)| with δ = 1e-12. For a C² function these are
+// 2δ|f⁽ᵏ⁺¹⁾| + round-off: at most 2e-12 for cos.
+struct CosErrors {
+  double value = 0, d1 = 0, d2 = 0, jump0 = 0, jump1 = 0, jump2 = 0;
+};
+CosErrors cos_errors(const Table1D& t) {
+  CosErrors e;
+  for (int i = 0; i <= 10000; ++i) {
+    const double x = 2 * M_PI * i / 10000;
+    double v, d1, d2;
+    t.eval(x, v, d1, d2);
+    e.value = std::max(e.value, std::abs(v - std::cos(x)));
+    e.d1 = std::max(e.d1, std::abs(d1 + std::sin(x)));
+    e.d2 = std::max(e.d2, std::abs(d2 + std::cos(x)));
+  }
+  const double delta = 1e-12;
+  double vr, d1r, d2r, vl, d1l, d2l;
+  t.eval(delta, vr, d1r, d2r);
+  t.eval(2 * M_PI - delta, vl, d1l, d2l);
+  e.jump0 = std::abs(vr - vl);
+  e.jump1 = std::abs(d1r - d1l);
+  e.jump2 = std::abs(d2r - d2l);
+  return e;
+}
+
+std::vector<double> linspace(double a, double b, int n) {
+  std::vector<double> x(n);
+  for (int i = 0; i < n; ++i) x[i] = a + (b - a) * i / (n - 1);
+  x.back() = b;
+  return x;
+}
+
+}  // namespace
+
+TEST(Table1D, PeriodicCubicSplineOfACosineIsC2AcrossThePeriodAndBeatsTheNaturalSpline) {
+  // cos sampled on 33 points over [0, 2π] (h = π/16), first and last values equal.
+  const std::vector<double> x = linspace(0, 2 * M_PI, 33);
+  std::vector<double> y;
+  for (double xi : x) y.push_back(std::cos(xi));
+  y.back() = y.front();
+  const Table1D periodic(x, y, Table1D::Interp::kCubic, 2 * M_PI);
+  // What a periodic table was before: the natural spline through the same points, wrapped (on
+  // [0, 2π] the same values as this unwrapped table; the jumps compare its two ends).
+  const Table1D natural(x, y, Table1D::Interp::kCubic);
+  const CosErrors p = cos_errors(periodic), n = cos_errors(natural);
+  std::printf("cos on 33 points: periodic spline |e| %.2e, |e'| %.2e, |e''| %.2e, jumps %.1e %.1e %.1e; "
+              "natural spline |e| %.2e, |e'| %.2e, |e''| %.2e, jumps %.1e %.1e %.1e\n",
+              p.value, p.d1, p.d2, p.jump0, p.jump1, p.jump2, n.value, n.d1, n.d2, n.jump0, n.jump1, n.jump2);
+  // Interpolation error of a cubic spline with exact end conditions: (5/384) h⁴ max|f⁗| = 1.2e-5
+  // for the value, (1/24) h³ max|f⁗| = 3.1e-4 for the derivative (Hall & Meyer 1976).
+  const double h = M_PI / 16;
+  EXPECT_LT(p.value, 5.0 / 384 * std::pow(h, 4));
+  EXPECT_LT(p.d1, 1.0 / 24 * std::pow(h, 3));
+  EXPECT_LT(p.jump0, 1e-14);
+  EXPECT_LT(p.jump1, 3e-12);
+  EXPECT_LT(p.jump2, 1e-12);
+  // the natural spline forces s'' = 0 at the ends where cos'' = −1: its s' jumps at the boundary
+  // and its errors near the ends are O(h²) instead of O(h⁴)
+  EXPECT_GT(n.jump1, 0.05);
+  EXPECT_GT(n.d2, 0.9);
+  EXPECT_GT(n.value, 100 * p.value);
+  EXPECT_GT(n.d1, 100 * p.d1);
+}
+
+TEST(Table1D, PeriodicCubicSplineConvergesAtFourthOrder) {
+  // Errors against sin(x) + 0.3 cos(2x) for 17, 33, 65 points: ratio 2⁴ = 16 per halving of h.
+  auto f = [](double x) { return std::sin(x) + 0.3 * std::cos(2 * x); };
+  double prev = 0;
+  for (int n : {17, 33, 65}) {
+    const std::vector<double> x = linspace(0, 2 * M_PI, n);
+    std::vector<double> y;
+    for (double xi : x) y.push_back(f(xi));
+    y.back() = y.front();
+    const Table1D t(x, y, Table1D::Interp::kCubic, 2 * M_PI);
+    double err = 0;
+    for (int i = 0; i <= 4000; ++i) {
+      const double xx = -3 + 12 * M_PI * i / 4000;  // several periods, negative arguments included
+      err = std::max(err, std::abs(t.value(xx) - f(xx)));
+    }
+    if (prev > 0) {
+      std::printf("periodic spline, %d points: error %.3e, ratio %.2f\n", n, err, prev / err);
+      EXPECT_NEAR(prev / err, 16.0, 2.0);
+    }
+    prev = err;
+  }
+}
+
+TEST(Table1D, PeriodicTableWithoutItsClosingPointAndWithFewPoints) {
+  // Without the point at x0 + period, (x0 + period, y0) is implied.
+  const std::vector<double> x = linspace(0, 2 * M_PI, 33);
+  std::vector<double> y;
+  for (double xi : x) y.push_back(std::cos(xi));
+  const Table1D full(x, y, Table1D::Interp::kCubic, 2 * M_PI);
+  const Table1D open(std::vector<double>(x.begin(), x.end() - 1), std::vector<double>(y.begin(), y.end() - 1),
+                     Table1D::Interp::kCubic, 2 * M_PI);
+  for (double xx : {0.1, 3.0, 6.2, 6.28, -0.05})
+    EXPECT_NEAR(open.value(xx), full.value(xx), 1e-15) << xx;
+  // Three points (a 2 × 2 cyclic system): through (0, 1), (π, −1), (2π, 1) the periodic spline
+  // has second derivatives m0 = −m1 with (2π/3 − π/3) m0 = −4/π, i.e. s''(0) = −12/π²,
+  // s''(π) = 12/π², and s'(0) = −2/π + (π/3)(12/π²) − (π/6)(12/π²) = 0.
+  const Table1D three({0, M_PI, 2 * M_PI}, {1, -1, 1}, Table1D::Interp::kCubic, 2 * M_PI);
+  double v, d1, d2, vp, d1p, d2p;
+  three.eval(0, v, d1, d2);
+  three.eval(M_PI, vp, d1p, d2p);
+  EXPECT_NEAR(v, 1, 1e-15);
+  EXPECT_NEAR(d1, 0, 1e-15);
+  EXPECT_NEAR(d2, -12 / (M_PI * M_PI), 1e-15);
+  EXPECT_NEAR(d2p, 12 / (M_PI * M_PI), 1e-15);
+  // Four points (the smallest Sherman–Morrison case): C² across the period boundary.
+  const Table1D four({0, 1, 2.5, 4}, {1e5, 3e5, 2e5, 1e5}, Table1D::Interp::kCubic, 4);
+  four.eval(1e-12, v, d1, d2);
+  four.eval(4 - 1e-12, vp, d1p, d2p);
+  EXPECT_NEAR(d1, d1p, 1e-6);  // values of 1e5: round-off of the derivative ~1e5 ε / h
+  EXPECT_NEAR(d2, d2p, 1e-5);
+}
+
+TEST(Table1D, PeriodicTableInputErrors) {
+  auto error_of = [](std::vector<double> x, std::vector<double> y, double period) {
+    try {
+      Table1D(std::move(x), std::move(y), Table1D::Interp::kCubic, period);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of({0, 1, 2}, {0, 5, 1}, 2).find("a periodic table must end with its first value"), std::string::npos);
+  EXPECT_NE(error_of({0, 1, 3}, {0, 5, 0}, 2).find("more than the period"), std::string::npos);
+  EXPECT_EQ(error_of({0, 1, 2}, {0, 5, 0}, 2), "");
 }
