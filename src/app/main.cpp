@@ -424,7 +424,8 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   const bool plotted = plot_history(out);
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
   S["case_name"] = cs.name;
-  S["status"] = res.final.ok ? (res.interrupted ? "interrupted" : "complete") : "partial";
+  S["status"] = res.final.ok && res.failure.empty() ? (res.interrupted ? "interrupted" : "complete") : "partial";
+  if (!res.failure.empty()) S["failure"] = res.failure;
   S["options"] = {{"optimization", spec.to_json()}, {"generalized_alpha", cs.simulation.to_json()}};
   nlohmann::json p0 = nlohmann::json::object(), pf = nlohmann::json::object();
   const lsmbs::Vec init = d.initial();
@@ -459,6 +460,11 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
                 kkt.stationarity, kkt.bound_sign_violation);
     for (int i = 0; i < d.size(); ++i) std::printf("  %-10s %.6g -> %.6g\n", d.variables[i].name.c_str(), init[i], res.p[i]);
     std::printf("  results in %s\n", out.c_str());
+  }
+  if (!res.failure.empty()) {
+    std::fprintf(stderr, "lsmbs optimize: numerical failure: %s (results up to it kept; status partial)\n",
+                 res.failure.c_str());
+    return 1;
   }
   return res.final.ok ? 0 : 1;
 }

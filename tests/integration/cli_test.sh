@@ -216,6 +216,24 @@ assert b["status"] == "complete" and b["final"] == a["final"] and b["counts"]["s
 ra, rb = (open(f.replace("summary.json", "history.csv")).read().splitlines() for f in sys.argv[1:3])
 assert len(ra) == len(rb) and [l.split(",")[:4] for l in ra] == [l.split(",")[:4] for l in rb]
 PY
+# A simulation that fails inside optimize (the initial design runs, a later one does not): exit 1,
+# status partial, and the failure says which evaluation, where and why.
+cat > "$tmp/optfail.json" <<'JSON'
+{"name":"pend_fail","gravity":[0,-9.81],
+ "bodies":[{"name":"bob","type":"rigid","position":[1,0],"mass":1,"inertia":0.1}],
+ "joints":[{"name":"pin","type":"revolute","a":{"body":"bob","at":[-1,0]},"b":"ground"}],
+ "forces":[{"name":"push","type":"point_force","point":{"body":"bob"},"force":[0,-1]}],
+ "simulation":{"t_end":0.2,"h":0.02,"max_iter":4,"max_halvings":0},
+ "design":{"variables":[{"name":"s","initial":1,"lower":0,"upper":1e7}],"parameters":[{"parameter":"push.scale","variable":"s"}]},
+ "output":{"measures":[{"name":"bob","type":"position","point":{"body":"bob"}}],
+  "responses":[{"name":"final_y","measure":"bob.y","aggregate":"final"}]},
+ "optimization":{"objective":"final_y","constraints":[],"optimizer":"mma"}}
+JSON
+"$exe" optimize "$tmp/optfail.json" -o "$tmp/optfail" -q 2> "$tmp/eof.txt"; rc=$?
+[ $rc -eq 1 ] && grep -q "numerical failure: evaluation 2 at p = " "$tmp/eof.txt" || fail "failed evaluation in optimize: rc $rc $(cat "$tmp/eof.txt")"
+python3 -c "
+import json; s=json.load(open('$tmp/optfail/summary.json'))
+assert s['status'] == 'partial' and 'Newton did not converge' in s['failure'], s.get('failure')" || fail "optimize failure summary"
 # IDAS sensitivities from the command line: statistics, quadratures with gradients, options as run.
 "$exe" sensitivity "$spring" --method idas --rtol 1e-8 -o "$tmp/sens_idas" -q || fail "sensitivity --method idas"
 python3 - "$tmp/sens_idas/summary.json" <<'PY' || fail "idas summary.json"

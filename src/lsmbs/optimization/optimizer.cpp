@@ -29,6 +29,7 @@ struct Context {
   long new_sims = 0;
   bool interrupted = false;
   bool stop = false;  ///< set when the run must end (interrupted, failed simulation)
+  std::string failure;  ///< the first failed evaluation (OptimizeResult::failure)
   std::string case_sha, spec_json;
 
   Vec to_p(const double* x) const {
@@ -56,7 +57,16 @@ struct Context {
         request_stop();
       }
     }
-    if (!e.ok) request_stop();
+    if (!e.ok) {
+      if (failure.empty()) {
+        std::ostringstream os;
+        os << "evaluation " << history.size() << " at p = [";
+        for (Eigen::Index i = 0; i < p.size(); ++i) os << (i ? ", " : "") << p[i];
+        os << "] failed: " << e.message;
+        failure = os.str();
+      }
+      request_stop();
+    }
     return e;
   }
   void request_stop() {
@@ -231,6 +241,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   res.nlopt_code = r;
   res.nlopt_status = status_text(r);
   res.interrupted = c.interrupted;
+  res.failure = c.failure;
   res.history = c.history;
   res.evaluations = static_cast<long>(c.history.size());
   res.simulations = prob.simulations();

@@ -33,6 +33,9 @@ struct OptimizeResult {
   long simulations = 0;      ///< simulations run in this process
   bool converged = false;    ///< NLopt stopped on its tolerance with a feasible design
   bool interrupted = false;
+  /// Non-empty when an evaluation's simulation failed (the run stops there): which evaluation,
+  /// at which design, and the integrator's message (when and why).
+  std::string failure;
   std::vector<Evaluation> history;  ///< every distinct evaluation in order
   double wall_seconds = 0;
 };
