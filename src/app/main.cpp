@@ -21,6 +21,7 @@
 #include <optional>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/geometry_run.hpp"
@@ -75,13 +76,20 @@ int simulate(const std::string& case_file, const std::string& out, const std::ve
   if (verbose)
     std::fprintf(stderr, "lsmbs: case '%s': %d DOFs, %d constraint equations, %d nonzeros\n", cs.name.c_str(),
                  cs.model->nq(), cs.model->nc(), cs.model->pattern().nnz());
+  lsmbs::install_interrupt_handlers();
   const auto res = lsmbs::run_simulation(cs, ro);
   const auto& s = res.integrator;
+  if (res.interrupted) {
+    std::fprintf(stderr, "lsmbs simulate: %s; what was computed is in %s (status partial)\n", s.message.c_str(),
+                 out.c_str());
+    return 130;
+  }
   if (!quiet) {
     std::printf("lsmbs simulate: %s — %ld steps, %ld Newton iterations, %ld factorizations, %.3f s\n",
                 s.ok ? "complete" : "FAILED", s.steps, s.newton_iterations, s.factorizations, s.wall_seconds);
     if (s.halvings) std::printf("  step halvings: %ld (first at t = %g s)\n", s.halvings, s.halving_times.front());
-    for (const auto& [name, v] : res.responses) std::printf("  %-28s %.10g\n", name.c_str(), v);
+    if (s.ok)
+      for (const auto& [name, v] : res.responses) std::printf("  %-28s %.10g\n", name.c_str(), v);
     std::printf("  results in %s\n", out.c_str());
   }
   if (!s.ok) {
@@ -415,6 +423,7 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
       }
     }
   }
+  lsmbs::install_interrupt_handlers();  // an interrupt ends the run after the current evaluation
   const auto res = lsmbs::optimize(prob, o);
   line.clear();
   // final design pictures and summary
@@ -465,6 +474,11 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
     std::fprintf(stderr, "lsmbs optimize: numerical failure: %s (results up to it kept; status partial)\n",
                  res.failure.c_str());
     return 1;
+  }
+  if (res.interrupted && lsmbs::interrupted()) {
+    std::fprintf(stderr, "lsmbs optimize: interrupted after %ld evaluations; --resume continues from the checkpoint\n",
+                 res.evaluations);
+    return 130;
   }
   return res.final.ok ? 0 : 1;
 }

@@ -234,6 +234,28 @@ JSON
 python3 -c "
 import json; s=json.load(open('$tmp/optfail/summary.json'))
 assert s['status'] == 'partial' and 'Newton did not converge' in s['failure'], s.get('failure')" || fail "optimize failure summary"
+# Interruptions of simulate: SIGINT finishes the step, writes everything with status partial and
+# reason interrupted, exits 130; SIGKILL over an earlier complete run leaves no complete-looking
+# summary.json beside the new files.
+for sig in INT KILL; do
+  d="$tmp/sim_$sig"
+  "$exe" simulate "$spring" -o "$d" -q || fail "simulate before $sig"   # an earlier complete run
+  "$exe" simulate "$src/data/robot_arm/robot_arm.json" -o "$d" -q & pid=$!
+  for _ in $(seq 1 500); do ls "$d/vtu" 2> /dev/null | grep -q vtu && break; sleep 0.01; done
+  kill -$sig $pid; wait $pid; rc=$?
+  if [ $sig = INT ]; then
+    [ $rc -eq 130 ] || fail "SIGINT: exit $rc, expected 130"
+    python3 -c "
+import json; s=json.load(open('$d/summary.json'))
+assert s['status'] == 'partial' and s['reason'] == 'interrupted' and all(v is None for v in s['responses'].values()), s" || fail "SIGINT summary"
+    [ -s "$d/history.csv" ] && [ -s "$d/plate.pvd" ] || fail "SIGINT: history.csv or plate.pvd missing"
+  else
+    [ $rc -eq 137 ] || fail "SIGKILL: exit $rc"
+    if [ -f "$d/summary.json" ]; then
+      python3 -c "import json; assert json.load(open('$d/summary.json'))['case_name'] == 'robot_arm'" || fail "SIGKILL: the earlier run's summary survived"
+    fi
+  fi
+done
 # IDAS sensitivities from the command line: statistics, quadratures with gradients, options as run.
 "$exe" sensitivity "$spring" --method idas --rtol 1e-8 -o "$tmp/sens_idas" -q || fail "sensitivity --method idas"
 python3 - "$tmp/sens_idas/summary.json" <<'PY' || fail "idas summary.json"

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
 
@@ -74,11 +75,21 @@ class Recorder : public StepObserver {
 
 }  // namespace
 
+namespace {
+// Stops the integration at the next step once an interrupt was requested (core/interrupt.hpp).
+struct InterruptObserver : StepObserver {
+  bool on_step(const StepInfo&) override { return interrupted() == 0; }
+};
+}  // namespace
+
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   SimulationResult res;
   res.columns = cs.measure_columns();
   if (!ro.out_dir.empty()) {
     std::filesystem::create_directories(ro.out_dir);
+    // an earlier run's summary must never stand next to this run's files
+    std::error_code ec;
+    std::filesystem::remove(ro.out_dir + "/summary.json", ec);
     if (cs.output.vtu_stride > 0) std::filesystem::create_directories(ro.out_dir + "/vtu");
   }
   Recorder rec(cs, res, ro);
@@ -112,7 +123,14 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   } else {
     GeneralizedAlpha ga(cs.simulation);
     ProgressObserver prog(&line, cs.simulation.t_end);
-    res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec, &prog}, &res.final_state);
+    InterruptObserver stop;
+    res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec, &prog, &stop}, &res.final_state);
+    if (res.integrator.aborted && interrupted()) {
+      res.integrator.ok = false;
+      res.interrupted = true;
+      res.integrator.message = "interrupted (signal " + std::to_string(interrupted()) + ") at t = " +
+                               std::to_string(res.integrator.t_reached) + " s";
+    }
   }
   line.clear();
 
@@ -125,7 +143,8 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     const double val = aggregate(r, res.times, v, &n);
     res.responses[r.name] = val;
     res.response_counts[r.name] = n;
-    responses[r.name] = std::isfinite(val) ? nlohmann::json(val) : nlohmann::json(nullptr);
+    // a run that did not reach t_end has no responses (its aggregates cover part of the run)
+    responses[r.name] = std::isfinite(val) && res.integrator.ok ? nlohmann::json(val) : nlohmann::json(nullptr);
     windows[r.name] = {{"measure", res.columns[r.column]}, {"aggregate", ResponseSpec::kind_name(r.kind)},
                        {"window", r.window_text}, {"t0", r.t0 > -1e299 ? nlohmann::json(r.t0) : nlohmann::json(nullptr)},
                        {"t1", r.t1 < 1e299 ? nlohmann::json(r.t1) : nlohmann::json(nullptr)}, {"steps", n}};
@@ -140,6 +159,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["case_name"] = cs.name;
   S["status"] = res.integrator.ok ? "complete" : "partial";
   if (!res.integrator.ok) S["failure"] = res.integrator.message;
+  if (res.interrupted) S["reason"] = "interrupted";
   S["options"] = {{"integrator", ro.idas ? "idas" : "generalized-alpha"},
                   {ro.idas ? "idas" : "generalized_alpha", ro.idas ? res.idas_options.to_json() : cs.simulation.to_json()},
                   {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};

@@ -26,6 +26,7 @@ struct SimulationResult {
   std::map<std::string, double> responses;
   std::map<std::string, int> response_counts;    ///< steps in each response's window
   State final_state;
+  bool interrupted = false;                      ///< stopped by SIGINT/SIGTERM (partial)
   nlohmann::json summary;                        ///< what summary.json contains
   /// Column of the history by name (throws if unknown).
   std::vector<double> column(const std::string& name) const;

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/optimization/mma_classic.hpp"
 
@@ -52,7 +53,7 @@ struct Context {
         checkpoint();
       }
       if (o.on_evaluation) o.on_evaluation(static_cast<int>(history.size()), e);
-      if (o.stop_after >= 0 && new_sims >= o.stop_after) {
+      if ((o.stop_after >= 0 && new_sims >= o.stop_after) || lsmbs::interrupted()) {
         interrupted = true;
         request_stop();
       }
