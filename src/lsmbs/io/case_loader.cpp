@@ -1,3 +1,5 @@
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseQR>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -758,6 +760,30 @@ void check_determined(const Case& cs, const JsonReader& root) {
 
 }  // namespace
 
+// Redundant or conflicting constraints, seen before any run: the rows of Φ_q at the initial
+// positions must be independent (rank-revealing sparse QR of Φ_qᵀ). The dependent rows are
+// named by their joints — e.g. a duplicated bearing, or two prismatic joints that both lock a
+// body's rotation — instead of a singular iteration matrix later blaming another joint.
+static void check_constraint_rank(const Case& cs) {
+  const Model& m = *cs.model;
+  if (m.nc() == 0) return;
+  SpMat Jt = m.constraint_jacobian(0.0, m.initial_positions(), m.params()).transpose();
+  Jt.makeCompressed();
+  Eigen::SparseQR<SpMat, Eigen::COLAMDOrdering<int>> qr;
+  qr.compute(Jt);
+  if (qr.info() != Eigen::Success || qr.rank() >= m.nc()) return;
+  std::string dependent;
+  const auto& perm = qr.colsPermutation().indices();
+  const int shown = std::min<int>(m.nc() - static_cast<int>(qr.rank()), 6);
+  for (int k = static_cast<int>(qr.rank()); k < static_cast<int>(qr.rank()) + shown; ++k)
+    dependent += (dependent.empty() ? "" : "; ") + m.describe_unknown(m.nq() + perm[k]);
+  throw Error(cs.file, "/joints",
+              std::to_string(m.nc() - qr.rank()) + " of the " + std::to_string(m.nc()) +
+                  " constraint equations are redundant or conflicting at t = 0 (the rows of the constraint "
+                  "Jacobian are dependent): " + dependent +
+                  " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) locked twice");
+}
+
 Case load_case_json(const nlohmann::json& j, const std::string& file_label, const std::string& base_dir) {
   Case cs;
   cs.file = file_label;
@@ -795,6 +821,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   root.finish();
   check_determined(cs, root);
   cs.model->finalize();
+  check_constraint_rank(cs);
   // constraint-force measures: rows are known now
   size_t pi = 0;
   for (auto& m : cs.measures) {

@@ -1,6 +1,8 @@
 // Invalid case files fail with the file, the JSON path and what was expected.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <cmath>
 #include <cstdio>
 
@@ -255,4 +257,26 @@ TEST(CaseLoader, PeriodicTableFileErrorNamesTheJsonPathAndTheFile) {
   EXPECT_NE(msg.find("<test>: /forces/0/law/file: " + f + ": table: a periodic table must end with its first value"),
             std::string::npos)
       << msg;
+}
+
+TEST(CaseLoader, RedundantOrConflictingConstraintsAreRefusedNamingTheJoints) {
+  // independent reference: the slider-crank has 10 independent constraint equations; a second
+  // copy of a bearing adds 2 dependent ones, a second prismatic joint along y locks the piston's
+  // rotation twice (1 dependent) — both seen at load time, naming the added joint
+  const std::string file = std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json";
+  const json base = json::parse(std::ifstream(file));
+  EXPECT_EQ(error_of(base), "");
+  json dup = base;
+  json bearing = base["joints"][0];
+  bearing["name"] = "main_bearing_2";
+  dup["joints"].push_back(bearing);
+  const std::string e1 = error_of(dup);
+  EXPECT_NE(e1.find("/joints: 2 of the 10 constraint equations are redundant"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("'main_bearing_2'"), std::string::npos) << e1;
+  json two = base;
+  two["joints"].push_back({{"name", "cyl2"}, {"type", "prismatic"}, {"a", {{"body", "piston"}, {"at", {0, 0}}}},
+                           {"direction", {0, 1}}});
+  const std::string e2 = error_of(two);
+  EXPECT_NE(e2.find("1 of the 10 constraint equations"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("'cyl2'"), std::string::npos) << e2;
 }
