@@ -30,6 +30,9 @@ struct Case {
   std::unique_ptr<Model> model;
   State initial;
   GeneralizedAlphaOptions simulation;
+  /// simulation.check_constraints: refuse redundant or conflicting constraints at load time
+  /// (false only for models that are evaluated, never integrated, e.g. derivative tests).
+  bool check_constraints = true;
   OutputSpec output;
   std::vector<std::unique_ptr<Measure>> measures;
   std::vector<ResponseSpec> responses;
