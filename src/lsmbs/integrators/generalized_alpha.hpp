@@ -1,15 +1,21 @@
 #pragma once
-// Generalized-α time integration of the index-3 augmented-Lagrangian DAE (7), exactly as the
-// paper's Algorithm 1 (Chung & Hulbert 1993; Arnold & Brüls 2007):
+// Generalized-α time integration of the index-3 augmented-Lagrangian DAE (7), after the paper's
+// Algorithm 1 (Chung & Hulbert 1993; Arnold & Brüls 2007):
 //   (1−α_m) a_{n+1} + α_m a_n = (1−α_f) q̈_{n+1} + α_f q̈_n                          (8)
 //   q_{n+1} = q_n + h q̇_n + h²(½−β) a_n + h²β a_{n+1}                                (9)
 //   q̇_{n+1} = q̇_n + h(1−γ) a_n + hγ a_{n+1}                                          (10)
 // coefficients from ρ∞ (11); Newton on [r; kΦ] with the iteration matrix S_t (20) and the
 // corrections Δq̇ = γ' Δq, Δq̈ = β' Δq (17)–(18). Predictor: q̈_{n+1} = 0, λ_{n+1} = 0.
+// Where it departs from Algorithm 1 as printed (docs/methods.md gives the reasons):
+//  - the start is consistent (q̈0, λ0 from the acceleration-level system; consistent_start) and
+//    q0, q̇0 are projected on the constraints (project_initial); Algorithm 1 starts from zero;
+//  - convergence: per-row residual scales and round-off floors, ‖Φ‖ in length units, and the next
+//    Newton correction within tol_q·L, applied before the step is accepted (Algorithm 1 tests
+//    one residual norm);
+//  - at least min_iter Newton corrections per step; a failed step is retried with halved steps.
 // Sparse KLU: one symbolic analysis per run, numeric (re)factorization per Newton iteration
 // (full Newton), or reuse while convergence is fast: within a step (modified Newton) or across
 // steps of equal h (modified_across_steps; primal runs of large models), both opt-in.
-// A step whose Newton iteration fails is retried with halved sub-steps (bounded).
 // With threads = 2, concurrent observers (the direct sensitivities of Algorithm 2) run on a
 // worker thread one step behind, each step's factorization alternating between two numeric
 // factorizations of the one symbolic analysis.
