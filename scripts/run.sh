@@ -9,6 +9,6 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup-deps.sh"
 bash "$root/scripts/build.sh"
 out="${1:-$root/out/robot_arm}"
-"$root/build/src/lsmbs" optimize "$root/data/robot_arm/robot_arm_holes.json" -o "$out"
+"$root/build/src/lsmbs" optimize "$root/data/robot_arm/robot_arm_holes.json" -o "$out" --overwrite
 python3 "$root/paper_results/robot_arm_tables.py" "$out" "$out/tables.md"
 echo "results: $out/summary.json, $out/history.csv, $out/convergence.png, $out/final_design/plate.png, $out/tables.md"

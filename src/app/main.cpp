@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <set>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
@@ -130,6 +131,32 @@ void check_output_folder(const std::string& out) {
   if (!fs::is_directory(q, ec)) throw lsmbs::Error("-o " + out + ": " + q.string() + " is not a folder");
   if (::access(q.c_str(), W_OK) != 0 || q.string().rfind("/proc", 0) == 0 || q.string().rfind("/sys", 0) == 0)
     throw lsmbs::Error("-o " + out + ": cannot create or write in " + q.string());
+}
+
+// An output folder that holds an earlier lsmbs run is refused (its files would be mixed with this
+// run's) unless --overwrite, which removes the earlier run's files first (and only those);
+// optimize --resume continues the run the folder holds.
+void claim_output_folder(const std::string& out, bool overwrite, bool resume) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (resume || !fs::is_directory(out, ec)) return;
+  static const std::set<std::string> kFiles = {"summary.json", "history.csv", "gradients.csv", "checkpoint.json",
+                                               "report.md",    "bench.json",  "convergence.png"};
+  static const std::set<std::string> kFolders = {"vtu", "final_design"};
+  static const std::set<std::string> kExtensions = {".pvd", ".png", ".csv", ".gp"};
+  std::vector<fs::path> ours;
+  for (const auto& e : fs::directory_iterator(out, ec)) {
+    const std::string name = e.path().filename().string();
+    if (kFiles.count(name) || (e.is_directory() && kFolders.count(name)) ||
+        (e.is_regular_file() && kExtensions.count(e.path().extension().string())))
+      ours.push_back(e.path());
+  }
+  if (ours.empty()) return;
+  if (!overwrite)
+    throw lsmbs::Error("-o " + out + ": the folder holds an earlier run (" + ours.front().filename().string() +
+                       (ours.size() > 1 ? ", … " + std::to_string(ours.size()) + " entries" : std::string()) +
+                       "); give another folder, or --overwrite to replace that run");
+  for (const auto& p : ours) fs::remove_all(p);
 }
 
 // IDAS tolerances from the command line: checked before anything runs
@@ -492,10 +519,11 @@ int main(int argc, char** argv) {
   app.add_flag("--version", version, "print version and git commit");
 
   std::string case_file, out = "out";
-  bool quiet = false, verbose = false;
+  bool quiet = false, verbose = false, overwrite = false;
   auto* sim = app.add_subcommand("simulate", "simulate a case with the generalized-alpha scheme");
   sim->add_option("case", case_file, "case file (JSON)")->required()->check(CLI::ExistingFile);
   sim->add_option("-o,--output", out, "output folder (summary.json, history.csv, VTU)")->capture_default_str();
+  sim->add_flag("--overwrite", overwrite, "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   sim->add_flag("-q,--quiet", quiet, "print nothing but errors");
   sim->add_flag("-v,--verbose", verbose, "print model statistics");
   std::string integrator = "generalized-alpha";
@@ -521,6 +549,7 @@ int main(int argc, char** argv) {
   auto* geo = app.add_subcommand("geometry", "map the level-set design onto the mesh: μ_e (VTU, PNG), mass and its gradient");
   geo->add_option("case", case_file, "case file (JSON) with a design section")->required()->check(CLI::ExistingFile);
   geo->add_option("-o,--output", out, "output folder")->capture_default_str();
+  geo->add_flag("--overwrite", overwrite, "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   geo->add_option("--set", sets, "design variable override name=value (repeatable)");
   geo->add_option("--width", width, "PNG width in pixels")->capture_default_str()->check(CLI::Range(16, 20000));
   geo->add_flag("-q,--quiet", quiet, "print nothing but errors");
@@ -531,6 +560,7 @@ int main(int argc, char** argv) {
   auto* sen = app.add_subcommand("sensitivity", "responses and their design gradients (semi-analytical, direct, finite differences)");
   sen->add_option("case", case_file, "case file (JSON) with design variables and responses")->required()->check(CLI::ExistingFile);
   sen->add_option("-o,--output", out, "output folder")->capture_default_str();
+  sen->add_flag("--overwrite", overwrite, "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   sen->add_option("--method", method,
                   "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | fd-central | idas | "
                   "idas-adjoint (time-integral responses only)")
@@ -569,6 +599,7 @@ int main(int argc, char** argv) {
       ->required()->check(CLI::ExistingFile);
   opt->add_option("-o,--output", out, "output folder (history.csv, checkpoint.json, final_design/, summary.json)")
       ->capture_default_str();
+  opt->add_flag("--overwrite", overwrite, "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   opt->add_flag("--resume", resume, "continue an interrupted run from OUT/checkpoint.json");
   std::string optimizer;
   opt->add_option("--optimizer", optimizer, "override the case's optimizer")
@@ -591,6 +622,7 @@ int main(int argc, char** argv) {
                                            "time-step study against IDAS, mesh study, pass/fail");
   ver->add_option("case", case_file, "case file (JSON) with design variables and responses")->required()->check(CLI::ExistingFile);
   ver->add_option("-o,--output", out, "output folder (report.md, CSV, PNG)")->capture_default_str();
+  ver->add_flag("--overwrite", overwrite, "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   ver->add_flag("--no-idas", no_idas, "skip IDAS (too slow for long runs of stiff flexible models)");
   ver->add_flag("--no-mesh-study", no_mesh, "skip the mesh study");
   ver->add_option("--fd-delta", vo.fd_delta, "fd-central step")->capture_default_str();
@@ -605,6 +637,7 @@ int main(int argc, char** argv) {
                                           "sensitivity overheads, peak memory");
   ben->add_option("case", case_file, "case file (JSON)")->required()->check(CLI::ExistingFile);
   ben->add_option("-o,--output", out, "output folder (bench.json, summary.json)")->capture_default_str();
+  ben->add_flag("--overwrite", overwrite, "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   ben->add_option("--methods", bench_methods, "sensitivity methods to time (default: direct-analytic "
                                               "semi-analytical-central; 'none' for none)");
   ben->add_option("--matrices", bo.matrices, "back-solve matrices timed besides the default for the direct methods "
@@ -625,7 +658,10 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
-    if (*sim || *geo || *opt || *ben || *ver || *sen) check_output_folder(out);
+    if (*sim || *geo || *opt || *ben || *ver || *sen) {
+      check_output_folder(out);
+      claim_output_folder(out, overwrite, *opt && resume);
+    }
     if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, error_test,
                                 joined_args(argc, argv));
     if (*geo) return geometry(case_file, out, sets, width, quiet, joined_args(argc, argv));

@@ -234,13 +234,26 @@ JSON
 python3 -c "
 import json; s=json.load(open('$tmp/optfail/summary.json'))
 assert s['status'] == 'partial' and 'Newton did not converge' in s['failure'], s.get('failure')" || fail "optimize failure summary"
+# An output folder holding an earlier run is refused (its files would mix with this run's) unless
+# --overwrite, which removes that run's files and keeps the user's own.
+python3 -c "
+import json
+c=json.load(open('$src/data/robot_arm/robot_arm.json')); c['simulation']['t_end']=0.05; c['output']['vtu_stride']=5
+c['output']['responses']=[r for r in c['output']['responses'] if 'window' not in r]
+json.dump(c,open('$tmp/arm_short.json','w'))"
+"$exe" simulate "$tmp/arm_short.json" -o "$tmp/reuse" -q || fail "simulate into a new folder"
+echo "my notes" > "$tmp/reuse/notes.txt"
+"$exe" simulate "$spring" -o "$tmp/reuse" -q 2> "$tmp/er.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "holds an earlier run" "$tmp/er.txt" || fail "reused folder: rc $rc $(cat "$tmp/er.txt")"
+"$exe" simulate "$spring" -o "$tmp/reuse" -q --overwrite || fail "--overwrite"
+[ ! -e "$tmp/reuse/plate.pvd" ] && [ ! -e "$tmp/reuse/vtu" ] && [ -f "$tmp/reuse/notes.txt" ] || fail "--overwrite: $(ls "$tmp/reuse")"
 # Interruptions of simulate: SIGINT finishes the step, writes everything with status partial and
 # reason interrupted, exits 130; SIGKILL over an earlier complete run leaves no complete-looking
 # summary.json beside the new files.
 for sig in INT KILL; do
   d="$tmp/sim_$sig"
   "$exe" simulate "$spring" -o "$d" -q || fail "simulate before $sig"   # an earlier complete run
-  "$exe" simulate "$src/data/robot_arm/robot_arm.json" -o "$d" -q & pid=$!
+  "$exe" simulate "$src/data/robot_arm/robot_arm.json" -o "$d" -q --overwrite & pid=$!
   for _ in $(seq 1 500); do ls "$d/vtu" 2> /dev/null | grep -q vtu && break; sleep 0.01; done
   kill -$sig $pid; wait $pid; rc=$?
   if [ $sig = INT ]; then
