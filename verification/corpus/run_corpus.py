@@ -67,8 +67,11 @@ def run(cmd):
     return p.returncode, (p.stderr.strip() or p.stdout.strip())
 
 
+OVERWRITE = []   # ["--overwrite"] when the binary has it (set in main; folders are fresh anyway)
+
+
 def sensitivity(bin_, case_file, out_dir, method, extra=()):
-    cmd = [bin_, "sensitivity", case_file, "--method", method, "-o", out_dir, "-q", "--overwrite"] + list(extra)
+    cmd = [bin_, "sensitivity", case_file, "--method", method, "-o", out_dir, "-q"] + OVERWRITE + list(extra)
     t0 = time.monotonic()
     rc, msg = run(cmd)
     res = {"rc": rc, "command": " ".join(cmd[1:]), "seconds": round(time.monotonic() - t0, 3)}
@@ -139,7 +142,8 @@ def metric(g, ref, variables, w):
 
 def run_seed(seed, a):
     d = os.path.join(a.out, "cases", "seed_%04d" % seed)
-    os.makedirs(d, exist_ok=True)
+    shutil.rmtree(d, ignore_errors=True)   # lsmbs refuses an output folder holding an earlier run
+    os.makedirs(d)
     rec = {"seed": seed}
     try:
         case = gen_mechanisms.generate(seed, with_new_loads=a.with_new_loads)
@@ -188,13 +192,17 @@ def run_seed(seed, a):
             rec.setdefault("run_failures", []).append("%s: exit %d: %s" % (k, v["rc"], v.get("message", "")))
     rows = []
     fd_keys = ["fd-central@%g" % dp for dp in FD_DELTAS]
-    if any(runs[k]["rc"] != 0 for k in fd_keys):
-        rec["status"] = "reference_failed"
-        finish(rec, a, d)
-        return rec
     for m in METHODS:
         if runs[m]["rc"] != 0:
             failures.append("%s exited with %d: %s" % (m, runs[m]["rc"], runs[m].get("message", "")))
+    for k, v in runs.items():   # invalid input or usage (exit 2) is never a numerical limitation
+        if v["rc"] == 2 and k not in METHODS:
+            failures.append("%s exited with 2: %s" % (k, v.get("message", "")))
+    if any(runs[k]["rc"] != 0 for k in fd_keys):
+        rec["failures"] = failures
+        rec["status"] = "FAIL" if failures else "reference_failed"
+        finish(rec, a, d)
+        return rec
     base = runs[fd_keys[0]]
     rec["responses"] = {}
     for rname in sorted(base["gradients"]):
@@ -417,6 +425,11 @@ def main(argv=None):
     ap.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     a = ap.parse_args(argv)
     a.lsmbs = os.path.abspath(a.lsmbs)
+    if not os.access(a.lsmbs, os.X_OK):
+        ap.error("--lsmbs %s: not an executable" % a.lsmbs)
+    rc, text = run([a.lsmbs, "sensitivity", "--help"])
+    if "--overwrite" in text:
+        OVERWRITE.append("--overwrite")
     temp = a.out is None
     if temp:
         a.out = tempfile.mkdtemp(prefix="lsmbs_corpus_")
