@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Gradient corpus: the direct sensitivity methods at default options on random mechanisms.
 
-    run_corpus.py --lsmbs BIN --seeds A-B [--jobs 1] [--out DIR] [--matrix M] [--no-idas] [--keep]
+    run_corpus.py --lsmbs BIN --seeds A-B [--jobs 1] [--out DIR] [--matrix M] [--no-idas] [--require-idas] [--keep]
 
 For each seed, gen_mechanisms.py generates a case; the gradients of every response are computed
 with ``direct-analytic``, ``semi-analytical`` and ``semi-analytical-central`` at their default
@@ -195,6 +195,8 @@ def run_seed(seed, a):
     for m in METHODS:
         if runs[m]["rc"] != 0:
             failures.append("%s exited with %d: %s" % (m, runs[m]["rc"], runs[m].get("message", "")))
+    if a.require_idas and "idas" in runs and runs["idas"]["rc"] != 0:
+        failures.append("idas exited with %d: %s" % (runs["idas"]["rc"], runs["idas"].get("message", "")))
     for k, v in runs.items():   # invalid input or usage (exit 2) is never a numerical limitation
         if v["rc"] == 2 and k not in METHODS:
             failures.append("%s exited with 2: %s" % (k, v.get("message", "")))
@@ -420,6 +422,8 @@ def main(argv=None):
     ap.add_argument("--matrix", choices=["last", "converged", "refined"],
                     help="passed to the direct methods (default: not passed, i.e. lsmbs's default)")
     ap.add_argument("--no-idas", action="store_true", help="skip the secondary IDAS reference")
+    ap.add_argument("--require-idas", action="store_true",
+                    help="an IDAS run that fails fails the case (default: reported only)")
     ap.add_argument("--keep", action="store_true", help="keep every lsmbs output folder")
     ap.add_argument("--with-new-loads", action="store_true", help="generate torque / rotational spring loads")
     ap.add_argument("-q", "--quiet", action="store_true", help="print only the summary")

@@ -44,7 +44,7 @@ nlohmann::json IdasStats::to_json() const {
           {"jacobian_evaluations", jacobian_evaluations}, {"nonlinear_iterations", nonlinear_iterations},
           {"error_test_failures", error_test_failures}, {"nonlinear_convergence_failures", nonlinear_convergence_failures},
           {"sensitivity_residual_evaluations", sensitivity_residual_evaluations}, {"wall_seconds", wall_seconds},
-          {"error_test", error_test}, {"max_order", max_order}};
+          {"error_test", error_test}, {"max_order", max_order}, {"massless_velocities", massless_velocities}};
   if (adjoint_problems > 0)
     j["adjoint"] = {{"backward_problems", adjoint_problems}, {"steps", adjoint_steps},
                     {"residual_evaluations", adjoint_residual_evaluations},
@@ -669,6 +669,18 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
   y << s0.q, s0.v, s0.lambda, Vec::Zero(nc);
   yp << s0.v, s0.a, Vec::Zero(nc), Vec::Zero(nc);
   id << Vec::Ones(2 * nq), Vec::Zero(2 * nc);
+  // A velocity whose DOF carries no mass (a massless link's coordinates, the angle of a point
+  // mass on a slider) never appears differentiated: M v̇ has a zero row there, and v is fixed by
+  // the velocity constraints (F4). Treated as differential it made the corrector fail (flag -4)
+  // on generated mechanisms with massless links at tight tolerances; it is algebraic.
+  {
+    Mat x(nq, 1), Mx(nq, 1);
+    for (int i = 0; i < nq; ++i) x(i, 0) = 1.0 + 0.37 * std::sin(1.0 + i);  // generic: no cancellation
+    m.mass_damping_product(s0, im.nominal, x, Mat::Zero(nq, 1), Mx);
+    const double scale = Mx.cwiseAbs().maxCoeff();
+    for (int i = 0; i < nq; ++i)
+      if (std::abs(Mx(i, 0)) <= 1e-14 * scale) id[nq + i] = 0, ++st.massless_velocities;
+  }
   const double L = m.length_scale(), T = std::max(im.o.t_end, im.o.h_out);
   const bool positions_only = im.o.error_test == IdasOptions::ErrorTest::kPositions ||
                               (im.o.error_test == IdasOptions::ErrorTest::kAuto && !m.flexible_bodies().empty());
@@ -738,7 +750,34 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
   std::sort(breaks.begin(), breaks.end());
   breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
   size_t next_break = 0;
-  if (!breaks.empty() && !adjoint) IDASetStopTime(sd.mem, breaks[0]);
+  // Forward runs also stop where a driver's acceleration or a load law has a kink, and restart
+  // there from consistent right-limit values: a BDF step across one, or a restart from the left
+  // limit's history, fails the corrector (flag -4) as the acceleration and λ jump. The adjoint
+  // run cannot stop (see below) and steps across them.
+  struct Stop {
+    double t;
+    bool is_break, is_kink;
+  };
+  std::vector<Stop> stops;
+  for (double t : breaks) stops.push_back({t, true, false});
+  if (!adjoint) {
+    const double margin = 1e-12 * im.o.h_out;
+    for (double t : im.m.time_kinks(s0.t + margin, im.o.t_end - margin)) stops.push_back({t, false, true});
+    std::stable_sort(stops.begin(), stops.end(), [](const Stop& a, const Stop& b) { return a.t < b.t; });
+    std::vector<Stop> merged;  // one stop for near-equal times (a window boundary keeps its time)
+    for (const Stop& x : stops) {
+      if (!merged.empty() && x.t - merged.back().t <= margin) {
+        Stop& m0 = merged.back();
+        if (x.is_break && !m0.is_break) m0.t = x.t;
+        m0.is_break |= x.is_break, m0.is_kink |= x.is_kink;
+        continue;
+      }
+      merged.push_back(x);
+    }
+    stops = std::move(merged);
+  }
+  size_t next_stop = 0;
+  if (!stops.empty() && !adjoint) IDASetStopTime(sd.mem, stops[0].t);
   Vec Qv(nQ);
   Mat dQ(nQ, nv);
   std::vector<Breakpoint> at_breaks;  // adjoint runs
@@ -752,6 +791,37 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
       for (int i = 0; i < nv; ++i) dQ.col(i) = Eigen::Map<Vec>(N_VGetArrayPointer(sd.yQS[i]), nQ);
     }
     im.quad->on_breakpoint(t, Qv, sens ? &dQ : nullptr);
+  };
+  // Restart at a kink t_k: q, v, the sensitivities of q and v and the quadratures are continuous;
+  // q̈ and λ are re-solved from the index-1 system at t_k⁺ (as at t0), the sensitivities' rates
+  // restart from the left limit (IDAS's order-1 restart corrects them within its error test).
+  auto restart_at_kink = [&](double tk) -> std::string {
+    State s;
+    s.t = tk + 1e-9 * im.o.h_out;
+    s.q = y.head(nq), s.v = y.segment(nq, nq), s.lambda = y.segment(2 * nq, nc);
+    s.a = yp.segment(nq, nq);
+    if (auto r = consistent_accelerations(m, im.nominal, 1.0, s, lu); !r.ok())
+      return "IDAS restart at the law kink t = " + std::to_string(tk) + ": " + r.message;
+    y.segment(2 * nq, nc) = s.lambda;
+    yp.head(nq) = s.v;
+    yp.segment(nq, nq) = s.a;
+    yp.tail(2 * nc).setZero();
+    realtype tr;
+    if (sens) {
+      IDAGetSens(sd.mem, &tr, sd.yS);
+      IDAGetSensDky(sd.mem, tk, 1, sd.ypS);
+    }
+    if (nQ > 0) {
+      IDAGetQuad(sd.mem, &tr, sd.yQ);
+      if (sens) IDAGetQuadSens(sd.mem, &tr, sd.yQS);
+    }
+    if (IDAReInit(sd.mem, tk, sd.y, sd.yp) != IDA_SUCCESS ||
+        (sens && IDASensReInit(sd.mem, im.o.staggered ? IDA_STAGGERED : IDA_SIMULTANEOUS, sd.yS, sd.ypS) !=
+                     IDA_SUCCESS) ||
+        (nQ > 0 && IDAQuadReInit(sd.mem, sd.yQ) != IDA_SUCCESS) ||
+        (nQ > 0 && sens && IDAQuadSensReInit(sd.mem, sd.yQS) != IDA_SUCCESS))
+      return "IDAS could not restart at the law kink t = " + std::to_string(tk);
+    return "";
   };
   // ---- outputs on the grid
   Mat dq(nq, nv), dv(nq, nv), da(nq, nv), dl(nc, nv);
@@ -796,8 +866,14 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
       // window boundaries are stop times (set before IDAS's internal time can pass them): a step
       // ends exactly on each
       while ((flag = IDASolve(sd.mem, tout, &tret, sd.y, sd.yp, IDA_NORMAL)) == IDA_TSTOP_RETURN) {
-        report_quadrature(tret);
-        if (++next_break < breaks.size()) IDASetStopTime(sd.mem, breaks[next_break]);
+        if (stops[next_stop].is_break) report_quadrature(tret);
+        if (stops[next_stop].is_kink)
+          if (auto msg = restart_at_kink(tret); !msg.empty()) {
+            flag = -1;
+            st.message = msg;
+            break;
+          }
+        if (++next_stop < stops.size()) IDASetStopTime(sd.mem, stops[next_stop].t);
         if (tret >= tout - eps) break;
       }
     } else {
@@ -819,7 +895,8 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
     }
     if (flag < 0) {
       st.ok = false;
-      st.message = "IDAS failed at t = " + std::to_string(tret) + " (flag " + std::to_string(flag) + ")";
+      if (st.message.empty())
+        st.message = "IDAS failed at t = " + std::to_string(tret) + " (flag " + std::to_string(flag) + ")";
       break;
     }
     emit(tout);

@@ -100,6 +100,8 @@ struct IdasStats {
   std::string message;
   long steps = 0, residual_evaluations = 0, jacobian_evaluations = 0, nonlinear_iterations = 0;
   long error_test_failures = 0, nonlinear_convergence_failures = 0, sensitivity_residual_evaluations = 0;
+  /// velocity DOFs without mass, treated as algebraic variables
+  long massless_velocities = 0;
   std::string error_test;           ///< resolved: "positions" or "positions+velocities"
   int max_order = 0;                ///< resolved maximum BDF order
   /// Adjoint runs: backward problems (one per quadrature and time asked for), their steps,

@@ -56,6 +56,7 @@ class AngleDriver : public ConstraintElement {
   }
   void time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_tt) const override;
   const TimeLaw& law() const { return *law_; }
+  void time_kinks(double t0, double t1, std::vector<double>& out) const override { law_->kinks(t0, t1, out); }
 
  private:
   std::vector<int> dofs_;
@@ -71,6 +72,7 @@ class TranslationDriver : public ConstraintElement {
   void hessian(double t, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const override;
   void time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_tt) const override;
   const TimeLaw& law() const { return *law_; }
+  void time_kinks(double t0, double t1, std::vector<double>& out) const override { law_->kinks(t0, t1, out); }
 
  private:
   PointRef a_;

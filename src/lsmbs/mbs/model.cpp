@@ -1,5 +1,6 @@
 #include "lsmbs/mbs/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -497,6 +498,15 @@ void Model::residual_param_derivative(const State& s, const ModelParams& p, cons
       for (size_t i = 0; i < d.size(); ++i) out[d[i]] += dv * r[i];
     }
   }
+}
+
+std::vector<double> Model::time_kinks(double t0, double t1) const {
+  std::vector<double> t;
+  for (const auto& f : forces_) f->time_kinks(t0, t1, t);
+  for (const auto& c : cons_) c->time_kinks(t0, t1, t);
+  std::sort(t.begin(), t.end());
+  t.erase(std::unique(t.begin(), t.end()), t.end());
+  return t;
 }
 
 }  // namespace lsmbs

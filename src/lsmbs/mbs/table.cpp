@@ -175,4 +175,21 @@ void Table1D::eval(double x, double& v, double& d1, double& d2) const {
   d2 = A * m_[i] + B * m_[i + 1];
 }
 
+void Table1D::kinks(double a, double b, std::vector<double>& out) const {
+  if (x_.empty() || !(b > a)) return;
+  std::vector<double> base;
+  if (interp_ == Interp::kLinear) base = x_;
+  else if (period_ <= 0) base = {x_.front(), x_.back()};
+  if (period_ <= 0) {
+    for (double x : base)
+      if (x > a && x < b) out.push_back(x);
+    return;
+  }
+  // periodic: x_k + j·period for every j that lands in (a, b)
+  const double j0 = std::floor((a - x_.back()) / period_), j1 = std::ceil((b - x_.front()) / period_);
+  for (double j = j0; j <= j1; ++j)
+    for (double x : base)
+      if (const double xj = x + j * period_; xj > a && xj < b) out.push_back(xj);
+}
+
 }  // namespace lsmbs

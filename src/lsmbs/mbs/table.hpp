@@ -28,6 +28,9 @@ class Table1D {
   bool empty() const { return x_.empty(); }
   double x_min() const { return x_.front(); }
   double x_max() const { return x_.back(); }
+  /// Appends the x in (a, b) where the interpolant is not C² (the knots of a linear table, the
+  /// ends of a non-periodic one where it is held constant), repeated over periods.
+  void kinks(double a, double b, std::vector<double>& out) const;
 
  private:
   std::vector<double> x_, y_, m_;  // m_: second derivatives at the knots

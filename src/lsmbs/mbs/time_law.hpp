@@ -21,6 +21,13 @@ class TimeLaw {
   virtual ~TimeLaw() = default;
   virtual void eval(double t, double& s, double& sd, double& sdd) const = 0;
   virtual std::vector<Phase> phases() const { return {}; }
+  /// Appends the times in (t0, t1) where s̈ is discontinuous (phase boundaries, table knots):
+  /// IDAS stops there instead of stepping across.
+  virtual void kinks(double t0, double t1, std::vector<double>& out) const {
+    for (const Phase& p : phases())
+      for (double t : {p.t0, p.t1})
+        if (t > t0 && t < t1) out.push_back(t);
+  }
   double value(double t) const { double s, sd, sdd; eval(t, s, sd, sdd); return s; }
 };
 
@@ -52,6 +59,7 @@ class TabulatedLaw : public TimeLaw {
  public:
   explicit TabulatedLaw(Table1D table) : table_(std::move(table)) {}
   void eval(double t, double& s, double& sd, double& sdd) const override { table_.eval(t, s, sd, sdd); }
+  void kinks(double t0, double t1, std::vector<double>& out) const override { table_.kinks(t0, t1, out); }
 
  private:
   Table1D table_;

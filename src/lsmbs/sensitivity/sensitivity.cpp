@@ -132,7 +132,49 @@ std::vector<ResponseSensitivity> simulate_responses(Case& cs, const Vec& p, Sens
   return simulate_responses_at_current_design(cs, counts, nullptr, line, 1);
 }
 
+namespace {
+
+// A result that finished but holds a NaN or an infinity is a numerical failure, never a complete
+// run with null entries (a too large --delta can make a perturbed simulation meaningless).
+void flag_non_finite(SensitivityResult& res, const Design& d, bool grid_gradients) {
+  if (!res.ok) return;
+  auto fail = [&](const std::string& what) {
+    res.ok = false;
+    res.message = what + " is not finite (NaN or infinite): a perturbed or nominal simulation produced a "
+                         "meaningless value; try a smaller --delta, or check the response";
+  };
+  for (const auto& r : res.responses) {
+    for (size_t k = 0; k < r.values.size(); ++k)
+      if (!std::isfinite(r.values[k])) return fail("the value of response '" + r.name + "'");
+    if (!grid_gradients) continue;
+    for (Eigen::Index k = 0; k < r.gradient.rows(); ++k)
+      for (Eigen::Index i = 0; i < r.gradient.cols(); ++i)
+        if (!std::isfinite(r.gradient(k, i)))
+          return fail("the derivative of response '" + r.name + "' with respect to '" +
+                      d.variables[static_cast<size_t>(i)].name + "'");
+  }
+  for (const auto& q : res.quadratures) {
+    if (!std::isfinite(q.value)) return fail("the IDAS quadrature value of response '" + q.name + "'");
+    for (Eigen::Index i = 0; i < q.gradient.size(); ++i)
+      if (!std::isfinite(q.gradient[i]))
+        return fail("the IDAS quadrature derivative of response '" + q.name + "' with respect to '" +
+                    d.variables[static_cast<size_t>(i)].name + "'");
+  }
+}
+
+SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const SensitivityOptions& o);
+
+}  // namespace
+
 SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const SensitivityOptions& o) {
+  SensitivityResult res = compute_sensitivities_unchecked(cs, p, o);
+  flag_non_finite(res, *cs.design, o.method != SensitivityOptions::Method::kIdasAdjoint);
+  return res;
+}
+
+namespace {
+
+SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const SensitivityOptions& o) {
   if (!cs.design) throw Error(cs.file, "/design", "sensitivities need a design section (design variables)");
   if (cs.responses.empty()) throw Error(cs.file, "/output/responses", "sensitivities need at least one response");
   const auto t0 = std::chrono::steady_clock::now();
@@ -288,5 +330,7 @@ SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const Sensitivit
   res.counts.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }
+
+}  // namespace
 
 }  // namespace lsmbs
