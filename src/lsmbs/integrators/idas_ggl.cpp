@@ -695,6 +695,22 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
       IDASetUserData(sd.mem, &im) || IDASetId(sd.mem, sd.id) || IDASetSuppressAlg(sd.mem, SUNTRUE) ||
       IDASetMaxNumSteps(sd.mem, im.o.max_steps) || IDASetMaxOrd(sd.mem, st.max_order))
     return fail("IDAS set-up failed");
+  {
+    // Initial step: where ½h²‖q̈‖ reaches the position tolerance. IDAS's own estimate bounds
+    // h‖ẏ‖ by the weights of every component, and velocities that start at rest have only their
+    // absolute tolerance, atol·L/t_end: on Andrews' squeezer at rtol ≤ 5e-11 that gave h ~ 1e-19 s,
+    // where the corrector cannot converge in floating point (flag -4 at t = 0).
+    double wa = 0;
+    for (int i = 0; i < nq; ++i) {
+      const double w = s0.a[i] / (im.o.rtol * std::abs(s0.q[i]) + im.o.atol * L);
+      wa += w * w;
+    }
+    wa = std::sqrt(wa / nq);
+    if (wa > 0 && std::isfinite(wa)) {
+      const double h0 = std::min(0.1 * im.o.h_out, std::sqrt(2.0 / wa));
+      if (IDASetInitStep(sd.mem, h0)) return fail("IDAS set-up failed (initial step)");
+    }
+  }
   const SpMat J0 = im.jacobian(s0.t, 1.0, y.data(), yp.data());
   sd.A = SUNSparseMatrix(N, N, J0.nonZeros(), CSC_MAT, sd.ctx);
   sd.LS = SUNLinSol_KLU(sd.y, sd.A, sd.ctx);
