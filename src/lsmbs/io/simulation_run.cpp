@@ -90,7 +90,8 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     // an earlier run's summary must never stand next to this run's files
     std::error_code ec;
     std::filesystem::remove(ro.out_dir + "/summary.json", ec);
-    if (cs.output.vtu_stride > 0) std::filesystem::create_directories(ro.out_dir + "/vtu");
+    if (cs.output.vtu_stride > 0 && !cs.model->flexible_bodies().empty())
+      std::filesystem::create_directories(ro.out_dir + "/vtu");
   }
   Recorder rec(cs, res, ro);
   ProgressLine line(ro.progress);
@@ -181,11 +182,15 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     std::vector<std::string> header = {"t"};
     header.insert(header.end(), res.columns.begin(), res.columns.end());
     std::vector<std::vector<double>> rows;
-    for (size_t i = 0; i < res.history.size(); i += cs.output.csv_stride) {
+    auto add_row = [&](size_t i) {
       std::vector<double> r = {res.times[i]};
       r.insert(r.end(), res.history[i].begin(), res.history[i].end());
       rows.push_back(std::move(r));
-    }
+    };
+    const size_t stride = static_cast<size_t>(cs.output.csv_stride);
+    for (size_t i = 0; i < res.history.size(); i += stride) add_row(i);
+    // the last recorded state is always written, whatever the stride
+    if (!res.history.empty() && (res.history.size() - 1) % stride != 0) add_row(res.history.size() - 1);
     write_csv(ro.out_dir + "/history.csv", header, rows);
     for (const auto& [body, entries] : rec.pvd_) write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
     S["files"] = {{"history", "history.csv"}};
