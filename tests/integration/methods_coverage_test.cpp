@@ -5,7 +5,8 @@
 // The problem has closed forms. Four free rigid bodies, no gravity, no joints, t ∈ [0, 1]:
 //   A (mass m1) and B (mass m2) coast at 2^½ and 2 m/s: kinetic energy m1 + 2 m2;
 //   C (mass m1) and D (mass m2) start 1 m apart at rest and are pushed apart by 1 N each:
-//   their separation grows by e = ½ (1/m1 + 1/m2) at t = 1, their kinetic energy is ½ (1/m1 + 1/m2).
+//   their separation grows by e = ½ (1/m1 + 1/m2) at t = 1, their kinetic energy is ½ (1/m1 +
+//   1/m2).
 // Constant forces give constant accelerations, which generalized-α integrates exactly (a quadratic
 // in t from consistent start accelerations), so the discrete responses are the closed forms to
 // round-off:  energy E = m1 + 2 m2 + ½ (1/m1 + 1/m2),  spread e = ½ (1/m1 + 1/m2).
@@ -13,7 +14,6 @@
 // energy's second term is the constant ½, and the KKT conditions give m1 = 1 + √2,
 // m2 = m1/√2, E* = 3 + 2√2 + ½ with multiplier m1² − ½ > 0.
 #include <gtest/gtest.h>
-
 #include <sys/wait.h>
 
 #include <cmath>
@@ -32,7 +32,8 @@ using json = nlohmann::json;
 
 namespace {
 
-const double kM1 = 1 + std::sqrt(2.0), kM2 = kM1 / std::sqrt(2.0), kE = 3 + 2 * std::sqrt(2.0) + 0.5;
+const double kM1 = 1 + std::sqrt(2.0), kM2 = kM1 / std::sqrt(2.0),
+             kE = 3 + 2 * std::sqrt(2.0) + 0.5;
 
 json coasting_bodies(const std::string& optimizer) {
   json j = R"({
@@ -99,7 +100,8 @@ TEST(MethodsCoverage, ResponsesOfTheCoastingBodiesAreTheClosedForms) {
   ASSERT_TRUE(res.ok) << res.message;
   const auto& E = res.responses[0];
   const auto& e = res.responses[1];
-  std::printf("E = %.17g (closed form %.17g), e = %.17g (%.17g)\n", E.values[0], energy(2, 3), e.values[0], spread(2, 3));
+  std::printf("E = %.17g (closed form %.17g), e = %.17g (%.17g)\n", E.values[0], energy(2, 3),
+              e.values[0], spread(2, 3));
   // 10 exact steps: round-off of sums of O(1) numbers
   EXPECT_NEAR(E.values[0], energy(2, 3), 1e-13);
   EXPECT_NEAR(e.values[0], spread(2, 3), 1e-14);
@@ -133,12 +135,16 @@ TEST(MethodsCoverage, FdForwardIsTheForwardDifferenceWithItsTruncationError) {
   for (int i = 0; i < 2; ++i) {
     const double m = p[i], dm = o.step(*cs.design, p, i);
     ASSERT_NEAR(dm, 1e-4 * m, 1e-18);
-    const double exact = -0.5 / (m * m), forward = -0.5 / (m * (m + dm)), central = -0.5 / ((m + dm) * (m - dm));
+    const double exact = -0.5 / (m * m), forward = -0.5 / (m * (m + dm)),
+                 central = -0.5 / ((m + dm) * (m - dm));
     // round-off of a difference quotient of values known to ~1e-15: 1e-15 / Δm ≈ 5e-12
     const double tol = 1e-14 / dm;
-    std::printf("m%d: fd-forward %.15e (forward difference %.15e, derivative %.15e: truncation %.3e relative); "
-                "fd-central %.15e\n",
-                i + 1, fwd.responses[1].gradient(0, i), forward, exact, forward / exact - 1, ctr.responses[1].gradient(0, i));
+    std::printf(
+        "m%d: fd-forward %.15e (forward difference %.15e, derivative %.15e: truncation %.3e "
+        "relative); "
+        "fd-central %.15e\n",
+        i + 1, fwd.responses[1].gradient(0, i), forward, exact, forward / exact - 1,
+        ctr.responses[1].gradient(0, i));
     EXPECT_NEAR(fwd.responses[1].gradient(0, i), forward, tol);
     EXPECT_NEAR(ctr.responses[1].gradient(0, i), central, tol);
     // the truncation error is there, with its sign: the forward difference is not a central one
@@ -158,10 +164,12 @@ TEST(MethodsCoverage, NloptMmaCcsaqAndSlsqpReachTheClosedFormOptimum) {
   for (const std::string opt : {"mma", "ccsaq", "slsqp"}) {
     const OptRun r = optimize_case(coasting_bodies(opt));
     const Vec& p = r.res.p;
-    std::printf("%-6s %3ld evaluations, %s: m = (%.9f, %.9f) [closed form (%.9f, %.9f)], E = %.12f [%.12f], "
-                "violation %+.2e\n",
-                opt.c_str(), r.res.evaluations, r.res.nlopt_status.c_str(), p[0], p[1], kM1, kM2, r.res.final.objective,
-                kE, r.res.final.max_violation);
+    std::printf(
+        "%-6s %3ld evaluations, %s: m = (%.9f, %.9f) [closed form (%.9f, %.9f)], E = %.12f "
+        "[%.12f], "
+        "violation %+.2e\n",
+        opt.c_str(), r.res.evaluations, r.res.nlopt_status.c_str(), p[0], p[1], kM1, kM2,
+        r.res.final.objective, kE, r.res.final.max_violation);
     EXPECT_TRUE(r.res.converged) << opt << ": " << r.res.nlopt_status;
     EXPECT_NEAR(p[0] / kM1, 1, 3e-4) << opt;
     EXPECT_NEAR(p[1] / kM2, 1, 3e-4) << opt;
@@ -173,7 +181,8 @@ TEST(MethodsCoverage, NloptMmaCcsaqAndSlsqpReachTheClosedFormOptimum) {
 
 TEST(MethodsCoverage, MmaSvanbergRespectsItsMoveLimitAndReachesTheOptimum) {
   // move_limit 0.05: no variable moves by more than 0.05 × (10 − 0.5) = 0.475 per iteration; from
-  // m = (5, 5) to (2.41, 1.71) the first iterations take the full move (the optimum is ≥ 5 moves away)
+  // m = (5, 5) to (2.41, 1.71) the first iterations take the full move (the optimum is ≥ 5 moves
+  // away)
   json j = coasting_bodies("mma-svanberg");
   j["optimization"]["move_limit"] = 0.05;
   const OptRun r = optimize_case(j);
@@ -185,22 +194,28 @@ TEST(MethodsCoverage, MmaSvanbergRespectsItsMoveLimitAndReachesTheOptimum) {
     for (int i = 0; i < 2; ++i) {
       const double step = std::abs(h[k].p[i] - h[k - 1].p[i]);
       largest = std::max(largest, step);
-      if (step > 0.475 * (1 - 1e-5)) ++at_limit;  // the interior-point subproblem stays inside its box
+      if (step > 0.475 * (1 - 1e-5))
+        ++at_limit;  // the interior-point subproblem stays inside its box
       EXPECT_LE(step, 0.475 * (1 + 1e-12)) << "iteration " << k << " variable " << i;
     }
-  std::printf("mma-svanberg, move limit 0.05: %ld evaluations, largest step %.6f (limit 0.475), %d steps at the limit; "
-              "m = (%.9f, %.9f), E = %.12f\n",
-              r.res.evaluations, largest, at_limit, r.res.p[0], r.res.p[1], r.res.final.objective);
+  std::printf(
+      "mma-svanberg, move limit 0.05: %ld evaluations, largest step %.6f (limit 0.475), %d steps "
+      "at the limit; "
+      "m = (%.9f, %.9f), E = %.12f\n",
+      r.res.evaluations, largest, at_limit, r.res.p[0], r.res.p[1], r.res.final.objective);
   EXPECT_GE(at_limit, 5) << "the first moves are limited";
   EXPECT_TRUE(r.res.converged);
   EXPECT_NEAR(r.res.p[0] / kM1, 1, 3e-4);  // as above (measured 1.1e-5)
   EXPECT_NEAR(r.res.p[1] / kM2, 1, 3e-4);
-  EXPECT_NEAR(r.res.final.objective / kE, 1, 1e-6);  // the classic MMA stops on the same rule (measured 2.4e-7)
+  EXPECT_NEAR(r.res.final.objective / kE, 1,
+              1e-6);  // the classic MMA stops on the same rule (measured 2.4e-7)
   // the default move limit (0.5) lets the first step go further than 0.475
   const OptRun d = optimize_case(coasting_bodies("mma-svanberg"));
   double first = 0;
-  for (int i = 0; i < 2; ++i) first = std::max(first, std::abs(d.res.history[1].p[i] - d.res.history[0].p[i]));
-  std::printf("mma-svanberg, default move limit: first step %.6f, %ld evaluations\n", first, d.res.evaluations);
+  for (int i = 0; i < 2; ++i)
+    first = std::max(first, std::abs(d.res.history[1].p[i] - d.res.history[0].p[i]));
+  std::printf("mma-svanberg, default move limit: first step %.6f, %ld evaluations\n", first,
+              d.res.evaluations);
   EXPECT_GT(first, 0.475);
   EXPECT_NEAR(d.res.p[0] / kM1, 1, 3e-4);
 }
@@ -212,12 +227,15 @@ TEST(MethodsCoverage, CliGradientsCsvAndSummaryHoldTheLibraryNumbers) {
   fs::create_directories(dir);
   json j = coasting_bodies("mma");
   // a per-step response too (gradients.csv rows per step, arrays in summary.json)
-  j["output"]["responses"].push_back({{"name", "spread_steps"}, {"measure", "spread"}, {"aggregate", "per_step"},
+  j["output"]["responses"].push_back({{"name", "spread_steps"},
+                                      {"measure", "spread"},
+                                      {"aggregate", "per_step"},
                                       {"window", {{"t0", 0.5}, {"t1", 1.0}}}});
   const std::string file = dir + "/case.json";
   std::ofstream(file) << j.dump(1);
   const std::string out = dir + "/out";
-  const std::string cmd = std::string(LSMBS_CLI) + " sensitivity " + file + " --method direct-analytic --set m1=2 --set m2=3 -q -o " + out;
+  const std::string cmd = std::string(LSMBS_CLI) + " sensitivity " + file +
+                          " --method direct-analytic --set m1=2 --set m2=3 -q -o " + out;
   const int rc = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0) << cmd;
 
@@ -234,13 +252,15 @@ TEST(MethodsCoverage, CliGradientsCsvAndSummaryHoldTheLibraryNumbers) {
   for (const auto& rs : lib.responses) {
     if (rs.times.empty()) {
       EXPECT_EQ(S["responses"][rs.name].get<double>(), rs.values[0]) << rs.name;
-      for (int i = 0; i < 2; ++i, ++compared) EXPECT_EQ(S["gradients"][rs.name][vars[i]].get<double>(), rs.gradient(0, i));
+      for (int i = 0; i < 2; ++i, ++compared)
+        EXPECT_EQ(S["gradients"][rs.name][vars[i]].get<double>(), rs.gradient(0, i));
     } else {
       ASSERT_EQ(S["responses"][rs.name].size(), rs.values.size());
       for (size_t k = 0; k < rs.values.size(); ++k) {
         EXPECT_EQ(S["responses"][rs.name][k].get<double>(), rs.values[k]);
         for (int i = 0; i < 2; ++i, ++compared)
-          EXPECT_EQ(S["gradients"][rs.name][vars[i]][k].get<double>(), rs.gradient(static_cast<Eigen::Index>(k), i));
+          EXPECT_EQ(S["gradients"][rs.name][vars[i]][k].get<double>(),
+                    rs.gradient(static_cast<Eigen::Index>(k), i));
       }
     }
   }

@@ -21,26 +21,34 @@ using namespace lsmbs;
 using json = nlohmann::json;
 
 TEST(PaperTable5, InitialDesignMassAndDeviationWithTheDocumentedGaps) {
-  json j = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm/robot_arm_holes.json"));
-  j["output"]["responses"].push_back({{"name", "average_eq45"}, {"measure", "tip_deviation"}, {"aggregate", "average_eq45"},
+  json j = json::parse(
+      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm/robot_arm_holes.json"));
+  j["output"]["responses"].push_back({{"name", "average_eq45"},
+                                      {"measure", "tip_deviation"},
+                                      {"aggregate", "average_eq45"},
                                       {"window", {{"driver", "theta1"}, {"phase", "constant"}}}});
   j["output"]["vtu_stride"] = 0;
-  const Case cs = load_case_json(j, "robot_arm_holes.json", std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm");
+  const Case cs =
+      load_case_json(j, "robot_arm_holes.json", std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm");
   const double mu_min = j["design"]["geometry"][0].value("mu_min", 1e-3);
   const auto res = run_simulation(cs);
   ASSERT_TRUE(res.integrator.ok) << res.integrator.message;
 
-  const double xi = 5, A_hole = 4 * 0.01 * 0.01 * std::pow(std::tgamma(1 + 1 / xi), 2) / std::tgamma(1 + 2 / xi);
+  const double xi = 5, A_hole = 4 * 0.01 * 0.01 * std::pow(std::tgamma(1 + 1 / xi), 2) /
+                                std::tgamma(1 + 2 / xi);
   const double m_exact = 2700 * 0.0025 * (0.6 * 0.05 - (1 - mu_min) * 5 * A_hole);
   const double m = res.responses.at("plate_mass"), dev = res.responses.at("average_tip_deviation");
   const double dev45 = res.responses.at("average_eq45");
   const int n = res.response_counts.at("average_tip_deviation");
   const double paper_m = 0.186498, paper_dev = 0.6037e-3;
-  std::printf("initial design: plate mass %.3f g (exact holes %.3f g: %+.3f %%; paper %.3f g: %+.2f %%)\n"
-              "  average tip deviation %.4f mm over %d steps (paper %.4f mm: %+.2f %%); eq. (45) as printed %.4f mm "
-              "(%+.2f %%)\n",
-              1e3 * m, 1e3 * m_exact, 100 * (m / m_exact - 1), 1e3 * paper_m, 100 * (m / paper_m - 1), 1e3 * dev, n,
-              1e3 * paper_dev, 100 * (dev / paper_dev - 1), 1e3 * dev45, 100 * (dev45 / paper_dev - 1));
+  std::printf(
+      "initial design: plate mass %.3f g (exact holes %.3f g: %+.3f %%; paper %.3f g: %+.2f %%)\n"
+      "  average tip deviation %.4f mm over %d steps (paper %.4f mm: %+.2f %%); eq. (45) as "
+      "printed %.4f mm "
+      "(%+.2f %%)\n",
+      1e3 * m, 1e3 * m_exact, 100 * (m / m_exact - 1), 1e3 * paper_m, 100 * (m / paper_m - 1),
+      1e3 * dev, n, 1e3 * paper_dev, 100 * (dev / paper_dev - 1), 1e3 * dev45,
+      100 * (dev45 / paper_dev - 1));
   // the mapping's void area is 0.28 % above the exact one (the logistic's smoothing of curved
   // boundaries, docs/methods.md), i.e. 0.28 % × 5 A_hole / A_plate ≈ 0.02 % of the mass
   EXPECT_NEAR(m / m_exact, 1, 5e-4);

@@ -8,15 +8,24 @@ namespace lsmbs {
 
 const char* ResponseSpec::kind_name(Kind k) {
   switch (k) {
-    case Kind::kAverage: return "average";
-    case Kind::kAverageEq45: return "average_eq45";
-    case Kind::kMax: return "max";
-    case Kind::kMin: return "min";
-    case Kind::kFinal: return "final";
-    case Kind::kIntegral: return "integral";
-    case Kind::kRms: return "rms";
-    case Kind::kPerStep: return "per_step";
-    case Kind::kKS: return "ks";
+    case Kind::kAverage:
+      return "average";
+    case Kind::kAverageEq45:
+      return "average_eq45";
+    case Kind::kMax:
+      return "max";
+    case Kind::kMin:
+      return "min";
+    case Kind::kFinal:
+      return "final";
+    case Kind::kIntegral:
+      return "integral";
+    case Kind::kRms:
+      return "rms";
+    case Kind::kPerStep:
+      return "per_step";
+    case Kind::kKS:
+      return "ks";
   }
   return "?";
 }
@@ -26,7 +35,8 @@ double Aggregate::scalar() const {
   return values.size() == 1 ? values[0] : *std::max_element(values.begin(), values.end());
 }
 
-Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v, const Mat* G) {
+Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
+                    const std::vector<double>& v, const Mat* G) {
   using K = ResponseSpec::Kind;
   Aggregate out;
   const double eps = 1e-9 * (t.size() > 1 ? std::abs(t[1] - t[0]) : 1.0);
@@ -60,8 +70,9 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t, const s
     case K::kAverageEq45: {
       // eq. (45): the sum over the window's steps divided by their number (average) or by the
       // number of intervals n_cvf − n_cvi as printed (average_eq45; undefined for one step)
-      const double div = r.kind == K::kAverage ? static_cast<double>(n)
-                                               : (n > 1 ? n - 1.0 : std::numeric_limits<double>::quiet_NaN());
+      const double div = r.kind == K::kAverage
+                             ? static_cast<double>(n)
+                             : (n > 1 ? n - 1.0 : std::numeric_limits<double>::quiet_NaN());
       for (auto i : idx) val += v[i], add_row(1, i);
       val /= div;
       out.gradient /= div;
@@ -104,7 +115,8 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t, const s
       for (auto i : idx) add_row(std::exp(r.ks * (v[i] - m)) / sum, i);  // softmax weights
       break;
     }
-    case K::kPerStep: break;  // handled above
+    case K::kPerStep:
+      break;  // handled above
   }
   out.values.push_back(val);
   return out;

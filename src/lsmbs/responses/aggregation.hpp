@@ -45,7 +45,7 @@ struct Aggregate {
 /// Aggregates the per-step values v_n at the grid times t_n (steps within [t0, t1] up to 1e-9 of
 /// the first step). G (row n: df_n/dp, one column per design variable) is optional; without it
 /// the gradient has no columns.
-Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
-                    const Mat* G = nullptr);
+Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
+                    const std::vector<double>& v, const Mat* G = nullptr);
 
 }  // namespace lsmbs

@@ -43,7 +43,8 @@ Polygon polygon(const std::function<double(double)>& r, const Vec2& c, double ro
   for (int i = 0; i < n; ++i) {
     const double psi = 2 * kPi * i / n, rr = r(psi);
     const Vec2 u(rr * std::cos(psi), rr * std::sin(psi));
-    p.v.emplace_back(c + Vec2(std::cos(rot) * u.x() - std::sin(rot) * u.y(), std::sin(rot) * u.x() + std::cos(rot) * u.y()));
+    p.v.emplace_back(c + Vec2(std::cos(rot) * u.x() - std::sin(rot) * u.y(),
+                              std::sin(rot) * u.x() + std::cos(rot) * u.y()));
   }
   return p;
 }
@@ -60,7 +61,8 @@ TEST(FeatureDistance, CircleIsExactInEveryZone) {
   for (int k = 0; k < 16; ++k) {
     const double psi = 0.37 + 2 * kPi * k / 16;
     const Vec2 n(std::cos(psi), std::sin(psi));
-    for (const double s : {-8e-3, -2e-3, -1.2e-3, -2e-4, 1e-5, 3e-4, 1.2e-3, 2e-3, 2.9e-3, 5e-3, 2e-2}) {
+    for (const double s :
+         {-8e-3, -2e-3, -1.2e-3, -2e-4, 1e-5, 3e-4, 1.2e-3, 2e-3, 2.9e-3, 5e-3, 2e-2}) {
       const Vec2 x = Vec2(cx, cy) + (R + s) * n;
       const double d = (s < 0 ? -1 : 1) * poly.distance(x);
       for (const double refine : {0.0, rw}) {
@@ -80,19 +82,25 @@ TEST(FeatureDistance, SuperEllipseAgainstBruteForceInTheRefinedBlendAndPlainZone
   // refinement radius r = 3 mm (the mapping uses 12 bands: ε = 0.25 mm here).
   const double cx = 0.1, cy = 0.02, a = 0.02, b = 0.01, xi = 5, rot = 0.3, rw = 3e-3;
   Feature f("S", Feature::Type::kSuperEllipse,
-            {constant(cx), constant(cy), constant(a), constant(b), constant(xi), constant(xi), constant(rot)}, true);
+            {constant(cx), constant(cy), constant(a), constant(b), constant(xi), constant(xi),
+             constant(rot)},
+            true);
   const double th[7] = {cx, cy, a, b, xi, xi, rot};
   auto r = [&](double psi) {
-    return std::pow(std::pow(std::abs(std::cos(psi) / a), xi) + std::pow(std::abs(std::sin(psi) / b), xi), -1 / xi);
+    return std::pow(
+        std::pow(std::abs(std::cos(psi) / a), xi) + std::pow(std::abs(std::sin(psi) / b), xi),
+        -1 / xi);
   };
   // polygon sag κ Δ²/8 ≤ 500 m⁻¹ (3e-7 m)² / 8 ≈ 1e-11 m at the corners
   const Polygon poly = polygon(r, Vec2(cx, cy), rot, 400000);
   const Vec2 c(cx, cy);
   auto to_global = [&](const Vec2& u) -> Vec2 {
-    return c + Vec2(std::cos(rot) * u.x() - std::sin(rot) * u.y(), std::sin(rot) * u.x() + std::cos(rot) * u.y());
+    return c + Vec2(std::cos(rot) * u.x() - std::sin(rot) * u.y(),
+                    std::sin(rot) * u.x() + std::cos(rot) * u.y());
   };
-  const std::vector<double> offsets = {-4e-3, -2.5e-3, -1.5e-3, -1e-3, -5e-4, -2.5e-4, -1.25e-4, 1.25e-4, 2.5e-4,
-                                       5e-4,  1e-3,    1.5e-3,  2e-3, 2.5e-3, 2.9e-3, 4e-3,    6e-3};
+  const std::vector<double> offsets = {-4e-3,    -2.5e-3, -1.5e-3, -1e-3, -5e-4, -2.5e-4,
+                                       -1.25e-4, 1.25e-4, 2.5e-4,  5e-4,  1e-3,  1.5e-3,
+                                       2e-3,     2.5e-3,  2.9e-3,  4e-3,  6e-3};
   double worst_refined = 0, worst_k = 0, worst_order = 1e300, near = 0;
   int n_refined = 0, n_blend = 0, n_plain = 0;
   for (int k = 0; k < 24; ++k) {
@@ -108,7 +116,8 @@ TEST(FeatureDistance, SuperEllipseAgainstBruteForceInTheRefinedBlendAndPlainZone
       const double d = (s < 0 ? -1 : 1) * poly.distance(x);
       const double D = f.distance<double>(x, th, rw), D0 = f.distance<double>(x, th, 0);
       const double Dr = f.distance<double>(x, th, 1e300);  // the refined distance everywhere
-      ASSERT_EQ(D < 0, s < 0) << "sign at psi " << psi << ", s " << s << ": D = " << D << ", d = " << d;
+      ASSERT_EQ(D < 0, s < 0) << "sign at psi " << psi << ", s " << s << ": D = " << D
+                              << ", d = " << d;
       // φ is convex (ξ, η ≥ 1), so D₀ = φ/|∇φ| never exceeds the signed distance: outside,
       // 0 = φ(y*) ≥ φ(x) + ∇φ(x)·(y* − x) gives φ ≤ |∇φ| d; inside, following ∇φ to the boundary
       // gives |φ|/|∇φ| ≥ d.
@@ -135,14 +144,16 @@ TEST(FeatureDistance, SuperEllipseAgainstBruteForceInTheRefinedBlendAndPlainZone
       if (err.count(s) && err.count(2 * s) && err[2 * s] > 1e-10)
         worst_order = std::min(worst_order, std::log2(err[2 * s] / std::max(err[s], 1e-12)));
   }
-  std::printf("super-ellipse ξ = 5, a = 20 mm, b = 10 mm, refinement radius 3 mm: refined zone (%d points) "
-              "|D − d| ≤ %.2e m (≤ %.3g |d|³; ≤ %.2e m within 0.5 mm), observed order ≥ %.2f; %d blend, %d plain points\n",
-              n_refined, worst_refined, worst_k, near, worst_order, n_blend, n_plain);
+  std::printf(
+      "super-ellipse ξ = 5, a = 20 mm, b = 10 mm, refinement radius 3 mm: refined zone (%d points) "
+      "|D − d| ≤ %.2e m (≤ %.3g |d|³; ≤ %.2e m within 0.5 mm), observed order ≥ %.2f; %d blend, %d "
+      "plain points\n",
+      n_refined, worst_refined, worst_k, near, worst_order, n_blend, n_plain);
   EXPECT_GT(n_refined, 150);
   EXPECT_GT(n_blend, 20);
   EXPECT_GT(n_plain, 20);
-  // measured 1.9e3 |d|³ (8.3e-6 m at |d| = 1.5 mm, near a corner), 8.9e-8 m within 0.5 mm = 2 bands,
-  // where the logistic's slope is largest; orders ≥ 3
+  // measured 1.9e3 |d|³ (8.3e-6 m at |d| = 1.5 mm, near a corner), 8.9e-8 m within 0.5 mm = 2
+  // bands, where the logistic's slope is largest; orders ≥ 3
   EXPECT_LT(worst_k, 4e3);
   EXPECT_LT(near, 2e-7);
   EXPECT_GE(worst_order, 3.0);

@@ -23,7 +23,8 @@ using json = nlohmann::json;
 namespace {
 
 json spring_crank() {
-  return json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json"));
+  return json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
+                                   "/data/slider_crank_rigid/slider_crank_spring.json"));
 }
 
 // Slider-crank with the crank pinned at its reference point (origin), crank pin at radius r,
@@ -50,10 +51,11 @@ TEST(InitialVelocity, GivenCrankSpeedIsKeptAndTheRestFollowsTheClosedForm) {
   const auto& piston = *m.find_rigid("piston");
   const Vec& v = cs.initial.v;
   const auto k = crank_kinematics(0.045, 0.1356, 0.3, 60.0);
-  std::printf("crank %.15g rad/s; rod pin (%.12f, %.12f) m/s, rod %.12f rad/s, piston %.12f m/s "
-              "(closed form: (%.12f, %.12f), %.12f, %.12f)\n",
-              v[crank.dof0 + 2], v[rod.dof0], v[rod.dof0 + 1], v[rod.dof0 + 2], v[piston.dof0], k.pin.x(), k.pin.y(),
-              k.phi_dot, k.xp_dot);
+  std::printf(
+      "crank %.15g rad/s; rod pin (%.12f, %.12f) m/s, rod %.12f rad/s, piston %.12f m/s "
+      "(closed form: (%.12f, %.12f), %.12f, %.12f)\n",
+      v[crank.dof0 + 2], v[rod.dof0], v[rod.dof0 + 1], v[rod.dof0 + 2], v[piston.dof0], k.pin.x(),
+      k.pin.y(), k.phi_dot, k.xp_dot);
   EXPECT_EQ(v[crank.dof0 + 2], 60.0) << "the given crank speed is kept exactly";
   // the solve is one sparse LU of an O(1)-conditioned 15 × 15 system: round-off ~1e-15 of the
   // speeds (2.7 m/s, 20 rad/s)
@@ -107,13 +109,18 @@ TEST(InitialVelocity, ContradictoryGivenVelocitiesAreAnInputErrorNamingTheBody) 
   // a driver that imposes a speed at t = 0 contradicts a body speed of zero given explicitly
   json d = spring_crank();
   d["bodies"][0]["angular_velocity"] = 0.0;
-  d["joints"].push_back({{"name", "motor"}, {"type", "rotation_driver"}, {"body", "crank"},
-                         {"law", {{"type", "table"}, {"points", {{-1, -10.0}, {1, 10.0}}}, {"interpolation", "linear"}}}});
+  d["joints"].push_back(
+      {{"name", "motor"},
+       {"type", "rotation_driver"},
+       {"body", "crank"},
+       {"law",
+        {{"type", "table"}, {"points", {{-1, -10.0}, {1, 10.0}}}, {"interpolation", "linear"}}}});
   try {
     test::make_case(d);
     FAIL() << "expected an input error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/bodies/0/angular_velocity"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/bodies/0/angular_velocity"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -133,7 +140,8 @@ TEST(InitialVelocity, UnheldProjectionIsTheSmallestChangeInTheUnitConsistentMetr
   lu.analyze(m.pattern());
   ASSERT_TRUE(project_initial_state(m, m.params(), s, lu, 1e-13, nullptr).ok());
   const double L = m.length_scale(), w = (2 + L * L * 5) / (1 + L * L);
-  std::printf("L = %g: projected (%.15g, %.15g, %.15g), closed form (0, %.15g, %.15g)\n", L, s.v[0], s.v[1], s.v[2], w, w);
+  std::printf("L = %g: projected (%.15g, %.15g, %.15g), closed form (0, %.15g, %.15g)\n", L, s.v[0],
+              s.v[1], s.v[2], w, w);
   EXPECT_NEAR(s.v[0], 0, 1e-15);
   EXPECT_NEAR(s.v[1], w, 1e-14);
   EXPECT_NEAR(s.v[2], w, 1e-14);

@@ -2,12 +2,12 @@
 // closed forms on the signals f_n(p) = p1 sin(t_n) + p2 t_n² sampled on a uniform grid, values
 // and gradients (G row n = df_n/dp = (sin t_n, t_n²)), and the one implementation used by the
 // simulate path (no derivatives) giving the same values as the sensitivity path.
+#include "lsmbs/responses/aggregation.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
-
-#include "lsmbs/responses/aggregation.hpp"
 
 using namespace lsmbs;
 using K = ResponseSpec::Kind;
@@ -81,7 +81,8 @@ TEST(Aggregation, AverageAndAverageEq45OverAWindowMatchClosedFormSums) {
   EXPECT_NEAR(eq45 / avg, double(n) / (n - 1), 1e-14);
   // eq. (45) is undefined for a window of one step
   EXPECT_TRUE(std::isnan(aggregate(spec(K::kAverageEq45, 0.5, 0.5), s.t, s.v).scalar()));
-  EXPECT_DOUBLE_EQ(aggregate(spec(K::kAverage, 0.5, 0.5), s.t, s.v).scalar(), p1 * std::sin(0.5) + p2 * 0.25);
+  EXPECT_DOUBLE_EQ(aggregate(spec(K::kAverage, 0.5, 0.5), s.t, s.v).scalar(),
+                   p1 * std::sin(0.5) + p2 * 0.25);
 }
 
 TEST(Aggregation, TrapezoidalIntegralMatchesItsClosedFormOnSinAndTSquared) {
@@ -126,7 +127,8 @@ TEST(Aggregation, MaxAndMinTakeTheExtremeStepAndItsDerivative) {
   // sin on [0, 2π] sampled with h = π/50: max 1 at t = π/2 (k = 25), min −1 at t = 3π/2 (k = 75)
   const double h = kPi / 50;
   const Signal s = sample(h, 100, 1.0, 0.0);
-  const Aggregate mx = aggregate(spec(K::kMax), s.t, s.v, &s.G), mn = aggregate(spec(K::kMin), s.t, s.v, &s.G);
+  const Aggregate mx = aggregate(spec(K::kMax), s.t, s.v, &s.G),
+                  mn = aggregate(spec(K::kMin), s.t, s.v, &s.G);
   EXPECT_NEAR(mx.values[0], 1.0, 1e-15);
   EXPECT_NEAR(mn.values[0], -1.0, 1e-15);
   // d max/dp = G at the extreme step: (sin t*, t*²)
@@ -149,7 +151,8 @@ TEST(Aggregation, KreisselmeierSteinhauserBoundsAndGradient) {
   // differences of KS as a function of p).
   const std::vector<double> t = {0, 1, 2, 3, 4};
   const std::vector<double> c(5, 0.25);
-  EXPECT_NEAR(aggregate(spec(K::kKS, -1e300, 1e300, 40), t, c).scalar(), 0.25 + std::log(5.0) / 40, 1e-15);
+  EXPECT_NEAR(aggregate(spec(K::kKS, -1e300, 1e300, 40), t, c).scalar(), 0.25 + std::log(5.0) / 40,
+              1e-15);
   const double h = 0.05, ks = 20;
   const Signal s = sample(h, 80, 1.0, 0.2);
   const Aggregate g = aggregate(spec(K::kKS, -1e300, 1e300, ks), s.t, s.v, &s.G);
@@ -184,10 +187,11 @@ TEST(Aggregation, PerStepGivesEveryStepOfTheWindowWithItsRow) {
 }
 
 TEST(Aggregation, ValuesWithoutDerivativesAreTheValuesWithDerivatives) {
-  // One implementation: the simulate path (no G) and the sensitivity path give bit-identical values.
+  // One implementation: the simulate path (no G) and the sensitivity path give bit-identical
+  // values.
   const Signal s = sample(0.02, 150, -0.6, 0.35);
-  for (const K kind : {K::kAverage, K::kAverageEq45, K::kMax, K::kMin, K::kFinal, K::kIntegral, K::kRms, K::kPerStep,
-                       K::kKS}) {
+  for (const K kind : {K::kAverage, K::kAverageEq45, K::kMax, K::kMin, K::kFinal, K::kIntegral,
+                       K::kRms, K::kPerStep, K::kKS}) {
     const ResponseSpec r = spec(kind, 0.5, 2.5, 30);
     const Aggregate a = aggregate(r, s.t, s.v), b = aggregate(r, s.t, s.v, &s.G);
     EXPECT_EQ(a.values, b.values) << ResponseSpec::kind_name(kind);

@@ -80,7 +80,8 @@ TEST(MeasureGradients, StrainEnergyDistanceAndElongationMatchCentralDifferences)
       const double scale = fd.lpNorm<Eigen::Infinity>();
       ASSERT_GT(scale, 0) << name;
       const double e = (dq - fd).lpNorm<Eigen::Infinity>() / scale;
-      std::printf("%-14s trial %d: |∂f/∂q − central difference|∞ / |∂f/∂q|∞ = %.2e\n", name, trial, e);
+      std::printf("%-14s trial %d: |∂f/∂q − central difference|∞ / |∂f/∂q|∞ = %.2e\n", name, trial,
+                  e);
       EXPECT_LT(e, 1e-7) << name << " trial " << trial;
     }
   }
