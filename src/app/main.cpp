@@ -318,7 +318,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     char buf[64];
     for (const auto& row : rows) {
       for (size_t i = 0; i < row.size(); ++i) {
-        std::snprintf(buf, sizeof buf, "%.15g", row[i]);
+        std::snprintf(buf, sizeof buf, "%.17g", row[i]);
         csv += (i ? "," : "") + std::string(buf);
       }
       csv += "\n";

@@ -22,7 +22,7 @@ namespace lsmbs {
 struct MappingOptions {
   double mu_min = 1e-3;
   int subgrid = 8;    ///< sub-cells per element edge in cut elements
-  double band = 0.5;  ///< ε in units of the (mean) sub-cell size
+  double band = 0.5;  ///< ε in units of the sub-cell size (median element size / subgrid)
 };
 
 class DesignMap {

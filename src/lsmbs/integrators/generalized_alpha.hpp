@@ -8,7 +8,9 @@
 // corrections Δq̇ = γ' Δq, Δq̈ = β' Δq (17)–(18). Predictor: q̈_{n+1} = 0, λ_{n+1} = 0.
 // Where it departs from Algorithm 1 as printed (docs/methods.md gives the reasons):
 //  - the start is consistent (q̈0, λ0 from the acceleration-level system; consistent_start) and
-//    q0, q̇0 are projected on the constraints (project_initial); Algorithm 1 starts from zero;
+//    q0, q̇0 are projected on the constraints (project_initial; initial_state.hpp); Algorithm 1
+//    starts from zero;
+//  - k and ζ of eq. (7) are chosen automatically from the iteration matrix (automatic_scaling);
 //  - convergence: per-row residual scales and round-off floors, ‖Φ‖ in length units, and the next
 //    Newton correction within tol_q·L, applied before the step is accepted (Algorithm 1 tests
 //    one residual norm);
@@ -98,7 +100,8 @@ class GeneralizedAlpha {
   /// `final_state` receives the last converged state.
   IntegratorSummary run(const Model& model, const ModelParams& p, State s0,
                         std::vector<StepObserver*> observers, State* final_state = nullptr);
-  /// Automatic k = ζ: mean |diagonal| of β'M + K_t over the position unknowns at s.
+  /// Automatic k = ζ: mean of the non-zero |diagonal| entries of β'M + γ'C_t + K_t over the
+  /// position unknowns at s.
   static double automatic_scaling(const Model& model, const ModelParams& p, const State& s,
                                   const AlphaCoefficients& c);
 

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "lsmbs/integrators/initial_state.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/json_reader.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -184,6 +185,7 @@ struct Loader {
                                                      "rigid body '" + name + "'"));
     init_v.conservativeResize(model().nq());
     init_v.segment<3>(rb.dof0) << v0.x(), v0.y(), w0;
+    given_velocity(r, rb.dof0, rb.dof0 + 2, r.has("velocity"), r.has("angular_velocity"));
   }
 
   void flexible_body(const JsonReader& r, const std::string& name) {
@@ -267,6 +269,8 @@ struct Loader {
       const Vec2 x = fb.placed(i) - fb.origin;
       init_v.segment<2>(fb.node_dof(i)) = v0 + w0 * Vec2(-x.y(), x.x());
     }
+    const bool given = r.has("velocity") || r.has("angular_velocity");  // the whole rigid field
+    given_velocity(r, fb.node_dof(0), model().nq(), given, given);
   }
 
   // ---------------------------------------------------------------- joints and drivers
@@ -739,6 +743,23 @@ struct Loader {
   }
 
   Vec init_v;
+  // Velocities the case gives (kept by the initial projection) and, per body that gives any,
+  // its JSON path and unknowns [first, end).
+  std::vector<char> held_v;
+  struct GivenVelocity {
+    std::string path;
+    int first, end;
+  };
+  std::vector<GivenVelocity> given_v;
+  // A body's unknowns [first, end) with the angle (rigid) or all (flexible) from `rotation_dof` on:
+  // translations held when `translation`, the rest when `rotation`.
+  void given_velocity(const JsonReader& r, int first, int rotation_dof, bool translation, bool rotation) {
+    const int end = model().nq();
+    held_v.resize(end, 0);
+    for (int i = first; i < end; ++i) held_v[i] = i < rotation_dof ? translation : rotation;
+    if (translation || rotation)
+      given_v.push_back({r.path() + (r.has("velocity") ? "/velocity" : "/angular_velocity"), first, end});
+  }
   std::map<std::string, bool> driver_relative;
   std::map<std::string, std::pair<size_t, size_t>> joint_elements;
   std::vector<std::pair<std::string, std::string>> pending_forces;
@@ -783,6 +804,31 @@ static void check_constraint_rank(const Case& cs) {
                   " constraint equations are redundant or conflicting at t = 0 (the rows of the constraint "
                   "Jacobian are dependent): " + dependent +
                   " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) locked twice");
+}
+
+// Initial velocities the case gives are kept; the others follow from the constraints
+// (integrators/initial_state.hpp). Given velocities that contradict the constraints are an input
+// error naming the first body concerned. Positions and velocities are projected here, so that
+// every run starts from the same consistent state.
+template <class Given>
+static void hold_given_velocities(Case& cs, std::vector<char> held, const std::vector<Given>& given) {
+  const Model& m = *cs.model;
+  if (given.empty() || m.nc() == 0 || !cs.simulation.project_initial) return;
+  held.resize(m.nq(), 0);
+  SparseLU lu;
+  lu.analyze(m.pattern());
+  ProjectionReport rep;
+  State s = cs.initial;
+  const Status st = project_initial_state(m, m.params(), s, lu, 1e-13 * m.length_scale(), &rep, &held);
+  if (st.ok()) cs.initial = s;
+  if (st.ok() || rep.conflicting_rows.empty()) return;  // other failures: reported by the run
+  std::string path = "/bodies";
+  for (const auto& g : given)
+    for (int j : rep.conflicting_held)
+      if (j >= g.first && j < g.end && path == "/bodies") path = g.path;
+  throw Error(cs.file, path,
+              st.message + " — give only the velocities that determine the motion (the others are computed), "
+                           "or velocities that satisfy the joints and drivers at t = 0");
 }
 
 Case load_case_json(const nlohmann::json& j, const std::string& file_label, const std::string& base_dir) {
@@ -857,6 +903,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   cs.initial.v.conservativeResize(cs.model->nq());
   cs.initial.a.setZero(cs.model->nq());
   cs.initial.lambda.setZero(cs.model->nc());
+  hold_given_velocities(cs, L.held_v, L.given_v);
   return cs;
 }
 

@@ -140,8 +140,9 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     std::vector<double> v;
     v.reserve(res.history.size());
     for (const auto& row : res.history) v.push_back(row[r.column]);
-    int n = 0;
-    const double val = aggregate(r, res.times, v, &n);
+    const Aggregate a = aggregate(r, res.times, v);
+    const double val = a.scalar();
+    const int n = a.count;
     res.responses[r.name] = val;
     res.response_counts[r.name] = n;
     // a run that did not reach t_end has no responses (its aggregates cover part of the run)

@@ -4,12 +4,14 @@
 // between two points (deformed minus undeformed distance, positive in tension, §5.2), the
 // deviation of a point from a prescribed path (eq. 44), a constraint force, energies, the mass
 // of a flexible body, a body's angular velocity, a point's velocity. Each provides its partial
-// derivatives with respect to the state for the sensitivity tracker (eq. 24).
+// derivatives with respect to the state for the sensitivity tracker (eq. 24). Aggregation over
+// time windows: aggregation.hpp.
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/responses/aggregation.hpp"
 
 namespace lsmbs {
 
@@ -178,32 +180,5 @@ class FlexibleMassMeasure : public Measure {
  private:
   const FlexibleBody* body_;
 };
-
-/// Aggregation of one measure component over a time window of the grid steps (eq. 45 is the
-/// average; eq. 42's local formulation is the per-step maximum).
-struct ResponseSpec {
-  /// kAverageEq45 divides the sum by (count − 1), as eq. (45) is printed (n_cvf − n_cvi).
-  /// kPerStep: one response per grid step of the window (the local formulation, eq. 42);
-  /// kKS: Kreisselmeier–Steinhauser upper bound of the maximum with parameter ks in 1/[f]:
-  /// KS = (1/ks) ln Σ exp(ks f_n), evaluated as m + (1/ks) ln Σ exp(ks (f_n − m)), m = max f_n.
-  enum class Kind { kAverage, kAverageEq45, kMax, kMin, kFinal, kIntegral, kRms, kPerStep, kKS };
-  std::string name;
-  int column = 0;  ///< column in the history (0 = first measure component)
-  Kind kind = Kind::kAverage;
-  double t0 = -1e300, t1 = 1e300;
-  double ks = 0;            ///< KS parameter [1/unit of the measure]
-  std::string window_text;  ///< how the window was given, for the summary
-  static const char* kind_name(Kind k);
-};
-
-/// Evaluates a scalar response over (t, values) pairs of the grid (not kPerStep).
-double aggregate(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
-                 int* count = nullptr);
-
-/// Values and gradients of a response from per-step values v_n and total derivatives G (row n:
-/// df_n/dp). A kPerStep response has one value per step in the window; the others one value.
-/// The max/min use the derivative at the extreme step (not differentiable where it switches).
-void aggregate_with_gradient(const ResponseSpec& r, const std::vector<double>& t, const std::vector<double>& v,
-                             const Mat& G, std::vector<double>& values, Mat& grads, std::vector<double>* times = nullptr);
 
 }  // namespace lsmbs

@@ -116,10 +116,12 @@ std::vector<ResponseSensitivity> ResponseTracker::results() const {
     Mat G(static_cast<Eigen::Index>(c.values.size()), nv);
     for (size_t n = 0; n < c.grads.size(); ++n) G.row(static_cast<Eigen::Index>(n)) = c.grads[n];
     if (c.grads.empty()) G.setZero(static_cast<Eigen::Index>(c.values.size()), nv);
+    Aggregate a = aggregate(cs_.responses[r], times_, c.values, &G);
     ResponseSensitivity rs;
     rs.name = cs_.responses[r].name;
-    aggregate_with_gradient(cs_.responses[r], times_, c.values, G, rs.values, rs.gradient,
-                            cs_.responses[r].kind == ResponseSpec::Kind::kPerStep ? &rs.times : nullptr);
+    rs.values = std::move(a.values);
+    rs.times = std::move(a.times);
+    rs.gradient = std::move(a.gradient);
     out.push_back(std::move(rs));
   }
   return out;

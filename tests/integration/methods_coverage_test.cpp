@@ -1,0 +1,291 @@
+// Methods that had no test: the fd-forward sensitivity method, the NLopt ccsaq and slsqp
+// optimizers (and mma), the move limit of mma-svanberg, and the files the command line writes
+// (gradients.csv, summary.json) against the library's result.
+//
+// The problem has closed forms. Four free rigid bodies, no gravity, no joints, t ∈ [0, 1]:
+//   A (mass m1) and B (mass m2) coast at 2^½ and 2 m/s: kinetic energy m1 + 2 m2;
+//   C (mass m1) and D (mass m2) start 1 m apart at rest and are pushed apart by 1 N each:
+//   their separation grows by e = ½ (1/m1 + 1/m2) at t = 1, their kinetic energy is ½ (1/m1 +
+//   1/m2).
+// Constant forces give constant accelerations, which generalized-α integrates exactly (a quadratic
+// in t from consistent start accelerations), so the discrete responses are the closed forms to
+// round-off:  energy E = m1 + 2 m2 + ½ (1/m1 + 1/m2),  spread e = ½ (1/m1 + 1/m2).
+// Minimize E subject to e ≤ ½ (i.e. 1/m1 + 1/m2 ≤ 1), m ∈ [0.5, 10]: on the active constraint the
+// energy's second term is the constant ½, and the KKT conditions give m1 = 1 + √2,
+// m2 = m1/√2, E* = 3 + 2√2 + ½ with multiplier m1² − ½ > 0.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/optimization/optimizer.hpp"
+#include "lsmbs/sensitivity/sensitivity.hpp"
+#include "support/test_models.hpp"
+
+using namespace lsmbs;
+using json = nlohmann::json;
+
+namespace {
+
+const double kM1 = 1 + std::sqrt(2.0), kM2 = kM1 / std::sqrt(2.0),
+             kE = 3 + 2 * std::sqrt(2.0) + 0.5;
+
+json coasting_bodies(const std::string& optimizer) {
+  json j = R"({
+    "name": "coasting_bodies",
+    "bodies": [
+      {"name": "A", "type": "rigid", "position": [0, 0], "mass": 5, "inertia": 1, "velocity": [1.4142135623730951, 0]},
+      {"name": "B", "type": "rigid", "position": [0, 2], "mass": 5, "inertia": 1, "velocity": [2, 0]},
+      {"name": "C", "type": "rigid", "position": [-0.5, 5], "mass": 5, "inertia": 1},
+      {"name": "D", "type": "rigid", "position": [0.5, 5], "mass": 5, "inertia": 1}
+    ],
+    "forces": [
+      {"name": "push_C", "type": "point_force", "point": {"body": "C"}, "force": [-1, 0]},
+      {"name": "push_D", "type": "point_force", "point": {"body": "D"}, "force": [1, 0]}
+    ],
+    "simulation": {"t_end": 1, "h": 0.1, "tol_r": 1e-12},
+    "output": {
+      "measures": [{"name": "energy", "type": "kinetic_energy"},
+                   {"name": "spread", "type": "elongation", "a": {"body": "C"}, "b": {"body": "D"}}],
+      "responses": [{"name": "energy", "measure": "energy", "aggregate": "final"},
+                    {"name": "spread", "measure": "spread", "aggregate": "final"}]
+    },
+    "design": {
+      "variables": [{"name": "m1", "initial": 5, "lower": 0.5, "upper": 10},
+                    {"name": "m2", "initial": 5, "lower": 0.5, "upper": 10}],
+      "parameters": [{"parameter": "A.mass", "variable": "m1"}, {"parameter": "C.mass", "variable": "m1"},
+                     {"parameter": "B.mass", "variable": "m2"}, {"parameter": "D.mass", "variable": "m2"}]
+    },
+    "optimization": {
+      "objective": "energy",
+      "constraints": [{"response": "spread", "upper": 0.5}],
+      "stop": {"relative_objective_change": 1e-9, "relative_constraint_violation": 1e-8, "max_evaluations": 200}
+    }
+  })"_json;
+  j["optimization"]["optimizer"] = optimizer;
+  return j;
+}
+
+double energy(double m1, double m2) { return m1 + 2 * m2 + 0.5 * (1 / m1 + 1 / m2); }
+double spread(double m1, double m2) { return 0.5 * (1 / m1 + 1 / m2); }
+
+struct OptRun {
+  std::unique_ptr<Case> cs;
+  std::unique_ptr<DesignProblem> prob;
+  OptimizeResult res;
+};
+
+OptRun optimize_case(const json& j) {
+  OptRun r;
+  r.cs = std::make_unique<Case>(test::make_case(j));
+  r.prob = std::make_unique<DesignProblem>(*r.cs, parse_optimization(*r.cs));
+  OptimizeOptions o;  // no output folder
+  r.res = optimize(*r.prob, o);
+  return r;
+}
+
+}  // namespace
+
+TEST(MethodsCoverage, ResponsesOfTheCoastingBodiesAreTheClosedForms) {
+  Case cs = test::make_case(coasting_bodies("mma"));
+  SensitivityOptions o;
+  o.method = SensitivityOptions::Method::kDirectAnalytic;
+  const Vec p = (Vec(2) << 2.0, 3.0).finished();
+  const auto res = compute_sensitivities(cs, p, o);
+  ASSERT_TRUE(res.ok) << res.message;
+  const auto& E = res.responses[0];
+  const auto& e = res.responses[1];
+  std::printf("E = %.17g (closed form %.17g), e = %.17g (%.17g)\n", E.values[0], energy(2, 3),
+              e.values[0], spread(2, 3));
+  // 10 exact steps: round-off of sums of O(1) numbers
+  EXPECT_NEAR(E.values[0], energy(2, 3), 1e-13);
+  EXPECT_NEAR(e.values[0], spread(2, 3), 1e-14);
+  // dE/dm_i = (1, 2) − ½/m_i², de/dm_i = −½/m_i²; the direct method differentiates the discrete
+  // solution, which is the closed form: round-off only. The kinetic energy's explicit ∂T/∂m is a
+  // central difference with a relative step of 1e-6 (exact for T linear in m, round-off
+  // ε |T| / (1e-6 m) ≈ 1e-9), hence 1e-8 on dE/dm.
+  EXPECT_NEAR(E.gradient(0, 0), 1 - 0.5 / 4, 1e-8);
+  EXPECT_NEAR(E.gradient(0, 1), 2 - 0.5 / 9, 1e-8);
+  EXPECT_NEAR(e.gradient(0, 0), -0.5 / 4, 1e-12);
+  EXPECT_NEAR(e.gradient(0, 1), -0.5 / 9, 1e-12);
+}
+
+TEST(MethodsCoverage, FdForwardIsTheForwardDifferenceWithItsTruncationError) {
+  // With a relative step δ = 1e-4, Δm_i = δ m_i. For e = ½/m1 + …, the forward difference is
+  // exactly −½/(m (m + Δm)): its error against de/dm = −½/m² is the truncation ½ e'' Δm = Δm/m
+  // relative (1e-4 here, far above round-off ε|e|/Δm ≈ 1e-12 relative). fd-central's error is
+  // O(Δm²) instead: −½/((m + Δm)(m − Δm)) exactly.
+  Case cs = test::make_case(coasting_bodies("mma"));
+  const Vec p = (Vec(2) << 2.0, 3.0).finished();
+  SensitivityOptions o;
+  o.delta = 1e-4;
+  o.relative = true;
+  o.method = SensitivityOptions::Method::kFdForward;
+  const auto fwd = compute_sensitivities(cs, p, o);
+  o.method = SensitivityOptions::Method::kFdCentral;
+  const auto ctr = compute_sensitivities(cs, p, o);
+  ASSERT_TRUE(fwd.ok && ctr.ok);
+  EXPECT_EQ(fwd.counts.simulations, 3) << "one base run and one per variable";
+  EXPECT_EQ(ctr.counts.simulations, 5);
+  for (int i = 0; i < 2; ++i) {
+    const double m = p[i], dm = o.step(*cs.design, p, i);
+    ASSERT_NEAR(dm, 1e-4 * m, 1e-18);
+    const double exact = -0.5 / (m * m), forward = -0.5 / (m * (m + dm)),
+                 central = -0.5 / ((m + dm) * (m - dm));
+    // round-off of a difference quotient of values known to ~1e-15: 1e-15 / Δm ≈ 5e-12
+    const double tol = 1e-14 / dm;
+    std::printf(
+        "m%d: fd-forward %.15e (forward difference %.15e, derivative %.15e: truncation %.3e "
+        "relative); "
+        "fd-central %.15e\n",
+        i + 1, fwd.responses[1].gradient(0, i), forward, exact, forward / exact - 1,
+        ctr.responses[1].gradient(0, i));
+    EXPECT_NEAR(fwd.responses[1].gradient(0, i), forward, tol);
+    EXPECT_NEAR(ctr.responses[1].gradient(0, i), central, tol);
+    // the truncation error is there, with its sign: the forward difference is not a central one
+    EXPECT_NEAR(fwd.responses[1].gradient(0, i) - exact, forward - exact, tol);
+    EXPECT_GT(std::abs(forward - exact), 100 * tol);
+    // the energy's linear part is differenced exactly
+    EXPECT_NEAR(fwd.responses[0].gradient(0, i), (i == 0 ? 1.0 : 2.0) + forward, tol);
+  }
+}
+
+// Each optimizer ends at the closed-form optimum. The run stops when the objective changes by less
+// than 1e-9 (relative) at a design feasible within 1e-8. Along the active constraint the
+// objective is flat to first order at the optimum (E − E* ≈ ½ κ Δm²), so an objective 1e-8 off
+// leaves the design ~1e-4 off: tolerances 3e-4 on the design and 1e-7 on the objective
+// (measured: design 3.8e-5 (ccsaq), 1e-7 (mma), 2.3e-8 (slsqp); objective ≤ 7.4e-9).
+TEST(MethodsCoverage, NloptMmaCcsaqAndSlsqpReachTheClosedFormOptimum) {
+  for (const std::string opt : {"mma", "ccsaq", "slsqp"}) {
+    const OptRun r = optimize_case(coasting_bodies(opt));
+    const Vec& p = r.res.p;
+    std::printf(
+        "%-6s %3ld evaluations, %s: m = (%.9f, %.9f) [closed form (%.9f, %.9f)], E = %.12f "
+        "[%.12f], "
+        "violation %+.2e\n",
+        opt.c_str(), r.res.evaluations, r.res.nlopt_status.c_str(), p[0], p[1], kM1, kM2,
+        r.res.final.objective, kE, r.res.final.max_violation);
+    EXPECT_TRUE(r.res.converged) << opt << ": " << r.res.nlopt_status;
+    EXPECT_NEAR(p[0] / kM1, 1, 3e-4) << opt;
+    EXPECT_NEAR(p[1] / kM2, 1, 3e-4) << opt;
+    EXPECT_NEAR(r.res.final.objective / kE, 1, 1e-7) << opt;
+    // the objective evaluated by the simulation is the closed form at the final design
+    EXPECT_NEAR(r.res.final.objective, energy(p[0], p[1]), 1e-12) << opt;
+  }
+}
+
+TEST(MethodsCoverage, MmaSvanbergRespectsItsMoveLimitAndReachesTheOptimum) {
+  // move_limit 0.05: no variable moves by more than 0.05 × (10 − 0.5) = 0.475 per iteration; from
+  // m = (5, 5) to (2.41, 1.71) the first iterations take the full move (the optimum is ≥ 5 moves
+  // away)
+  json j = coasting_bodies("mma-svanberg");
+  j["optimization"]["move_limit"] = 0.05;
+  const OptRun r = optimize_case(j);
+  const auto& h = r.res.history;
+  ASSERT_GE(h.size(), 2u);
+  double largest = 0;
+  int at_limit = 0;
+  for (size_t k = 1; k < h.size(); ++k)
+    for (int i = 0; i < 2; ++i) {
+      const double step = std::abs(h[k].p[i] - h[k - 1].p[i]);
+      largest = std::max(largest, step);
+      if (step > 0.475 * (1 - 1e-5))
+        ++at_limit;  // the interior-point subproblem stays inside its box
+      EXPECT_LE(step, 0.475 * (1 + 1e-12)) << "iteration " << k << " variable " << i;
+    }
+  std::printf(
+      "mma-svanberg, move limit 0.05: %ld evaluations, largest step %.6f (limit 0.475), %d steps "
+      "at the limit; "
+      "m = (%.9f, %.9f), E = %.12f\n",
+      r.res.evaluations, largest, at_limit, r.res.p[0], r.res.p[1], r.res.final.objective);
+  EXPECT_GE(at_limit, 5) << "the first moves are limited";
+  EXPECT_TRUE(r.res.converged);
+  EXPECT_NEAR(r.res.p[0] / kM1, 1, 3e-4);  // as above (measured 1.1e-5)
+  EXPECT_NEAR(r.res.p[1] / kM2, 1, 3e-4);
+  EXPECT_NEAR(r.res.final.objective / kE, 1,
+              1e-6);  // the classic MMA stops on the same rule (measured 2.4e-7)
+  // the default move limit (0.5) lets the first step go further than 0.475
+  const OptRun d = optimize_case(coasting_bodies("mma-svanberg"));
+  double first = 0;
+  for (int i = 0; i < 2; ++i)
+    first = std::max(first, std::abs(d.res.history[1].p[i] - d.res.history[0].p[i]));
+  std::printf("mma-svanberg, default move limit: first step %.6f, %ld evaluations\n", first,
+              d.res.evaluations);
+  EXPECT_GT(first, 0.475);
+  EXPECT_NEAR(d.res.p[0] / kM1, 1, 3e-4);
+}
+
+TEST(MethodsCoverage, CliGradientsCsvAndSummaryHoldTheLibraryNumbers) {
+  namespace fs = std::filesystem;
+  const std::string dir = testing::TempDir() + "lsmbs_cli_numbers";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  json j = coasting_bodies("mma");
+  // a per-step response too (gradients.csv rows per step, arrays in summary.json)
+  j["output"]["responses"].push_back({{"name", "spread_steps"},
+                                      {"measure", "spread"},
+                                      {"aggregate", "per_step"},
+                                      {"window", {{"t0", 0.5}, {"t1", 1.0}}}});
+  const std::string file = dir + "/case.json";
+  std::ofstream(file) << j.dump(1);
+  const std::string out = dir + "/out";
+  const std::string cmd = std::string(LSMBS_CLI) + " sensitivity " + file +
+                          " --method direct-analytic --set m1=2 --set m2=3 -q -o " + out;
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0) << cmd;
+
+  Case cs = load_case(file);
+  SensitivityOptions o;
+  o.method = SensitivityOptions::Method::kDirectAnalytic;
+  const auto lib = compute_sensitivities(cs, (Vec(2) << 2.0, 3.0).finished(), o);
+  ASSERT_TRUE(lib.ok);
+
+  // summary.json: the same doubles (JSON numbers round-trip)
+  const json S = json::parse(std::ifstream(out + "/summary.json"));
+  const char* vars[2] = {"m1", "m2"};
+  int compared = 0;
+  for (const auto& rs : lib.responses) {
+    if (rs.times.empty()) {
+      EXPECT_EQ(S["responses"][rs.name].get<double>(), rs.values[0]) << rs.name;
+      for (int i = 0; i < 2; ++i, ++compared)
+        EXPECT_EQ(S["gradients"][rs.name][vars[i]].get<double>(), rs.gradient(0, i));
+    } else {
+      ASSERT_EQ(S["responses"][rs.name].size(), rs.values.size());
+      for (size_t k = 0; k < rs.values.size(); ++k) {
+        EXPECT_EQ(S["responses"][rs.name][k].get<double>(), rs.values[k]);
+        for (int i = 0; i < 2; ++i, ++compared)
+          EXPECT_EQ(S["gradients"][rs.name][vars[i]][k].get<double>(),
+                    rs.gradient(static_cast<Eigen::Index>(k), i));
+      }
+    }
+  }
+  // gradients.csv: "# responses: 0=energy …", a header, then response index, step index, t, value,
+  // d/dm1, d/dm2 — numbers written so that they read back as the same doubles
+  std::ifstream csv(out + "/gradients.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "# responses: 0=energy 1=spread 2=spread_steps");
+  std::getline(csv, line);
+  EXPECT_EQ(line, "response,index,t,value,d/dm1,d/dm2");
+  size_t rows = 0;
+  while (std::getline(csv, line)) {
+    std::vector<double> x;
+    std::stringstream ss(line);
+    for (std::string f; std::getline(ss, f, ',');) x.push_back(std::stod(f));
+    ASSERT_EQ(x.size(), 6u) << line;
+    const auto& rs = lib.responses.at(static_cast<size_t>(x[0]));
+    const auto k = static_cast<Eigen::Index>(x[1]);
+    EXPECT_EQ(x[3], rs.values[k]) << line;
+    EXPECT_EQ(x[4], rs.gradient(k, 0)) << line;
+    EXPECT_EQ(x[5], rs.gradient(k, 1)) << line;
+    if (!rs.times.empty()) EXPECT_EQ(x[2], rs.times[k]) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 2u + 6u);  // two scalar responses, six steps in [0.5, 1.0]
+  EXPECT_EQ(compared, 2 * 2 + 2 * 6);
+}

@@ -1,0 +1,160 @@
+// Feature distances (geometry/feature.hpp) against brute force: the Euclidean distance from a
+// point to a densely sampled boundary (the minimum over the segments of a polygon with 4·10⁵
+// vertices, uniform in polar angle), signed negative inside. Points lie on the normals of
+// boundary points at offsets that cover the three zones of the super-ellipse's distance:
+// refined (|D₀| ≤ r/2: three Newton projections onto φ = 0; error ∝ |d|³ or better), blend
+// (r/2 … r: between the refined distance and D₀) and plain D₀ = φ/|∇φ| beyond r, which for a
+// convex φ never exceeds the signed distance. The circle's φ is a signed distance, so every zone
+// is exact. (The ellipse's exact distance is tested in design_map_test.cpp.)
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <numbers>
+
+#include "lsmbs/geometry/feature.hpp"
+
+using namespace lsmbs;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+ParamBinding constant(double v) { return {v, 0, -1}; }
+
+// Boundary r(ψ) (polar, feature frame) → polygon in the global frame.
+struct Polygon {
+  std::vector<Vec2> v;
+  double distance(const Vec2& x) const {
+    double best = 1e300;
+    for (size_t i = 0; i < v.size(); ++i) {
+      const Vec2 a = v[i], b = v[(i + 1) % v.size()], ab = b - a;
+      const double t = std::clamp((x - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (x - a - t * ab).norm());
+    }
+    return best;
+  }
+};
+
+Polygon polygon(const std::function<double(double)>& r, const Vec2& c, double rot, int n) {
+  Polygon p;
+  for (int i = 0; i < n; ++i) {
+    const double psi = 2 * kPi * i / n, rr = r(psi);
+    const Vec2 u(rr * std::cos(psi), rr * std::sin(psi));
+    p.v.emplace_back(c + Vec2(std::cos(rot) * u.x() - std::sin(rot) * u.y(),
+                              std::sin(rot) * u.x() + std::cos(rot) * u.y()));
+  }
+  return p;
+}
+
+}  // namespace
+
+TEST(FeatureDistance, CircleIsExactInEveryZone) {
+  const double cx = 0.1, cy = -0.02, R = 0.01, rw = 3e-3;
+  Feature f("C", Feature::Type::kCircle, {constant(cx), constant(cy), constant(R)}, true);
+  const double th[3] = {cx, cy, R};
+  // brute-force resolution: the polygon's sag R (1 − cos(π/n)) ≈ 3e-12 m for n = 4·10⁵
+  const Polygon poly = polygon([&](double) { return R; }, Vec2(cx, cy), 0, 400000);
+  double worst = 0;
+  for (int k = 0; k < 16; ++k) {
+    const double psi = 0.37 + 2 * kPi * k / 16;
+    const Vec2 n(std::cos(psi), std::sin(psi));
+    for (const double s :
+         {-8e-3, -2e-3, -1.2e-3, -2e-4, 1e-5, 3e-4, 1.2e-3, 2e-3, 2.9e-3, 5e-3, 2e-2}) {
+      const Vec2 x = Vec2(cx, cy) + (R + s) * n;
+      const double d = (s < 0 ? -1 : 1) * poly.distance(x);
+      for (const double refine : {0.0, rw}) {
+        const double D = f.distance<double>(x, th, refine);
+        EXPECT_EQ(D < 0, s < 0);
+        EXPECT_NEAR(D, s, 1e-15) << "the closed form |x − c| − R";
+        worst = std::max(worst, std::abs(D - d));
+      }
+    }
+  }
+  std::printf("circle: largest |D − brute force| = %.2e m (polygon sag 3e-12 m)\n", worst);
+  EXPECT_LT(worst, 1e-11);
+}
+
+TEST(FeatureDistance, SuperEllipseAgainstBruteForceInTheRefinedBlendAndPlainZones) {
+  // ξ = η = 5 super-ellipse as on the robot arm (eq. 43): a = 20 mm, b = 10 mm, rotated;
+  // refinement radius r = 3 mm (the mapping uses 12 bands: ε = 0.25 mm here).
+  const double cx = 0.1, cy = 0.02, a = 0.02, b = 0.01, xi = 5, rot = 0.3, rw = 3e-3;
+  Feature f("S", Feature::Type::kSuperEllipse,
+            {constant(cx), constant(cy), constant(a), constant(b), constant(xi), constant(xi),
+             constant(rot)},
+            true);
+  const double th[7] = {cx, cy, a, b, xi, xi, rot};
+  auto r = [&](double psi) {
+    return std::pow(
+        std::pow(std::abs(std::cos(psi) / a), xi) + std::pow(std::abs(std::sin(psi) / b), xi),
+        -1 / xi);
+  };
+  // polygon sag κ Δ²/8 ≤ 500 m⁻¹ (3e-7 m)² / 8 ≈ 1e-11 m at the corners
+  const Polygon poly = polygon(r, Vec2(cx, cy), rot, 400000);
+  const Vec2 c(cx, cy);
+  auto to_global = [&](const Vec2& u) -> Vec2 {
+    return c + Vec2(std::cos(rot) * u.x() - std::sin(rot) * u.y(),
+                    std::sin(rot) * u.x() + std::cos(rot) * u.y());
+  };
+  const std::vector<double> offsets = {-4e-3,    -2.5e-3, -1.5e-3, -1e-3, -5e-4, -2.5e-4,
+                                       -1.25e-4, 1.25e-4, 2.5e-4,  5e-4,  1e-3,  1.5e-3,
+                                       2e-3,     2.5e-3,  2.9e-3,  4e-3,  6e-3};
+  double worst_refined = 0, worst_k = 0, worst_order = 1e300, near = 0;
+  int n_refined = 0, n_blend = 0, n_plain = 0;
+  for (int k = 0; k < 24; ++k) {
+    // boundary point and its outward normal ∇φ/|∇φ| in the feature frame
+    const double psi = 0.05 + 2 * kPi * k / 24, rr = r(psi);
+    const Vec2 y(rr * std::cos(psi), rr * std::sin(psi));
+    Vec2 n(xi * std::pow(std::abs(y.x() / a), xi - 1) / a * (y.x() < 0 ? -1 : 1),
+           xi * std::pow(std::abs(y.y() / b), xi - 1) / b * (y.y() < 0 ? -1 : 1));
+    n.normalize();
+    std::map<double, double> err;  // offset → |D − d| in the refined zone
+    for (const double s : offsets) {
+      const Vec2 x = to_global(y + s * n);
+      const double d = (s < 0 ? -1 : 1) * poly.distance(x);
+      const double D = f.distance<double>(x, th, rw), D0 = f.distance<double>(x, th, 0);
+      const double Dr = f.distance<double>(x, th, 1e300);  // the refined distance everywhere
+      ASSERT_EQ(D < 0, s < 0) << "sign at psi " << psi << ", s " << s << ": D = " << D
+                              << ", d = " << d;
+      // φ is convex (ξ, η ≥ 1), so D₀ = φ/|∇φ| never exceeds the signed distance: outside,
+      // 0 = φ(y*) ≥ φ(x) + ∇φ(x)·(y* − x) gives φ ≤ |∇φ| d; inside, following ∇φ to the boundary
+      // gives |φ|/|∇φ| ≥ d.
+      EXPECT_LE(D0, d + 1e-11) << psi << " " << s;
+      const double e = std::abs(D - d), ad = std::abs(D0);
+      if (ad <= rw / 2) {  // refined: three Newton projections, third order in d
+        ++n_refined;
+        worst_refined = std::max(worst_refined, e);
+        worst_k = std::max(worst_k, e / std::pow(std::abs(d), 3));
+        if (std::abs(d) <= 5e-4) near = std::max(near, e);
+        err[s] = e;
+      } else if (ad < rw) {  // blend: a convex combination of the refined distance and D₀
+        ++n_blend;
+        EXPECT_GE(D, std::min(Dr, D0) - 1e-15) << psi << " " << s;
+        EXPECT_LE(D, std::max(Dr, D0) + 1e-15) << psi << " " << s;
+      } else {  // plain: D₀ itself
+        ++n_plain;
+        EXPECT_EQ(D, D0);
+      }
+    }
+    // order: the error of the refined distance falls at least eightfold when the offset halves
+    // (where it is above the brute force's resolution)
+    for (const double s : {2.5e-4, 5e-4, -2.5e-4, -5e-4})
+      if (err.count(s) && err.count(2 * s) && err[2 * s] > 1e-10)
+        worst_order = std::min(worst_order, std::log2(err[2 * s] / std::max(err[s], 1e-12)));
+  }
+  std::printf(
+      "super-ellipse ξ = 5, a = 20 mm, b = 10 mm, refinement radius 3 mm: refined zone (%d points) "
+      "|D − d| ≤ %.2e m (≤ %.3g |d|³; ≤ %.2e m within 0.5 mm), observed order ≥ %.2f; %d blend, %d "
+      "plain points\n",
+      n_refined, worst_refined, worst_k, near, worst_order, n_blend, n_plain);
+  EXPECT_GT(n_refined, 150);
+  EXPECT_GT(n_blend, 20);
+  EXPECT_GT(n_plain, 20);
+  // measured 1.9e3 |d|³ (8.3e-6 m at |d| = 1.5 mm, near a corner), 8.9e-8 m within 0.5 mm = 2
+  // bands, where the logistic's slope is largest; orders ≥ 3
+  EXPECT_LT(worst_k, 4e3);
+  EXPECT_LT(near, 2e-7);
+  EXPECT_GE(worst_order, 3.0);
+}
