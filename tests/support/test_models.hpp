@@ -11,10 +11,25 @@ namespace lsmbs::test {
 
 inline Case make_case(const nlohmann::json& j) { return load_case_json(j, "<test>", LSMBS_SOURCE_DIR); }
 
-inline Mat dense_iteration_matrix(const Model& m, const State& s, const Coefficients& c, double k, double zeta) {
+inline SpMat sparse_iteration_matrix(const Model& m, const State& s, const Coefficients& c, double k, double zeta) {
   std::vector<double> vals;
   m.iteration_matrix(s, m.params(), c, k, zeta, vals);
-  return Mat(m.assembler().to_sparse(vals));
+  return m.assembler().to_sparse(vals);
+}
+
+inline Mat dense_iteration_matrix(const Model& m, const State& s, const Coefficients& c, double k, double zeta) {
+  return Mat(sparse_iteration_matrix(m, s, c, k, zeta));
+}
+
+/// M = ∂r/∂q̈ (nq × nq, sparse): S(1, 0, 0) − S(0, 0, 0).
+inline SpMat sparse_mass_matrix(const Model& m, const State& s) {
+  const SpMat d = sparse_iteration_matrix(m, s, {1, 0, 0}, 1, 0) - sparse_iteration_matrix(m, s, {0, 0, 0}, 1, 0);
+  return d.topLeftCorner(m.nq(), m.nq());
+}
+
+/// K_t = ∂r/∂q (nq × nq, sparse) with the augmented-Lagrangian terms of the given k, ζ.
+inline SpMat sparse_tangent_stiffness(const Model& m, const State& s, double k = 1, double zeta = 0) {
+  return sparse_iteration_matrix(m, s, {0, 0, 1}, k, zeta).topLeftCorner(m.nq(), m.nq());
 }
 
 /// M = ∂r/∂q̈ (nq × nq): S(1, 0, 0) − S(0, 0, 0), exact because S is linear in (c_a, c_v, c_q).
