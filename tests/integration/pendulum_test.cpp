@@ -77,3 +77,26 @@ TEST(RigidPendulum, SolutionDoesNotDependOnThePenaltyZeta) {
   EXPECT_LT((q1 - q2).norm(), 1e-10);
   EXPECT_LT((q1 - q3).norm(), 1e-10);
 }
+
+TEST(AugmentedLagrangian, AutomaticScalingIsTheMeanDiagonalOfTheIterationMatrix) {
+  // k = mean |diag(β′M + γ′C_t + K_t)| over the positions (DESIGN.md, eq. 7's scaling), with
+  // β′ = (1 − α_m)/((1 − α_f) β h²), γ′ = γ/(β h) from eq. (11) for ρ∞ = 0.8 (α_m = 1/3,
+  // α_f = 4/9). A rigid body (m, J, centre of mass at its reference point) on a spring–damper to
+  // ground along x at its free length and at rest: K_t = k_s n nᵀ, C_t = c n nᵀ with n = (1, 0),
+  // so the diagonal is (β′m + γ′c + k_s, β′m, β′J).
+  const double m = 2.0, J = 0.03, ks = 5e3, c = 40.0, h = 1e-3;
+  const json j = json::parse(R"({
+    "name": "scaling",
+    "bodies": [{"name": "b", "type": "rigid", "position": [0.5, 0], "mass": 2.0, "inertia": 0.03}],
+    "forces": [{"name": "s", "type": "spring_damper", "a": {"body": "b"}, "b": {"ground": [0, 0]},
+                "stiffness": 5e3, "damping": 40, "free_length": 0.5}],
+    "simulation": {"t_end": 0.001, "h": 0.001}
+  })");
+  Case cs = test::make_case(j);
+  const double am = 1.0 / 3, af = 4.0 / 9, g = 0.5 - am + af, b = 0.25 * (g + 0.5) * (g + 0.5);
+  const double bp = (1 - am) / ((1 - af) * b * h * h), gp = g / (b * h);
+  const double ref = ((bp * m + gp * c + ks) + bp * m + bp * J) / 3;
+  const double k = GeneralizedAlpha::automatic_scaling(*cs.model, cs.model->params(), cs.initial,
+                                                       AlphaCoefficients::make(0.8, h));
+  EXPECT_NEAR(k, ref, 1e-12 * ref);
+}
