@@ -13,7 +13,9 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -388,6 +390,19 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
              bool quiet, bool verbose, const std::string& cmdline, const lsmbs::GradientCheckOptions* check) {
   lsmbs::Case cs = lsmbs::load_case(case_file);
   lsmbs::OptimizationSpec spec = lsmbs::parse_optimization(cs);  // validated before anything is written
+  // Testing hook (docs/verification.md): LSMBS_STOP_AFTER_EVALUATIONS=N ends the run after N
+  // evaluations simulated in this run exactly as an interruption (SIGINT) would: checkpoint and
+  // history written, status "interrupted", exit code 130, resumable with --resume.
+  long stop_after = -1;
+  if (const char* env = std::getenv("LSMBS_STOP_AFTER_EVALUATIONS")) {
+    char* end = nullptr;
+    errno = 0;
+    const long n = std::strtol(env, &end, 10);
+    if (*env == '\0' || *end != '\0' || errno != 0 || n < 1)
+      throw lsmbs::Error("environment variable LSMBS_STOP_AFTER_EVALUATIONS=" + std::string(env) +
+                         ": expected a positive integer (a testing hook: stop after that many evaluations)");
+    stop_after = n;
+  }
   if (!optimizer.empty()) {
     if (optimizer != "mma-svanberg" && cs.optimization.contains("move_limit"))
       throw lsmbs::Error("--optimizer " + optimizer + ": the case sets a move_limit, which only mma-svanberg has");
@@ -403,6 +418,7 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   lsmbs::OptimizeOptions o;
   o.out_dir = out;
   o.resume = resume;
+  o.stop_after = stop_after;
   if (table) {
     std::printf("lsmbs optimize: %d variables, %d constraints, optimizer %s, sensitivities %s\n", d.size(),
                 prob.num_constraints(), spec.optimizer.c_str(), lsmbs::SensitivityOptions::name(spec.sensitivity.method));
@@ -502,7 +518,7 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
                  res.failure.c_str());
     return 1;
   }
-  if (res.interrupted && lsmbs::interrupted()) {
+  if (res.interrupted && (lsmbs::interrupted() || stop_after > 0)) {
     std::fprintf(stderr, "lsmbs optimize: interrupted after %ld evaluations; --resume continues from the checkpoint\n",
                  res.evaluations);
     return 130;

@@ -1,15 +1,24 @@
-// Fuzz target for the case loader: any byte string is parsed as JSON and loaded as a case
-// (every section, meshes from the shipped data folder, design and optimization sections).
-// The loader may reject an input only with lsmbs::Error (exit code 2 in the command line);
-// anything else — another exception, a crash, a hang, a sanitizer report — is a finding.
+// Fuzz target for the case loader: any byte string is written to a case file and loaded by
+// lsmbs::load_case(path), the command line's path (JSON parsing included), with the files of
+// data/slider_crank/ (meshes, pressure table) beside it; design and optimization sections too.
+// The loader may reject an input only with lsmbs::Error (exit code 2 in the command line), and
+// the rejection must name the file and either a JSON path or the invalid JSON; anything else —
+// another exception, a crash, a hang, a sanitizer report, a message without a path — is a finding.
 //
 // Built two ways:
 //   * with clang -fsanitize=fuzzer,address,undefined by scripts/fuzz.sh (libFuzzer drives it);
 //   * as an ordinary executable `fuzz_replay` (LSMBS_FUZZ_REPLAY) that ctest runs over every
-//     file of tests/fuzz/corpus/ — the inputs found so far stay checked on every build.
+//     file of tests/fuzz/corpus/: the inputs found so far stay checked on every build, and the
+//     seeds (seed_*.json, shipped cases) must load.
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <string>
+
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -18,6 +27,8 @@
 #include "lsmbs/io/optimization_spec.hpp"
 
 namespace {
+
+namespace fs = std::filesystem;
 
 // Inputs whose meshes would take more than the fuzzer's memory and time budget are skipped
 // (a real case may be that large; it is not a loader bug). Counts elements of rectangle meshes.
@@ -40,48 +51,94 @@ bool too_large(const nlohmann::json& j) {
   return false;
 }
 
+// A folder with links to the files of data/slider_crank/, where inputs are written and loaded.
+const fs::path& work_dir() {
+  static const fs::path dir = [] {
+    fs::path d = fs::temp_directory_path() / ("lsmbs_fuzz_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    for (const auto& e : fs::directory_iterator(fs::path(LSMBS_SOURCE_DIR) / "data" / "slider_crank"))
+      if (e.is_regular_file()) fs::create_symlink(e.path(), d / e.path().filename());
+    return d;
+  }();
+  return dir;
+}
+
+enum class Outcome { kLoaded, kRejected, kRejectedWithoutPath, kSkipped };
+
+// Loads the case file; returns how it ended (other exceptions propagate).
+Outcome load(const fs::path& file) {
+  {
+    std::ifstream in(file, std::ios::binary);
+    const auto j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    if (!j.is_discarded() && too_large(j)) return Outcome::kSkipped;
+  }
+  try {
+    lsmbs::Case cs = lsmbs::load_case(file.string());
+    if (cs.design && !cs.optimization.is_null()) lsmbs::parse_optimization(cs);
+    return Outcome::kLoaded;
+  } catch (const lsmbs::Error& e) {
+    // "FILE: /json/path: …", or for a file that is no JSON "FILE: [byte N: ]invalid JSON: …"
+    const std::string msg = e.what(), head = file.string() + ": ";
+    std::string rest = msg.rfind(head, 0) == 0 ? msg.substr(head.size()) : "";
+    if (rest.rfind("byte ", 0) == 0 && rest.find(": ") != std::string::npos) rest = rest.substr(rest.find(": ") + 2);
+    const bool named = rest.rfind("/", 0) == 0 || rest.rfind("invalid JSON:", 0) == 0;
+    if (!named) std::fprintf(stderr, "the rejection names no JSON path: %s\n", msg.c_str());
+    return named ? Outcome::kRejected : Outcome::kRejectedWithoutPath;
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(data, data + size);
-  } catch (const nlohmann::json::exception&) {
-    // not JSON, or a number out of range (1e999): load_case reports both as invalid JSON with
-    // exit code 2 — this finding of the fuzzer used to end in an "internal error"
-    return 0;
+  const fs::path file = work_dir() / "input.json";
+  {
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   }
-  if (too_large(j)) return 0;
-  try {
-    lsmbs::Case cs = lsmbs::load_case_json(j, "<fuzz>", LSMBS_SOURCE_DIR "/data/slider_crank");
-    if (cs.design && !cs.optimization.is_null()) lsmbs::parse_optimization(cs);
-  } catch (const lsmbs::Error&) {
-    // a clear rejection: the intended outcome for bad input
-  }
+  if (load(file) == Outcome::kRejectedWithoutPath) std::abort();  // a finding, like a crash
   return 0;
 }
 
 #ifdef LSMBS_FUZZ_REPLAY
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
-#include <vector>
+#include <exception>
 
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::fprintf(stderr, "usage: fuzz_replay CORPUS_DIR\n");
     return 2;
   }
-  int n = 0;
-  for (const auto& e : std::filesystem::directory_iterator(argv[1])) {
+  int n = 0, loaded = 0, rejected = 0, skipped = 0, failures = 0;
+  for (const auto& e : fs::directory_iterator(argv[1])) {
     if (!e.is_regular_file()) continue;
-    std::ifstream f(e.path(), std::ios::binary);
-    const std::vector<char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-    LLVMFuzzerTestOneInput(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
     ++n;
+    const std::string name = e.path().filename().string();
+    const fs::path copy = work_dir() / name;  // beside the linked data files
+    fs::copy_file(e.path(), copy, fs::copy_options::overwrite_existing);
+    try {
+      switch (load(copy)) {
+        case Outcome::kLoaded: ++loaded; break;
+        case Outcome::kSkipped: ++skipped; break;
+        case Outcome::kRejectedWithoutPath:
+          ++failures;
+          std::fprintf(stderr, "FAIL: %s\n", name.c_str());
+          break;
+        case Outcome::kRejected:
+          ++rejected;
+          if (name.rfind("seed_", 0) == 0) {
+            std::fprintf(stderr, "FAIL: seed %s is rejected (a shipped case must load)\n", name.c_str());
+            ++failures;
+          }
+          break;
+      }
+    } catch (const std::exception& x) {
+      std::fprintf(stderr, "FAIL: %s: not an lsmbs::Error: %s\n", name.c_str(), x.what());
+      ++failures;
+    }
+    fs::remove(copy);
   }
-  std::printf("replayed %d inputs without a crash\n", n);
-  return n > 0 ? 0 : 1;
+  fs::remove_all(work_dir());
+  std::printf("replayed %d inputs: %d loaded, %d rejected with a JSON path, %d skipped (too large), %d failures\n", n,
+              loaded, rejected, skipped, failures);
+  return n > 0 && failures == 0 ? 0 : 1;
 }
 #endif

@@ -1,11 +1,14 @@
 // Static cantilever plate 0.6 × 0.05 m, 2.5 mm, E = 72 GPa, ν = 0.3, clamped at x = 0, tip
 // shear load P on the free edge: the tip deflection against Timoshenko beam theory
 //   δ = P L³ / (3 E I) + P L / (κ G A),  κ = 5/6,
-// for the mesh used by the robot arm (120 × 10). Prints the mesh-convergence table for both
-// integration variants (copied into docs/verification.md).
+// for the mesh used by the robot arm (120 × 10), and the mesh convergence of both integration
+// variants: second order towards one limit, which lies within 0.2 % of beam theory (a fully
+// clamped root edge and a uniform edge shear are not beam theory's assumptions).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "lsmbs/integrators/static_solver.hpp"
 #include "support/test_models.hpp"
@@ -48,26 +51,43 @@ double tip_deflection(int nx, int ny, const std::string& integration) {
 
 }  // namespace
 
-TEST(CantileverStatic, TipDeflectionOfTheRobotArmMeshIsWithinTwoPercentOfTimoshenko) {
+TEST(CantileverStatic, TipDeflectionOfTheRobotArmMeshIsWithinPointFourPercentOfTimoshenko) {
   const double ref = timoshenko();
   const double d = tip_deflection(120, 10, "selective-shear");
   std::printf("Timoshenko %.6e m, selective-shear 120x10 %.6e m (%+.3f %%)\n", ref, d, 100 * (d / ref - 1));
-  EXPECT_NEAR(d / ref, 1.0, 0.02);
+  // the mesh-converged limit is 0.15 % stiffer than beam theory and this mesh 0.12 % stiffer
+  // than that limit (test below): 0.4 % bounds both with room for neither to double
+  EXPECT_NEAR(d / ref, 1.0, 0.004);
 }
 
-TEST(CantileverStatic, MeshConvergenceTable) {
+TEST(CantileverStatic, MeshConvergenceIsSecondOrderTowardsBeamTheory) {
   const double ref = timoshenko();
   std::printf("| mesh | full 2x2 Gauss | selective shear |\n|---|---|---|\n");
-  double prev_err = 1e9;
-  const int meshes[][2] = {{24, 2}, {60, 5}, {120, 10}, {240, 20}};
+  const int meshes[][2] = {{24, 2}, {60, 5}, {120, 10}, {240, 20}, {480, 40}};
+  std::vector<double> full, sri;
   for (const auto& m : meshes) {
-    const double full = tip_deflection(m[0], m[1], "full");
-    const double sri = tip_deflection(m[0], m[1], "selective-shear");
-    std::printf("| %d x %d | %+.3f %% | %+.3f %% |\n", m[0], m[1], 100 * (full / ref - 1), 100 * (sri / ref - 1));
-    // Full integration locks (too stiff) on coarse meshes; the selective variant does not.
-    EXPECT_LT(full, sri);
-    EXPECT_LT(std::abs(sri / ref - 1), 0.03);
-    prev_err = std::abs(full / ref - 1);
+    full.push_back(tip_deflection(m[0], m[1], "full") / ref - 1);
+    sri.push_back(tip_deflection(m[0], m[1], "selective-shear") / ref - 1);
+    std::printf("| %d x %d | %+.3f %% | %+.3f %% |\n", m[0], m[1], 100 * full.back(), 100 * sri.back());
+    // full integration locks (too stiff) on coarse meshes; the selective variant much less
+    EXPECT_LT(full.back(), sri.back());
   }
-  EXPECT_LT(prev_err, 0.05) << "full integration converges under refinement";
+  for (const auto* e : {&full, &sri}) {
+    const auto& v = *e;
+    // successive differences δ_h − δ_h/2 fall about fourfold (second order) once h ≤ 10 mm
+    // (60 × 5; 24 × 2, two elements across the height, is not yet asymptotic). The clamped
+    // corners are stress singularities of plane elasticity, which take the observed order a
+    // little below 2 (measured 1.94 full, 1.85–1.88 selective): 2 ± 0.25.
+    for (size_t i = 1; i + 2 < v.size(); ++i) {
+      const double order = std::log2((v[i] - v[i + 1]) / (v[i + 1] - v[i + 2]));
+      std::printf("%s: observed order %.3f\n", e == &full ? "full" : "selective shear", order);
+      EXPECT_NEAR(order, 2.0, 0.25);
+    }
+  }
+  // Richardson extrapolation of the two finest meshes: both variants converge to one limit, within
+  // 0.2 % of beam theory (the clamped root edge without Poisson contraction stiffens the plate)
+  const double lim_full = full[4] + (full[4] - full[3]) / 3, lim_sri = sri[4] + (sri[4] - sri[3]) / 3;
+  std::printf("extrapolated limits: full %+.4f %%, selective shear %+.4f %%\n", 100 * lim_full, 100 * lim_sri);
+  EXPECT_NEAR(lim_full, lim_sri, 1e-4);
+  EXPECT_LT(std::abs(lim_sri), 2e-3);
 }

@@ -1,13 +1,17 @@
 // Free flexible plate (no constraints) spinning and vibrating: with ρ∞ = 1 the total energy
-// T + W drifts less than 0.1 % over 1000 steps; with ρ∞ = 0.8 the energy of the elastic
+// T + W drifts less than 2e-4 over 1000 steps; with ρ∞ = 0.8 the energy of the elastic
 // (non-rigid) motion decays while linear and angular momentum are conserved — the
-// high-frequency content is damped, the rigid motion is not. Linear momentum is conserved to
-// round-off (the scheme is linear in the velocities); angular momentum only approximately (the
-// generalized-α scheme is not a variational integrator), to a relative drift below 1e-3.
+// high-frequency content is damped, the rigid motion is not. The elastic energy kept is
+// predicted mode by mode from generalized-α's amplification matrix (eq. 11's coefficients on
+// ẍ + ω²x = 0, written here) and the plate's free-vibration modes. Linear momentum is conserved
+// to round-off (the scheme is linear in the velocities); angular momentum only approximately
+// (the generalized-α scheme is not a variational integrator), to a relative drift below 1e-3.
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <random>
+
+#include <Eigen/Eigenvalues>
 
 #include "support/test_models.hpp"
 
@@ -62,7 +66,26 @@ struct EnergyRecorder : StepObserver {
   }
 };
 
-EnergyRecorder run(double rho) {
+// Spectral radius of one generalized-α step on ẍ + ω²x = 0 (eq. 11: α_m = (2ρ∞ − 1)/(ρ∞ + 1),
+// α_f = ρ∞/(ρ∞ + 1), γ = ½ − α_m + α_f, β = ¼(γ + ½)²), from the recurrences of Algorithm 1:
+//   q₁ = q₀ + h v₀ + h²(½ − β) a₀ + h²β a₁,  v₁ = v₀ + h(1 − γ) a₀ + hγ a₁,
+//   (1 − α_m) a₁ + α_m a₀ = (1 − α_f) q̈₁ + α_f q̈₀,  q̈ = −ω² q:  A x₁ = B x₀ for x = (q, v, a).
+double spectral_radius(double rho_inf, double wh) {
+  const double am = (2 * rho_inf - 1) / (rho_inf + 1), af = rho_inf / (rho_inf + 1), g = 0.5 - am + af,
+               b = 0.25 * (g + 0.5) * (g + 0.5), w2 = wh * wh;  // h = 1, ω = wh
+  Eigen::Matrix3d A, B;
+  A << 1, 0, -b, 0, 1, -g, (1 - af) * w2, 0, 1 - am;
+  B << 1, 1, 0.5 - b, 0, 1, 1 - g, -af * w2, 0, -am;
+  const Eigen::Matrix3d G = A.inverse() * B;
+  return Eigen::EigenSolver<Eigen::Matrix3d>(G).eigenvalues().cwiseAbs().maxCoeff();
+}
+
+struct Run {
+  EnergyRecorder rec;
+  double predicted_kept = 0;  ///< elastic energy fraction after the run, mode by mode
+};
+
+Run run(double rho) {
   json j = {{"name", "free_plate"},
             {"bodies", {{{"name", "plate"}, {"type", "flexible"},
                          {"mesh", {{"type", "rectangle"}, {"origin", {-0.05, -0.01}}, {"size", {0.1, 0.02}}, {"elements", {10, 2}}}},
@@ -73,37 +96,61 @@ EnergyRecorder run(double rho) {
   std::mt19937 g(7);
   std::uniform_real_distribution<double> u(-0.03, 0.03);
   for (int i = 0; i < cs.initial.v.size(); ++i) cs.initial.v[i] += u(g);  // high-frequency content
-  EnergyRecorder rec;
+  Run out;
+  EnergyRecorder& rec = out.rec;
   rec.m = cs.model.get();
   State s0 = cs.initial;
   s0.a.setZero(cs.model->nq());
   s0.lambda.setZero(0);
-  rec.M = Mat(test::dense_iteration_matrix(*cs.model, s0, {1, 0, 0}, 1, 0));
+  rec.M = test::dense_mass_matrix(*cs.model, s0);
+  // free-vibration modes of the undeformed (unstressed) plate: K φ = ω² M φ, three rigid modes
+  // first; the initial elastic energy of mode i is ½ (φ_iᵀ M v₀)² (mass-normalized φ)
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Mat> es(test::dense_tangent_stiffness(*cs.model, s0), rec.M);
+  const Vec modal_rates = es.eigenvectors().transpose() * rec.M * cs.initial.v;
+  double e0 = 0, e1 = 0;
+  for (Eigen::Index i = 3; i < modal_rates.size(); ++i) {
+    const double e = 0.5 * modal_rates[i] * modal_rates[i];
+    e0 += e;
+    e1 += e * std::pow(spectral_radius(rho, std::sqrt(es.eigenvalues()[i]) * cs.simulation.h), 2 * 1000);
+  }
+  EXPECT_LT(std::abs(es.eigenvalues()[2]), 1e-9 * es.eigenvalues()[3]) << "three rigid modes";
+  out.predicted_kept = e1 / e0;
   const auto sum = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&rec});
   EXPECT_TRUE(sum.ok) << sum.message;
   EXPECT_EQ(sum.steps, 1000);
-  return rec;
+  return out;
 }
 
 }  // namespace
 
 TEST(FreeFlexiblePlate, EnergyIsConservedWithRhoInfOne) {
-  const auto r = run(1.0);
+  const auto r = run(1.0).rec;
   double drift = 0;
   for (double e : r.total) drift = std::max(drift, std::abs(e / r.total.front() - 1));
   std::printf("rho_inf = 1: max energy drift over 1000 steps %.3e\n", drift);
-  EXPECT_LT(drift, 1e-3);
+  // ρ∞ = 1 conserves the energy of linear systems exactly; the drift is the geometric
+  // non-linearity of the spinning plate at Newton tolerance (measured 8.2e-5)
+  EXPECT_LT(drift, 2e-4);
   std::printf("relative angular momentum drift %.3e\n", r.worst_L / std::abs(r.L0));
   EXPECT_LT(r.worst_P, 1e-12);
   EXPECT_LT(r.worst_L, 1e-3 * std::abs(r.L0));
 }
 
-TEST(FreeFlexiblePlate, HighFrequencyContentDecaysWithRhoInfPointEight) {
+TEST(FreeFlexiblePlate, HighFrequencyContentDecaysAsTheAmplificationFactorsPredict) {
   const auto r1 = run(1.0), r8 = run(0.8);
-  const double keep1 = r1.elastic.back() / r1.elastic.front(), keep8 = r8.elastic.back() / r8.elastic.front();
-  std::printf("elastic energy kept after 1000 steps: rho_inf = 1: %.4f, rho_inf = 0.8: %.4f\n", keep1, keep8);
-  EXPECT_GT(keep1, 0.95);
-  EXPECT_LT(keep8, 0.5 * keep1);
-  EXPECT_LT(r8.worst_P, 1e-12) << "numerical damping must not touch linear momentum";
-  EXPECT_LT(r8.worst_L, 1e-3 * std::abs(r8.L0)) << "nor (to the scheme's accuracy) angular momentum";
+  const double keep1 = r1.rec.elastic.back() / r1.rec.elastic.front(),
+               keep8 = r8.rec.elastic.back() / r8.rec.elastic.front();
+  std::printf("elastic energy kept after 1000 steps: rho_inf = 1: %.4f (predicted %.4f), rho_inf = 0.8: %.4f "
+              "(predicted %.4f)\n",
+              keep1, r1.predicted_kept, keep8, r8.predicted_kept);
+  // The prediction is linear: it ignores the coupling of the modes by the rotation (2 rad/s
+  // against a lowest elastic mode of ~400 rad/s) and the geometric non-linearity, which exchange
+  // 0.3 % of the elastic energy with the rigid motion at ρ∞ = 1 (measured; 0.8 % of the kept
+  // energy at ρ∞ = 0.8). Bounds: 1 % and 5 % relative; the kept fraction is the 2000th power of
+  // the spectral radii, so a wrong α_m, α_f or γ moves it by far more.
+  EXPECT_NEAR(keep1 / r1.predicted_kept, 1.0, 0.01);
+  EXPECT_NEAR(keep8 / r8.predicted_kept, 1.0, 0.05);
+  EXPECT_LT(r8.predicted_kept, 0.5) << "the case must damp most of its elastic energy";
+  EXPECT_LT(r8.rec.worst_P, 1e-12) << "numerical damping must not touch linear momentum";
+  EXPECT_LT(r8.rec.worst_L, 1e-3 * std::abs(r8.rec.L0)) << "nor (to the scheme's accuracy) angular momentum";
 }

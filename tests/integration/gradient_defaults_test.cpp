@@ -9,11 +9,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
+#include "support/convergence.hpp"
+#include "support/gradients.hpp"
 #include "support/test_models.hpp"
 
 using namespace lsmbs;
@@ -23,11 +24,12 @@ using Matrix = SensitivityOptions::Matrix;
 
 namespace {
 
+// The spring slider-crank at the default Newton tolerance and step h; smooth responses only (a
+// max switches its maximizer under finite differences).
 json spring_crank_json(double h) {
-  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json"));
+  json c = test::spring_crank_json();
   c["simulation"].erase("tol_r");  // the default tolerance
   c["simulation"]["h"] = h;
-  // smooth responses only (a max switches its maximizer under finite differences)
   json keep = json::array();
   for (const auto& r : c["output"]["responses"])
     if (r["aggregate"] != "max") keep.push_back(r);
@@ -38,22 +40,11 @@ json spring_crank_json(double h) {
 // max over responses of max|g − g_ref| / max|g_ref|, both over every variable and (per-step
 // responses) every step: relative to the largest gradient of each response
 double worst_relative(const SensitivityResult& a, const SensitivityResult& ref) {
-  double worst = 0;
-  for (size_t r = 0; r < ref.responses.size(); ++r) {
-    const double n = ref.responses[r].gradient.cwiseAbs().maxCoeff();
-    if (n > 0) worst = std::max(worst, (a.responses[r].gradient - ref.responses[r].gradient).cwiseAbs().maxCoeff() / n);
-  }
-  return worst;
+  return test::worst_relative(a, ref, test::Norm::kPerResponse);
 }
 
 SensitivityResult gradients(Case& cs, Method m, Matrix mx = SensitivityOptions{}.matrix, double delta = 1e-6) {
-  SensitivityOptions o;
-  o.method = m;
-  o.matrix = mx;
-  o.delta = delta;
-  auto r = compute_sensitivities(cs, cs.design->initial(), o);
-  EXPECT_TRUE(r.ok) << r.message;
-  return r;
+  return test::gradients(cs, m, mx, delta);
 }
 
 // Reference: central differences of re-simulations converged far below the default tolerance.
@@ -162,12 +153,9 @@ TEST(NewtonConvergence, ClosedLoopFourBarConvergesAtOrderTwoWithDefaultOptions) 
     return final_value(c, "final_crank");
   };
   const double ref = at(1e-3 / 512, true);
-  double prev = 0;
-  for (int i = 0; i < 6; ++i) {
-    const double err = std::abs(at(1e-3 / std::pow(2.0, i), false) - ref);
-    if (i > 0) EXPECT_NEAR(std::log2(prev / err), 2.0, 0.05) << "h = 1e-3 / 2^" << i;
-    prev = err;
-  }
+  std::vector<double> err;
+  for (int i = 0; i < 6; ++i) err.push_back(std::abs(at(1e-3 / std::pow(2.0, i), false) - ref));
+  test::expect_order(err, 2.0, 0.05, "four-bar, final crank angle, h = 1e-3 / 2^i, default options");
 }
 
 TEST(GradientCheck, PassesOnTheDefaultGradientAndCatchesAWrongOne) {

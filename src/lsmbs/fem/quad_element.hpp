@@ -10,7 +10,7 @@
 //    one point. The split is exact for isotropic D (no normal–shear coupling), keeps objectivity
 //    (E is invariant under rigid rotation) and passes the patch test; it removes parasitic
 //    shear in bending (see docs/methods.md and the cantilever test).
-// Consistent mass M_IJ = ρ t ∫ N_I N_J dA (2×2 Gauss, exact for parallelograms).
+// Consistent mass M_IJ = ρ t ∫ N_I N_J dA (2×2 Gauss, exact: det J of a bilinear quad is linear).
 #include <array>
 
 #include "lsmbs/core/types.hpp"

@@ -157,9 +157,7 @@ TEST_F(Fixture, StiffnessBlockAndConstraintBlocksMatchDifferencesOfTheResidual) 
 }
 
 TEST_F(Fixture, MassAndDampingBlocksMatchDifferencesOfTheResidual) {
-  const Mat S0 = test::dense_iteration_matrix(m, s, {0, 0, 0}, k, zeta);
-  const Mat M = (test::dense_iteration_matrix(m, s, {1, 0, 0}, k, zeta) - S0).topLeftCorner(m.nq(), m.nq());
-  const Mat C = (test::dense_iteration_matrix(m, s, {0, 1, 0}, k, zeta) - S0).topLeftCorner(m.nq(), m.nq());
+  const Mat M = test::dense_mass_matrix(m, s), C = test::dense_damping_matrix(m, s);
   expect_close(M, fd(&State::a, 1e-3).topRows(m.nq()), 1e-7, m, "M");
   expect_close(C, fd(&State::v, 1e-5).topRows(m.nq()), 1e-6, m, "C_t");
 }
@@ -193,10 +191,111 @@ TEST_F(Fixture, VelocityAndAccelerationLevelConstraintTermsMatchDifferences) {
   EXPECT_LT((gamma - d2).lpNorm<Eigen::Infinity>(), 1e-5 * std::max(1.0, d2.lpNorm<Eigen::Infinity>()));
 }
 
-TEST_F(Fixture, KineticEnergyIsHalfVtMv) {
-  const Mat M = (test::dense_iteration_matrix(m, s, {1, 0, 0}, k, zeta) -
-                 test::dense_iteration_matrix(m, s, {0, 0, 0}, k, zeta)).topLeftCorner(m.nq(), m.nq());
-  EXPECT_NEAR(m.kinetic_energy(s, m.params()), 0.5 * s.v.dot(M * s.v), 1e-12 * s.v.dot(M * s.v));
+namespace {
+
+// ∂(Φ_q(q) x)/∂q and ∂(Φ_q(q)ᵀ w)/∂q by central differences of the analytic Φ_q (itself checked
+// against differences of Φ above). Φ is at most quadratic in each position times sin/cos of the
+// angles: with h = 1e-5 the truncation (h² × third derivatives ~ 1) and the round-off
+// (ε ‖Φ_q‖ / h ~ 1e-11) both stay below 1e-9 of the entries.
+Mat fd_of_jacobian(const Model& m, const State& s, const Vec& x, bool transposed) {
+  const double h = 1e-5;
+  const int rows = transposed ? m.nq() : m.nc();
+  Mat D(rows, m.nq());
+  for (int j = 0; j < m.nq(); ++j) {
+    Vec qp = s.q, qm = s.q;
+    qp[j] += h;
+    qm[j] -= h;
+    const SpMat Jp = m.constraint_jacobian(s.t, qp, m.params()), Jm = m.constraint_jacobian(s.t, qm, m.params());
+    D.col(j) = transposed ? Vec((Jp.transpose() * x - Jm.transpose() * x) / (2 * h)) : Vec((Jp * x - Jm * x) / (2 * h));
+  }
+  return D;
+}
+
+}  // namespace
+
+TEST_F(Fixture, ConstraintHessianIsTheDerivativeOfTheTransposedJacobianTimesW) {
+  // Σ_i w_i ∂²Φ_i/∂q² = ∂(Φ_qᵀ w)/∂q, the geometric stiffness of the constraint forces
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Vec w = Vec::NullaryExpr(m.nc(), [&] { return u(g); });
+  const SpMat H = m.constraint_hessian(s.t, s.q, w);
+  ASSERT_EQ(H.rows(), m.nq());
+  ASSERT_EQ(H.cols(), m.nq());
+  const Mat ref = fd_of_jacobian(m, s, w, true);
+  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-2) << "the case must have constraints non-linear in q";
+  expect_close(Mat(H), ref, 1e-8, m, "Σ w_i ∂²Φ_i/∂q²");
+  EXPECT_LT((Mat(H) - Mat(H).transpose()).lpNorm<Eigen::Infinity>(), 1e-14 * ref.lpNorm<Eigen::Infinity>())
+      << "a Hessian is symmetric";
+  // the pattern holds explicit zeros: the same at w = 0 and at another state
+  State x = s;
+  x.q.array() += 0.01;
+  EXPECT_EQ(m.constraint_hessian(s.t, s.q, Vec::Zero(m.nc())).nonZeros(), H.nonZeros());
+  EXPECT_EQ(m.constraint_hessian(x.t, x.q, w).nonZeros(), H.nonZeros());
+}
+
+TEST_F(Fixture, VelocityConstraintJacobianIsTheDerivativeOfTheJacobianTimesTheVelocity) {
+  // ∂(Φ_q q̇)/∂q, row i = (∂²Φ_i/∂q² q̇)ᵀ (the GGL index-2 system's Jacobian of IDAS)
+  const SpMat V = m.velocity_constraint_jacobian(s.t, s.q, s.v);
+  ASSERT_EQ(V.rows(), m.nc());
+  ASSERT_EQ(V.cols(), m.nq());
+  const Mat ref = fd_of_jacobian(m, s, s.v, false);
+  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-2);
+  expect_close(Mat(V), ref, 1e-8, m, "∂(Φ_q q̇)/∂q");
+  // consistent with the Hessian: (∂(Φ_q q̇)/∂q)ᵀ w = Σ_i w_i ∂²Φ_i/∂q² q̇
+  std::mt19937 g(12);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Vec w = Vec::NullaryExpr(m.nc(), [&] { return u(g); });
+  const Vec a = V.transpose() * w, b = m.constraint_hessian(s.t, s.q, w) * s.v;
+  EXPECT_LT((a - b).lpNorm<Eigen::Infinity>(), 1e-12 * b.lpNorm<Eigen::Infinity>());
+  EXPECT_EQ(m.velocity_constraint_jacobian(s.t, s.q, Vec::Zero(m.nq())).nonZeros(), V.nonZeros());
+}
+
+TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
+  // T = Σ_rigid ½ m |v_G|² + ½ J_G ω² (v_G = ẋ + ω R′(θ) c of the centre of mass at offset c from
+  // the reference point), + Σ_point masses ½ m |v_P|², + the plate ½ ρ t ∫ |v(X)|² dA with v the
+  // bilinear interpolation of the nodal velocities, integrated by 3 × 3 Gauss on each quad (exact:
+  // |v|² det J is of degree ≤ 3 in each of ξ, η). Masses and offsets are those of the JSON above.
+  double T = 0;
+  auto point_velocity = [&](const std::string& body, const Vec2& d) {
+    const int b = m.find_rigid(body)->dof0;
+    return Vec2(s.v.segment<2>(b) + s.v[b + 2] * rotation_derivative(s.q[b + 2]) * d);
+  };
+  struct Rigid {
+    const char* name;
+    double mass, J;
+    Vec2 c;
+  };
+  const Rigid rigid[] = {{"crank", 1.2, 0.01, {0.02, 0.01}}, {"link", 0.8, 0.004, {0.05, -0.005}},
+                         {"slider", 0.5, 0.001, {0, 0}},     {"floater", 1, 0.01, {0, 0}},
+                         {"rod", 0, 0, {0, 0}}};
+  for (const auto& r : rigid)
+    T += 0.5 * r.mass * point_velocity(r.name, r.c).squaredNorm() +
+         0.5 * r.J * std::pow(s.v[m.find_rigid(r.name)->dof0 + 2], 2);
+  T += 0.5 * 0.3 * point_velocity("link", {0.03, 0.01}).squaredNorm();  // m_body
+  const FlexibleBody& plate = *m.find_flexible("plate");
+  int node = 0;  // m_node: the node nearest to (0.05, 0) in the mesh frame
+  for (int i = 0; i < plate.mesh.num_nodes(); ++i)
+    if ((plate.mesh.nodes[i] - Vec2(0.05, 0)).norm() < (plate.mesh.nodes[node] - Vec2(0.05, 0)).norm()) node = i;
+  T += 0.5 * 0.2 * s.v.segment<2>(plate.node_dof(node)).squaredNorm();
+  const double rho_t = 1000 * 0.005, g = std::sqrt(0.6), gp[3] = {-g, 0, g}, gw[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
+  const double xi_n[4] = {-1, 1, 1, -1}, eta_n[4] = {-1, -1, 1, 1};  // counter-clockwise corners
+  for (const auto& quad : plate.mesh.quads)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        Vec2 v = Vec2::Zero(), dX_dxi = Vec2::Zero(), dX_deta = Vec2::Zero();
+        for (int I = 0; I < 4; ++I) {
+          const double N = 0.25 * (1 + xi_n[I] * gp[a]) * (1 + eta_n[I] * gp[b]);
+          v += N * s.v.segment<2>(plate.node_dof(quad[I]));
+          dX_dxi += 0.25 * xi_n[I] * (1 + eta_n[I] * gp[b]) * plate.mesh.nodes[quad[I]];
+          dX_deta += 0.25 * eta_n[I] * (1 + xi_n[I] * gp[a]) * plate.mesh.nodes[quad[I]];
+        }
+        const double detJ = dX_dxi.x() * dX_deta.y() - dX_dxi.y() * dX_deta.x();
+        T += 0.5 * rho_t * gw[a] * gw[b] * detJ * v.squaredNorm();
+      }
+  const double Tm = m.kinetic_energy(s, m.params());
+  std::printf("kinetic energy: model %.15e, closed form %.15e (%.1e)\n", Tm, T, std::abs(Tm / T - 1));
+  // both sums are exact: round-off of a few dozen terms of one sign
+  EXPECT_NEAR(Tm, T, 1e-13 * T);
 }
 
 TEST_F(Fixture, MassRateProductIsTheDerivativeOfMAlongTheMotion) {
@@ -210,9 +309,7 @@ TEST_F(Fixture, MassRateProductIsTheDerivativeOfMAlongTheMotion) {
   auto mass_times_w = [&](double tau) {
     State x = s;
     x.q += tau * s.v;
-    const Mat M = (test::dense_iteration_matrix(m, x, {1, 0, 0}, k, zeta) -
-                   test::dense_iteration_matrix(m, x, {0, 0, 0}, k, zeta)).topLeftCorner(m.nq(), m.nq());
-    return Vec(M * w);
+    return Vec(test::dense_mass_matrix(m, x) * w);
   };
   const double h = 1e-5;
   const Vec ref = (mass_times_w(h) - mass_times_w(-h)) / (2 * h);
@@ -269,6 +366,35 @@ TEST_F(Fixture, ParameterDerivativesMatchCentralDifferencesOfTheResidualForEvery
   std::printf("∂R/∂p exact vs central differences, %zu scalar parameters: worst relative error %.2e (%s); "
               "without ν %.2e\n",
               names.size(), worst, worst_name.c_str(), worst_linear);
+}
+
+TEST_F(Fixture, ParameterDerivativeAlongMaterialFieldsAndScalarsMatchesCentralDifferences) {
+  // A direction that moves μ_e of every plate element and two scalar parameters at once:
+  // ∂R/∂p·d against central differences of R along d. R is linear in each μ_e (eq. 3) and in
+  // k, c of a spring, so the difference is exact up to round-off: ε ‖R‖ / h with h = 1e-3.
+  const FlexibleBody& b = *m.find_flexible("plate");
+  std::mt19937 g(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  ParamDirection d;
+  for (int e = 0; e < b.mesh.num_elements(); ++e) d.fields.push_back({b.field, e, u(g)});
+  d.scalars.emplace_back(m.parameter_index("spring_bodies.stiffness"), 300.0);
+  d.scalars.emplace_back(m.parameter_index("spring_body_node.damping"), -2.0);
+  Vec exact;
+  m.residual_param_derivative(s, m.params(), d, exact);
+  const double h = 1e-3;
+  auto R_at = [&](double t) {
+    ModelParams p = m.params();
+    add_direction(p, d, t);
+    Vec r;
+    m.residual(s, p, k, zeta, r);
+    return r;
+  };
+  const Vec ref = (R_at(h) - R_at(-h)) / (2 * h);
+  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 0);
+  const double err = (exact - ref).lpNorm<Eigen::Infinity>() / ref.lpNorm<Eigen::Infinity>();
+  std::printf("∂R/∂p along material fields and scalars vs central differences: %.2e\n", err);
+  EXPECT_LT(err, 1e-9);
+  EXPECT_EQ(exact.tail(m.nc()).lpNorm<Eigen::Infinity>(), 0.0);
 }
 
 TEST_F(Fixture, ParameterDerivativeOfEachElementMatchesDifferencesOfItsOwnResidual) {
