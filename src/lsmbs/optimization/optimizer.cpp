@@ -216,10 +216,12 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   // objective scale from the initial design (evaluated first, also as the optimizer's first point)
   const Evaluation e0 = c.eval(x.data());
   OptimizeResult res;
-  if (!e0.ok) throw NumericalFailure("the initial design could not be simulated: " + e0.message);
   c.f0 = std::max(std::abs(e0.objective), 1e-300);
   nlopt_result r;
-  if (classic) {
+  if (!e0.ok) {  // the initial design cannot be simulated: nothing to optimize (c.failure says why)
+    c.failure = "the initial design could not be simulated: " + c.failure;
+    r = NLOPT_FORCED_STOP;
+  } else if (classic) {
     r = c.stop ? NLOPT_FORCED_STOP : run_mma_classic(c, x, e0);
   } else {
     c.opt = nlopt_create(alg, n);

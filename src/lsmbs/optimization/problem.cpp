@@ -84,10 +84,14 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
       e.max_violation = std::max(e.max_violation, (r.values[k] - ub) / std::max(std::abs(ub), 1e-300));
     }
   }
-  if (row != num_constraints_) {
+  if (row != num_constraints_ && res.ok) {  // a failed run's own message says when and why
     e.ok = false;
     e.message = "a per-step constraint produced " + std::to_string(row) + " values instead of " +
                 std::to_string(num_constraints_) + " (the run did not reach t_end?)";
+  }
+  if (!e.ok) {  // the aggregates of a run that stopped early are not the responses of this design
+    e.objective = NAN;
+    e.max_violation = NAN;
   }
   e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return cache_[key] = e;
