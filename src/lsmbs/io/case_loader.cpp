@@ -72,6 +72,7 @@ struct Loader {
     const double period = r.non_negative("period", 0.0);
     // x_scale multiplies the abscissae (which must increase): a positive factor; y_scale any factor
     const double xs = r.positive("x_scale", 1.0), ys = r.number("y_scale", 1.0);
+    if (r.has("file") && r.has("points")) r.fail("expected either \"file\" or \"points\", not both");
     if (r.has("file")) {
       const std::string f = resolve(r.string("file"));
       try {
@@ -423,7 +424,9 @@ struct Loader {
       const Vec2 u = r.vec2("direction");
       if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
       const int ap = param(name + ".area", r.positive("area"));
-      Table1D t = table(r.child("table"));
+      const JsonReader tr = r.child("table");
+      Table1D t = table(tr);
+      tr.finish();  // a misspelt table option (e.g. "x_scal") is an error, not ignored
       int angle_dof = -1;
       double offset = 0;
       if (r.has("argument")) {
@@ -974,28 +977,7 @@ Case load_case(const std::string& path) {
   std::stringstream ss;
   ss << f.rdbuf();
   const std::string text = ss.str();
-  // nlohmann::json parses recursively: bound the nesting before it can exhaust the stack
-  {
-    constexpr int kMaxDepth = 256;
-    int depth = 0;
-    bool in_string = false, escaped = false;
-    for (size_t i = 0; i < text.size(); ++i) {
-      const char ch = text[i];
-      if (in_string) {
-        if (escaped) escaped = false;
-        else if (ch == '\\') escaped = true;
-        else if (ch == '"') in_string = false;
-      } else if (ch == '"') {
-        in_string = true;
-      } else if (ch == '[' || ch == '{') {
-        if (++depth > kMaxDepth)
-          throw Error(path, "byte " + std::to_string(i),
-                      "invalid case: JSON nested deeper than " + std::to_string(kMaxDepth) + " levels");
-      } else if (ch == ']' || ch == '}') {
-        --depth;
-      }
-    }
-  }
+  check_json_depth(text, path);  // before nlohmann::json, which parses recursively
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);

@@ -148,6 +148,9 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
   e.objective_gradient = Eigen::Map<const Vec>(g.data(), static_cast<Eigen::Index>(g.size()));
   const auto cg = unhexv(j.at("constraint_gradient"));
   const Eigen::Index rows = j.at("rows").get<Eigen::Index>();
+  if (rows < 0 || (rows > 0 && static_cast<Eigen::Index>(cg.size()) % rows != 0))
+    throw std::invalid_argument("constraint gradient of " + std::to_string(cg.size()) + " values in " +
+                                std::to_string(rows) + " rows");
   e.constraint_gradient = Eigen::Map<const Mat>(cg.data(), rows, rows ? static_cast<Eigen::Index>(cg.size()) / rows : 0);
   e.max_violation = unhex(j.at("max_violation"));
   e.wall_seconds = j.at("wall_seconds").get<double>();
