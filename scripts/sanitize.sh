@@ -20,7 +20,7 @@ cd "$build"
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 if [ $ci -eq 1 ]; then
   # integration tests that take more than 20 s under ASan (the full run above covers them)
-  slow='^(Sensitivity\.(RobotArm|SemiAnalyticalError)|Idas\.GeneralizedAlphaConvergesToIdasAtSecondOrderOnAFlexibleModel|IdasAdjoint\.GradientsAgreeWithForwardSensitivitiesOnAFlexibleArm|RobotArm\.SolidPlate|Optimization\.Coarse|cli_end_to_end|verify_connecting_rod|gradient_corpus)'
+  slow='^(Sensitivity\.(RobotArm|SemiAnalyticalError)|Idas\.GeneralizedAlphaConvergesToIdasAtSecondOrderOnAFlexibleModel|IdasAdjoint\.GradientsAgreeWithForwardSensitivitiesOnAFlexibleArm|RobotArm\.SolidPlate|Optimization\.Coarse|cli_end_to_end|verify_connecting_rod|gradient_corpus|structure_fuzz|fault_injection)'
   ctest --output-on-failure -j"$(nproc)" --timeout 600 -E "$slow" "$@"
 else
   ctest --output-on-failure -j"$(nproc)" --timeout 1800 "$@"

@@ -32,6 +32,7 @@ invariant, 0 otherwise. Counts per verdict are printed (docs/verification.md, "R
 """
 import argparse
 import copy
+import functools
 import glob
 import hashlib
 import json
@@ -435,8 +436,19 @@ LOCATION = re.compile(r"(^|[\s'\"(]|: )/[A-Za-z0-9_]*(/[^\s:]*)*:|byte \d+|line 
                       r"-o \S")
 
 
-def limit_child():
-    resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+MEMORY_LIMIT = 2 << 30
+
+
+@functools.lru_cache(maxsize=None)
+def sanitized(exe):
+    """AddressSanitizer reserves terabytes of address space: it gets its own allocation limit."""
+    with open(exe, "rb") as f:
+        return b"AddressSanitizer" in f.read()
+
+
+def limit_child(address_space=True):
+    if address_space:
+        resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
 
@@ -495,7 +507,13 @@ def run_input(exe, root, inp, work, timeout):
     with open(case, "w", encoding="utf-8", errors="surrogatepass") as f:
         f.write(text)
     args = [exe] + [a.replace("@CASE@", case).replace("@OUT@", out) for a in inp["command"]]
-    p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, preexec_fn=limit_child, cwd=work)
+    env = dict(os.environ)
+    asan = sanitized(exe)
+    if asan:  # allocations beyond the limit fail (std::bad_alloc) instead of aborting
+        env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + f":allocator_may_return_null=1"
+                               f":max_allocation_size_mb={MEMORY_LIMIT >> 20}").lstrip(":")
+    p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=work, env=env,
+                         preexec_fn=lambda: limit_child(not asan))
     interrupted = False
     try:
         _, err = p.communicate(timeout=timeout)

@@ -25,6 +25,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
+std::string format_g(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
 struct Loader {
   Loader(Case& c, std::string dir) : cs(c), base_dir(std::move(dir)) {}
   Case& cs;
@@ -214,7 +220,7 @@ struct Loader {
       for (auto& x : b.mesh.nodes) {
         x *= sc;
         if (!x.allFinite() || x.norm() > 1e100)  // lengths beyond 1e100 m overflow in the element integrals
-          m.fail("scale", "the scaled mesh coordinates are out of range (scale " + std::to_string(sc) + ")");
+          m.fail("scale", "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
       }
     }
     m.finish();
@@ -272,7 +278,7 @@ struct Loader {
     try {  // the element geometry is checked here (inverted or degenerate quadrilaterals)
       added = &model().add_flexible_body(std::move(b));
     } catch (const Error& e) {
-      r.fail("mesh", e.what());
+      r.fail("mesh", std::string(e.what()) + " (check the mesh's coordinates: origin, size, scale)");
     }
     const FlexibleBody& fb = *added;
     init_v.conservativeResize(model().nq());
@@ -594,8 +600,7 @@ struct Loader {
     }
     if (o.t_end / o.h > 1e8) r.fail("h", "more than 1e8 steps requested");
     if (o.h > o.t_end * (1 + 1e-9))  // zero steps: the run would end at t = 0 and report it complete
-      r.fail("h", "h = " + std::to_string(o.h) + " is longer than t_end = " + std::to_string(o.t_end) +
-                      " (the run would have no step)");
+      r.fail("h", "h = " + format_g(o.h) + " is longer than t_end = " + format_g(o.t_end) + " (the run would have no step)");
     {  // the output grid must end on t_end: no silent overshoot (the run starts at t = 0)
       const double n = o.t_end / o.h;
       if (std::abs(n - std::round(n)) > 1e-9 * std::max(1.0, n)) {
