@@ -49,6 +49,13 @@ case_ heavy_rod_inertia "$rigid" 'c["bodies"][1]["inertia"] = 1.5e308'
 expect 2 heavy_rod_inertia "/bodies/1: rigid body 'rod'.*inertia = 1.5e\+308"
 case_ heavy_point_mass "$rigid" 'c["forces"] = [{"name": "lump", "type": "point_mass", "point": {"body": "rod", "at": [0.1, 0]}, "mass": 1e308}]'
 expect 2 heavy_point_mass "/forces/0: point mass 'lump'.*mass = 1e\+308"
+# A spring of 1e308 N/m: every entry is finite, but the factorization multiplies them ("consistent
+# initial accelerations are not finite" before): entries beyond 1e100 are refused, naming the spring
+case_ stiff_spring "$src/data/slider_crank_rigid/slider_crank_spring.json" 'c["design"]["variables"][0].update(initial=1e308, upper=1e308)'
+expect 2 stiff_spring "/forces/0: spring 'spring': its iteration-matrix entries reach 1e\+308 .*stiffness = 1e\+308"
+# A penalty 1e300 (exit 0 with a side force of 1e277 N before): far from the automatic scaling
+case_ zeta "$src/data/slider_crank_rigid/slider_crank_spring.json" 'c["simulation"]["zeta"] = 1e300'
+expect 2 zeta "/simulation/zeta: 1e\+300 is more than 1e8 times away from the automatic scaling"
 # ... while a heavy but representable crank (1e300 kg, fully driven) still runs
 case_ heavy_ok "$rigid" 'c["bodies"][0]["mass"] = 1e300'
 "$exe" simulate "$tmp/heavy_ok.json" -o "$tmp/out_heavy_ok" -q || fail "a 1e300 kg driven crank no longer runs"

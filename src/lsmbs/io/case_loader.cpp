@@ -856,6 +856,8 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
   const Vec& q = cs.initial.q;
   const Vec& v = cs.initial.v;
   const auto& forces = m.forces();
+  double s_max = 0;  // the largest iteration-matrix entry of one element, and which element
+  size_t f_max = 0;
   for (size_t f = 0; f < forces.size(); ++f) {
     const auto d = forces[f]->dofs();
     const auto nd = static_cast<Eigen::Index>(d.size());
@@ -865,11 +867,27 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
     LocalVec r = LocalVec::Zero(nd);
     LocalMat S = LocalMat::Zero(nd, nd);
     forces[f]->evaluate(ls, p, r, &co, &S);
-    if (r.allFinite() && S.allFinite()) continue;
+    if (r.allFinite() && S.allFinite()) {
+      if (nd && S.cwiseAbs().maxCoeff() > s_max) s_max = S.cwiseAbs().maxCoeff(), f_max = f;
+      continue;
+    }
     const Loader::Entry* e = entry_of(f);
     throw Error(cs.file, e ? e->path : "", forces[f]->describe() + ": its forces or iteration matrix are not finite " +
                                                when + ": a value is beyond double precision; check its parameters" +
                                                (e ? parameters_of(e->name) : "") + ", its initial velocity and the gravity");
+  }
+  // The factorization of [S kΦ_qᵀ; kΦ_q 0] forms products of entries (k²/S in the pivots of the
+  // constraint rows, with k the mean diagonal of S): entries beyond ~1e100 overflow there even
+  // though each one is finite (a spring of 1e308 N/m failed as "consistent initial accelerations
+  // are not finite"). No physical model comes near: the shipped ones stay below 1e13.
+  constexpr double kMaxEntry = 1e100;
+  if (s_max > kMaxEntry) {
+    const Loader::Entry* e = entry_of(f_max);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "its iteration-matrix entries reach %.3g ", s_max);
+    throw Error(cs.file, e ? e->path : "", forces[f_max]->describe() + ": " + buf + when +
+                                               ": beyond 1e100 the sparse factorization overflows; check its parameters" +
+                                               (e ? parameters_of(e->name) : ""));
   }
   Vec phi, phi_t, gamma;
   m.constraints(0.0, q, p, phi);
@@ -885,6 +903,17 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
                                      "(a position, velocity or driver law value beyond double precision)");
     }
   const double k = GeneralizedAlpha::automatic_scaling(m, p, cs.initial, c);
+  // A scaling or penalty far from the automatic one makes the constraint rows dominate (or vanish
+  // in) the iteration matrix: the results then carry round-off of that ratio (ζ = 1e300 gave a
+  // side force of 1e277 N, exit 0). The results do not depend on them within 1e-3 ... 1e3
+  // (test_pendulum); more than 1e8 away is refused.
+  for (const auto& [key, value] : {std::pair<const char*, double>{"k", cs.simulation.k}, {"zeta", cs.simulation.zeta}})
+    if (value > 0 && std::isfinite(k) && k > 0 && (value > 1e8 * k || value < 1e-8 * k)) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "%g is more than 1e8 times away from the automatic scaling %.3g of this model "
+                                     "(give 0 for the automatic value)", value, k);
+      throw Error(cs.file, std::string("/simulation/") + key, buf);
+    }
   std::vector<double> vals;
   m.iteration_matrix(cs.initial, p, co, cs.simulation.k > 0 ? cs.simulation.k : k,
                      cs.simulation.zeta > 0 ? cs.simulation.zeta : k, vals);
