@@ -161,6 +161,21 @@ void claim_output_folder(const std::string& out, bool overwrite, bool resume) {
   for (const auto& p : ours) fs::remove_all(p);
 }
 
+// A run that ends with an exception once it has started (a numerical failure raised deep inside,
+// memory exhausted, an internal error) leaves a summary.json with status partial and the reason,
+// replacing any earlier summary: exit 1 always comes with results flagged as partial.
+void flag_failed_run(const std::string& out, const std::string& cmdline, const std::string& case_file,
+                     const std::string& what) {
+  try {
+    std::filesystem::create_directories(out);
+    nlohmann::json S = lsmbs::provenance(cmdline, case_file, "");
+    S["status"] = "partial";
+    S["failure"] = what;
+    lsmbs::write_json_atomic(out + "/summary.json", S);
+  } catch (const std::exception&) {  // the folder cannot be written: the message on stderr remains
+  }
+}
+
 // IDAS tolerances from the command line: checked before anything runs
 void check_idas_tolerances(double rtol, double atol) {
   if (!(rtol > 0) || !std::isfinite(rtol) || rtol >= 1)
@@ -492,8 +507,9 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   S["responses"] = {{spec.objective, res.final.objective}};
   S["nlopt"] = {{"code", res.nlopt_code}, {"status", res.nlopt_status}};
   S["converged"] = res.converged;
-  const auto kkt = lsmbs::kkt_report(prob, res.final);
-  S["kkt"] = kkt.to_json();
+  // the KKT report of a failed evaluation would read gradients that were never computed
+  const auto kkt = res.final.ok ? lsmbs::kkt_report(prob, res.final) : lsmbs::KktReport{};
+  S["kkt"] = res.final.ok ? kkt.to_json() : nlohmann::json(nullptr);
   S["gradient_check"] = checked ? checked->to_json(*check) : nlohmann::json(nullptr);
   S["counts"] = {{"evaluations", res.evaluations}, {"simulations_this_run", res.simulations},
                  {"cache_hits", prob.cache_hits()}};
@@ -507,9 +523,10 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
                 res.nlopt_status.c_str(), res.evaluations, res.simulations, res.wall_seconds);
     std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first.objective, res.final.objective,
                 res.final.max_violation);
-    std::printf("  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; stationarity %.2e, "
-                "bound-sign violation %.2e\n", kkt.active_constraints, kkt.free_variables, kkt.at_lower, kkt.at_upper,
-                kkt.stationarity, kkt.bound_sign_violation);
+    if (res.final.ok)
+      std::printf("  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; stationarity %.2e, "
+                  "bound-sign violation %.2e\n", kkt.active_constraints, kkt.free_variables, kkt.at_lower, kkt.at_upper,
+                  kkt.stationarity, kkt.bound_sign_violation);
     for (int i = 0; i < d.size(); ++i) std::printf("  %-10s %.6g -> %.6g\n", d.variables[i].name.c_str(), init[i], res.p[i]);
     std::printf("  results in %s\n", out.c_str());
   }
@@ -673,10 +690,12 @@ int main(int argc, char** argv) {
     std::printf("lsmbs %s (commit %s)\n", lsmbs::kVersion, lsmbs::git_commit());
     return 0;
   }
+  bool started = false;  // the output folder is ours: a failure from here on is flagged in it
   try {
     if (*sim || *geo || *opt || *ben || *ver || *sen) {
       check_output_folder(out);
       claim_output_folder(out, overwrite, *opt && resume);
+      started = true;
     }
     if (*sim) return simulate(case_file, out, sets, quiet, verbose, integrator, rtol, atol, max_order, error_test,
                                 joined_args(argc, argv));
@@ -730,12 +749,18 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const lsmbs::NumericalFailure& e) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", e.what());
+    if (started) flag_failed_run(out, joined_args(argc, argv), case_file, std::string("numerical failure: ") + e.what());
     return 1;
   } catch (const std::filesystem::filesystem_error& e) {
     std::fprintf(stderr, "lsmbs: error: cannot write the output (-o %s): %s\n", out.c_str(), e.code().message().c_str());
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lsmbs: out of memory (the model or a table or mesh of the case is too large for this machine)\n");
+    if (started) flag_failed_run(out, joined_args(argc, argv), case_file, "out of memory");
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lsmbs: internal error: %s\n", e.what());
+    if (started) flag_failed_run(out, joined_args(argc, argv), case_file, std::string("internal error: ") + e.what());
     return 1;
   }
 }

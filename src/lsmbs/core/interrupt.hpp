@@ -1,7 +1,8 @@
 #pragma once
-// Clean interruption of long runs: SIGINT/SIGTERM set a flag that runs poll at step or evaluation
-// boundaries (they then finish the step, write what they have with status "partial" and the
-// reason "interrupted"); a second signal terminates at once.
+// Clean interruption of long runs: SIGINT/SIGTERM set a flag that runs poll at Newton iterations
+// or evaluation boundaries (a simulation then drops the step in progress, an optimization finishes
+// the evaluation; both write what they have with status "partial" / "interrupted"); a second
+// signal terminates at once.
 #include <atomic>
 #include <csignal>
 

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/file_check.hpp"
 
 namespace lsmbs {
 
@@ -124,6 +125,7 @@ struct Reader {
 }  // namespace
 
 Mesh2D Mesh2D::read_gmsh(const std::string& path) {
+  if (const auto why = unreadable_file_reason(path); !why.empty()) throw Error(path, "", "mesh file: " + why);
   std::ifstream f(path);
   if (!f) throw Error(path, "", "cannot open mesh file");
   Reader rd{f, path};
@@ -184,16 +186,19 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
     } else if (s == "$Nodes") {
       long nblocks, nnodes, minTag, maxTag;
       rd.parse(rd.next_line(), nblocks, nnodes, minTag, maxTag);
-      m.nodes.reserve(nnodes);
+      if (nblocks < 0 || nnodes < 0) rd.fail("negative block or node count");
+      m.nodes.reserve(static_cast<size_t>(std::min(nnodes, 10000000L)));  // a count is a claim, not yet data
       for (long b = 0; b < nblocks; ++b) {
         int edim, etag, parametric;
         long nb;
         rd.parse(rd.next_line(), edim, etag, parametric, nb);
-        std::vector<long> tags(nb);
-        for (long i = 0; i < nb; ++i) rd.parse(rd.next_line(), tags[i]);
+        if (nb < 0) rd.fail("negative node count in a block");
+        std::vector<long> tags;
+        for (long i = 0; i < nb; ++i) rd.parse(rd.next_line(), tags.emplace_back());
         for (long i = 0; i < nb; ++i) {
           double x, y, z;
           rd.parse(rd.next_line(), x, y, z);
+          if (!std::isfinite(x) || !std::isfinite(y)) rd.fail("non-finite node coordinate");
           node_index[tags[i]] = static_cast<int>(m.nodes.size());
           m.nodes.emplace_back(x, y);
         }

@@ -1,5 +1,6 @@
 #include "lsmbs/integrators/generalized_alpha.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -88,6 +89,14 @@ double GeneralizedAlpha::automatic_scaling(const Model& model, const ModelParams
 }
 
 namespace {
+
+// Column of the first NaN or Inf among the values of a matrix on `pat`, or −1.
+int first_non_finite_column(const CscPattern& pat, const std::vector<double>& vals) {
+  for (int col = 0; col < pat.n; ++col)
+    for (int at = pat.col_ptr[col]; at < pat.col_ptr[col + 1]; ++at)
+      if (!std::isfinite(vals[at])) return col;
+  return -1;
+}
 
 struct Workspace {
   State cur, prev;
@@ -339,6 +348,14 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     double rn = 0, pn = 0, prev_err = INFINITY, prev_inc = INFINITY;
     const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
     for (;; ++it) {
+      if (std::any_of(observers.begin(), observers.end(), [](const StepObserver* o) { return o->stop_requested(); })) {
+        sum.ok = false;  // abandon the step in progress: the run ends at the last converged step
+        sum.aborted = true;
+        sum.message = "stopped during the step from t = " + std::to_string(t_n) + " s";
+        sum.t_reached = w.prev.t;
+        if (final_state) *final_state = w.prev;
+        return finish(sum);
+      }
       timed(sum.seconds.residual, [&] { model.residual(x, p, k, zeta, w.R, &w.r_abs); });
       ++sum.residual_evaluations;
       if (!w.R.allFinite()) {
@@ -394,6 +411,12 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
         });
         sum.force_floor = std::max(sum.force_floor, nq ? w.row_floor.maxCoeff() : 0.0);
         ++sum.matrix_evaluations;
+        if (const int bad = first_non_finite_column(model.pattern(), w.vals); bad >= 0) {
+          // an overflow, not a singular motion: say so instead of blaming the factorization
+          why = "non-finite iteration matrix (NaN or Inf) in the equations of " + model.describe_unknown(bad);
+          have_factor = false;
+          break;
+        }
         const Status st = timed(sum.seconds.factor, [&] { return step_lu->factor(w.vals); });
         ++sum.factorizations;
         if (!st.ok()) {

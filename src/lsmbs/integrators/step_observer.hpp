@@ -46,6 +46,10 @@ class StepObserver {
   /// that the integrator leaves alone until on_step returns. A stop request then takes effect
   /// one step late.
   virtual bool concurrent() const { return false; }
+  /// Polled at every Newton iteration: true abandons the step in progress (the run ends at the
+  /// last converged step, reported as aborted). Lets an interrupt end a step that would otherwise
+  /// spend minutes in Newton iterations and halvings.
+  virtual bool stop_requested() const { return false; }
 };
 
 /// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …"

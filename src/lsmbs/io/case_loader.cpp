@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "lsmbs/core/file_check.hpp"
 #include "lsmbs/integrators/initial_state.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/json_reader.hpp"
@@ -24,6 +25,12 @@ std::vector<std::string> Case::measure_columns() const {
 namespace {
 
 namespace fs = std::filesystem;
+
+std::string format_g(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
 
 struct Loader {
   Loader(Case& c, std::string dir) : cs(c), base_dir(std::move(dir)) {}
@@ -70,7 +77,9 @@ struct Loader {
     const auto interp = r.one_of("interpolation", {"cubic", "linear"}, "cubic") == "cubic" ? Table1D::Interp::kCubic
                                                                                          : Table1D::Interp::kLinear;
     const double period = r.non_negative("period", 0.0);
-    const double xs = r.number("x_scale", 1.0), ys = r.number("y_scale", 1.0);
+    // x_scale multiplies the abscissae (which must increase): a positive factor; y_scale any factor
+    const double xs = r.positive("x_scale", 1.0), ys = r.number("y_scale", 1.0);
+    if (r.has("file") && r.has("points")) r.fail("expected either \"file\" or \"points\", not both");
     if (r.has("file")) {
       const std::string f = resolve(r.string("file"));
       try {
@@ -210,7 +219,11 @@ struct Loader {
         throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() + "/file)");
       }
       const double sc = m.positive("scale", 1.0);
-      for (auto& x : b.mesh.nodes) x *= sc;
+      for (auto& x : b.mesh.nodes) {
+        x *= sc;
+        if (!x.allFinite() || x.norm() > 1e100)  // lengths beyond 1e100 m overflow in the element integrals
+          m.fail("scale", "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
+      }
     }
     m.finish();
     if (auto pl = r.optional_child("placement")) {
@@ -263,7 +276,13 @@ struct Loader {
     const Vec2 v0 = r.vec2("velocity", Vec2::Zero());
     const double w0 = r.number("angular_velocity", 0.0);
     r.finish();
-    const FlexibleBody& fb = model().add_flexible_body(std::move(b));
+    const FlexibleBody* added = nullptr;
+    try {  // the element geometry is checked here (inverted or degenerate quadrilaterals)
+      added = &model().add_flexible_body(std::move(b));
+    } catch (const Error& e) {
+      r.fail("mesh", std::string(e.what()) + " (check the mesh's coordinates: origin, size, scale)");
+    }
+    const FlexibleBody& fb = *added;
     init_v.conservativeResize(model().nq());
     for (int i = 0; i < fb.mesh.num_nodes(); ++i) {
       const Vec2 x = fb.placed(i) - fb.origin;
@@ -279,6 +298,7 @@ struct Loader {
         r.one_of("type", {"revolute", "prismatic", "rigid_connection", "clamp", "rotation_driver", "translation_driver"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
     unique_name(r, name);
+    joint_paths[name] = r.path();
     const size_t first = model().constraints().size();
     auto add = [&](std::unique_ptr<ConstraintElement> c) {
       c->set_name(name);
@@ -355,6 +375,7 @@ struct Loader {
         "type", {"point_force", "spring_damper", "pressure", "point_mass", "torque", "rotational_spring_damper"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
     unique_name(r, name);
+    begin_entry(r, name);
     if (type == "point_mass") {
       const double m = r.non_negative("mass");
       const PointRef p = point(r.child("point"));
@@ -413,7 +434,9 @@ struct Loader {
       const Vec2 u = r.vec2("direction");
       if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
       const int ap = param(name + ".area", r.positive("area"));
-      Table1D t = table(r.child("table"));
+      const JsonReader tr = r.child("table");
+      Table1D t = table(tr);
+      tr.finish();  // a misspelt table option (e.g. "x_scal") is an error, not ignored
       int angle_dof = -1;
       double offset = 0;
       if (r.has("argument")) {
@@ -580,6 +603,8 @@ struct Loader {
       r.fail(msg.substr(0, colon), msg.substr(colon + 2));
     }
     if (o.t_end / o.h > 1e8) r.fail("h", "more than 1e8 steps requested");
+    if (o.h > o.t_end * (1 + 1e-9))  // zero steps: the run would end at t = 0 and report it complete
+      r.fail("h", "h = " + format_g(o.h) + " is longer than t_end = " + format_g(o.t_end) + " (the run would have no step)");
     {  // the output grid must end on t_end: no silent overshoot (the run starts at t = 0)
       const double n = o.t_end / o.h;
       if (std::abs(n - std::round(n)) > 1e-9 * std::max(1.0, n)) {
@@ -742,6 +767,18 @@ struct Loader {
     cs.design = std::move(d);
   }
 
+  /// The JSON entry each force element comes from, in the order they were added: the index of
+  /// its first element, its JSON path and its name (bodies: inertia or finite elements; forces).
+  struct Entry {
+    size_t first;
+    std::string path, name;
+  };
+  std::vector<Entry> force_entries;
+  std::map<std::string, std::string> joint_paths;  ///< joint name → JSON path
+  void begin_entry(const JsonReader& r, const std::string& name) {
+    force_entries.push_back({model().forces().size(), r.path(), name});
+  }
+
   Vec init_v;
   // Velocities the case gives (kept by the initial projection) and, per body that gives any,
   // its JSON path and unknowns [first, end).
@@ -806,6 +843,111 @@ static void check_constraint_rank(const Case& cs) {
                   " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) locked twice");
 }
 
+// Values beyond double precision, seen before any run: every force element's residual and
+// iteration-matrix block at the initial state with the case's h (the first Newton matrix of
+// Algorithm 1, S = β′M + γ′C_t + K_t), the assembled matrix with the automatic scaling k = ζ, and
+// the constraints Φ, Φ_t and γ at t = 0 must be finite. A mass of 1e308 kg, for instance,
+// overflows in β′M; without this check the KLU factorization of the start system fails and blames
+// an unrelated joint. The message names the JSON entry and its parameters.
+static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>& entries,
+                               const std::map<std::string, std::string>& joint_paths) {
+  const Model& m = *cs.model;
+  const ModelParams& p = m.params();
+  const AlphaCoefficients c = AlphaCoefficients::make(cs.simulation.rho_inf, cs.simulation.h);
+  const Coefficients co{c.beta_p, c.gamma_p, 1.0};
+  char when[160];
+  std::snprintf(when, sizeof when, "at t = 0 with h = %g s (β′ = %.3g s⁻²)", cs.simulation.h, c.beta_p);
+  auto entry_of = [&](size_t force) -> const Loader::Entry* {
+    const Loader::Entry* e = nullptr;
+    for (const auto& x : entries)
+      if (x.first <= force) e = &x;
+    return e;
+  };
+  auto parameters_of = [&](const std::string& name) {
+    std::string out;
+    char buf[64];
+    const auto& names = m.parameter_names();
+    for (size_t i = 0; i < names.size(); ++i)
+      if (names[i].rfind(name + ".", 0) == 0) {
+        std::snprintf(buf, sizeof buf, "%s = %g", names[i].substr(name.size() + 1).c_str(), p.scalars[i]);
+        out += (out.empty() ? "" : ", ") + std::string(buf);
+      }
+    return out.empty() ? std::string() : " (" + out + ")";
+  };
+  const Vec& q = cs.initial.q;
+  const Vec& v = cs.initial.v;
+  const auto& forces = m.forces();
+  double s_max = 0;  // the largest iteration-matrix entry of one element, and which element
+  size_t f_max = 0;
+  for (size_t f = 0; f < forces.size(); ++f) {
+    const auto d = forces[f]->dofs();
+    const auto nd = static_cast<Eigen::Index>(d.size());
+    LocalState ls;
+    ls.q.resize(nd), ls.v.resize(nd), ls.a.setZero(nd);
+    for (Eigen::Index i = 0; i < nd; ++i) ls.q[i] = q[d[i]], ls.v[i] = v[d[i]];
+    LocalVec r = LocalVec::Zero(nd);
+    LocalMat S = LocalMat::Zero(nd, nd);
+    forces[f]->evaluate(ls, p, r, &co, &S);
+    if (r.allFinite() && S.allFinite()) {
+      if (nd && S.cwiseAbs().maxCoeff() > s_max) s_max = S.cwiseAbs().maxCoeff(), f_max = f;
+      continue;
+    }
+    const Loader::Entry* e = entry_of(f);
+    throw Error(cs.file, e ? e->path : "", forces[f]->describe() + ": its forces or iteration matrix are not finite " +
+                                               when + ": a value is beyond double precision; check its parameters" +
+                                               (e ? parameters_of(e->name) : "") + ", its initial velocity and the gravity");
+  }
+  // The factorization of [S kΦ_qᵀ; kΦ_q 0] forms products of entries (k²/S in the pivots of the
+  // constraint rows, with k the mean diagonal of S): entries beyond ~1e100 overflow there even
+  // though each one is finite (a spring of 1e308 N/m failed as "consistent initial accelerations
+  // are not finite"). No physical model comes near: the shipped ones stay below 1e13.
+  constexpr double kMaxEntry = 1e100;
+  if (s_max > kMaxEntry) {
+    const Loader::Entry* e = entry_of(f_max);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "its iteration-matrix entries reach %.3g ", s_max);
+    throw Error(cs.file, e ? e->path : "", forces[f_max]->describe() + ": " + buf + when +
+                                               ": beyond 1e100 the sparse factorization overflows; check its parameters" +
+                                               (e ? parameters_of(e->name) : ""));
+  }
+  Vec phi, phi_t, gamma;
+  m.constraints(0.0, q, p, phi);
+  m.constraint_time_terms(0.0, q, v, p, phi_t, gamma);
+  for (Eigen::Index i = 0; i < phi.size(); ++i)
+    if (!std::isfinite(phi[i]) || !std::isfinite(phi_t[i]) || !std::isfinite(gamma[i])) {
+      std::string path = "/joints";
+      for (size_t k = 0; k < m.constraints().size(); ++k)
+        if (i >= m.constraint_offset(static_cast<int>(k)) && i < m.constraint_offset(static_cast<int>(k)) + m.constraints()[k]->size())
+          if (auto it = joint_paths.find(m.constraints()[k]->name()); it != joint_paths.end()) path = it->second;
+      throw Error(cs.file, path, m.describe_unknown(m.nq() + static_cast<int>(i)) +
+                                     ": the constraint, its velocity or its acceleration term is not finite at t = 0 "
+                                     "(a position, velocity or driver law value beyond double precision)");
+    }
+  const double k = GeneralizedAlpha::automatic_scaling(m, p, cs.initial, c);
+  // A scaling or penalty far from the automatic one makes the constraint rows dominate (or vanish
+  // in) the iteration matrix: the results then carry round-off of that ratio (ζ = 1e300 gave a
+  // side force of 1e277 N, exit 0). The results do not depend on them within 1e-3 ... 1e3
+  // (test_pendulum); more than 1e8 away is refused.
+  for (const auto& [key, value] : {std::pair<const char*, double>{"k", cs.simulation.k}, {"zeta", cs.simulation.zeta}})
+    if (value > 0 && std::isfinite(k) && k > 0 && (value > 1e8 * k || value < 1e-8 * k)) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "%g is more than 1e8 times away from the automatic scaling %.3g of this model "
+                                     "(give 0 for the automatic value)", value, k);
+      throw Error(cs.file, std::string("/simulation/") + key, buf);
+    }
+  std::vector<double> vals;
+  m.iteration_matrix(cs.initial, p, co, cs.simulation.k > 0 ? cs.simulation.k : k,
+                     cs.simulation.zeta > 0 ? cs.simulation.zeta : k, vals);
+  const auto& pat = m.pattern();
+  for (int col = 0; col < pat.n; ++col)
+    for (int at = pat.col_ptr[col]; at < pat.col_ptr[col + 1]; ++at)
+      if (!std::isfinite(vals[at]) || !std::isfinite(k))
+        throw Error(cs.file, "/simulation",
+                    "the iteration matrix is not finite " + std::string(when) + " in the equations of " +
+                        m.describe_unknown(col) + " (the sum of its masses or stiffnesses overflows; automatic "
+                        "scaling k = " + std::to_string(k) + "): a value is beyond double precision");
+}
+
 // Initial velocities the case gives are kept; the others follow from the constraints
 // (integrators/initial_state.hpp). Given velocities that contradict the constraints are an input
 // error naming the first body concerned. Positions and velocities are projected here, so that
@@ -848,6 +990,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
     L.unique_name(b, name);
     if (name == "ground") b.fail("name", "'ground' is reserved");
     const std::string type = b.one_of("type", {"rigid", "flexible"});
+    L.begin_entry(b, name);
     if (type == "rigid") L.rigid_body(b, name);
     else L.flexible_body(b, name);
   }
@@ -903,38 +1046,19 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   cs.initial.v.conservativeResize(cs.model->nq());
   cs.initial.a.setZero(cs.model->nq());
   cs.initial.lambda.setZero(cs.model->nc());
+  check_finite_start(cs, L.force_entries, L.joint_paths);
   hold_given_velocities(cs, L.held_v, L.given_v);
   return cs;
 }
 
 Case load_case(const std::string& path) {
+  if (const auto why = unreadable_file_reason(path); !why.empty()) throw Error(path, "", "case file: " + why);
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, "", "cannot open case file");
   std::stringstream ss;
   ss << f.rdbuf();
   const std::string text = ss.str();
-  // nlohmann::json parses recursively: bound the nesting before it can exhaust the stack
-  {
-    constexpr int kMaxDepth = 256;
-    int depth = 0;
-    bool in_string = false, escaped = false;
-    for (size_t i = 0; i < text.size(); ++i) {
-      const char ch = text[i];
-      if (in_string) {
-        if (escaped) escaped = false;
-        else if (ch == '\\') escaped = true;
-        else if (ch == '"') in_string = false;
-      } else if (ch == '"') {
-        in_string = true;
-      } else if (ch == '[' || ch == '{') {
-        if (++depth > kMaxDepth)
-          throw Error(path, "byte " + std::to_string(i),
-                      "invalid case: JSON nested deeper than " + std::to_string(kMaxDepth) + " levels");
-      } else if (ch == ']' || ch == '}') {
-        --depth;
-      }
-    }
-  }
+  check_json_depth(text, path);  // before nlohmann::json, which parses recursively
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);

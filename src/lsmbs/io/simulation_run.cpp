@@ -79,6 +79,7 @@ namespace {
 // Stops the integration at the next step once an interrupt was requested (core/interrupt.hpp).
 struct InterruptObserver : StepObserver {
   bool on_step(const StepInfo&) override { return interrupted() == 0; }
+  bool stop_requested() const override { return interrupted() != 0; }
 };
 }  // namespace
 

@@ -22,18 +22,6 @@ namespace fs = std::filesystem;
 using Method = SensitivityOptions::Method;
 using json = nlohmann::json;
 
-json read_json(const std::string& file) {
-  std::ifstream f(file);
-  if (!f) throw Error(file, "", "cannot open case file");
-  try {
-    return json::parse(f);
-  } catch (const json::parse_error& e) {
-    throw Error(file, "byte " + std::to_string(e.byte), std::string("invalid JSON: ") + e.what());
-  } catch (const json::exception& e) {  // out_of_range: a number like 1e999
-    throw Error(file, "", std::string("invalid JSON: ") + e.what());
-  }
-}
-
 Case make(const json& j, const std::string& file) {
   Case c = load_case_json(j, file, fs::path(file).parent_path().string());
   return c;
@@ -64,8 +52,8 @@ std::string fmt(const char* f, double v) {
 
 VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  const json base = read_json(file);
-  Case cs = load_case(file);  // validates everything before anything is written
+  Case cs = load_case(file);  // validates everything (nesting depth included) before anything is written
+  const json base = cs.raw;
   if (!cs.design) throw Error(file, "/design", "verification needs design variables");
   if (cs.responses.empty()) throw Error(file, "/output/responses", "verification needs responses");
   fs::create_directories(o.out_dir);

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/file_check.hpp"
 
 namespace lsmbs {
 
@@ -127,6 +128,7 @@ Table1D::Table1D(std::vector<double> x, std::vector<double> y, Interp interp, do
 }
 
 Table1D Table1D::read_csv(const std::string& path, Interp interp, double period, double xs, double ys) {
+  if (const auto why = unreadable_file_reason(path); !why.empty()) throw Error(path, "", "table file: " + why);
   std::ifstream f(path);
   if (!f) throw Error(path, "", "cannot open table file");
   std::vector<double> x, y;

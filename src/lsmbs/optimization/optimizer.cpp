@@ -10,6 +10,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/io/json_reader.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/optimization/mma_classic.hpp"
 
@@ -193,17 +194,40 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
     const std::string path = o.out_dir + "/checkpoint.json";
     std::ifstream f(path);
     if (!f) throw Error(path, "", "cannot resume: no checkpoint");
+    std::stringstream text;
+    text << f.rdbuf();
+    check_json_depth(text.str(), path);
     nlohmann::json j;
     try {
-      f >> j;
+      j = nlohmann::json::parse(text.str());
     } catch (const std::exception& e) {
       throw Error(path, "", std::string("cannot resume: damaged checkpoint (") + e.what() + ")");
     }
-    if (j.value("case_sha256", "") != cs.sha256)
+    if (!j.is_object()) throw Error(path, "/", "cannot resume: damaged checkpoint (expected an object)");
+    if (!j.contains("case_sha256") || j["case_sha256"] != cs.sha256)
       throw Error(path, "/case_sha256", "cannot resume: the case file changed since the checkpoint was written");
-    if (j.value("spec", "") != c.spec_json)
+    if (!j.contains("spec") || j["spec"] != c.spec_json)
       throw Error(path, "/spec", "cannot resume: the optimization options changed since the checkpoint was written");
-    for (const auto& e : j.at("evaluations")) prob.seed(evaluation_from_json(e));
+    if (!j.contains("evaluations") || !j["evaluations"].is_array())
+      throw Error(path, "/evaluations", "cannot resume: damaged checkpoint (expected an array of evaluations)");
+    // every evaluation must fit this case (a hand-edited or damaged file could index out of range)
+    const Eigen::Index nc = prob.num_constraints();
+    for (size_t k = 0; k < j["evaluations"].size(); ++k) {
+      Evaluation e;
+      try {
+        e = evaluation_from_json(j["evaluations"][k]);
+      } catch (const std::exception& ex) {
+        throw Error(path, "/evaluations/" + std::to_string(k), std::string("cannot resume: damaged checkpoint (") + ex.what() + ")");
+      }
+      const bool sizes = e.p.size() == n && e.objective_gradient.size() == n &&
+                         e.constraint_gradient.rows() == nc && e.constraint_gradient.cols() == (nc ? n : e.constraint_gradient.cols()) &&
+                         static_cast<Eigen::Index>(e.upper.size()) == static_cast<Eigen::Index>(e.constraints.size()) &&
+                         static_cast<Eigen::Index>(e.constraints.size()) <= nc;
+      if (!sizes)
+        throw Error(path, "/evaluations/" + std::to_string(k),
+                    "cannot resume: damaged checkpoint (the evaluation's sizes do not match the case)");
+      prob.seed(e);
+    }
   }
 
   const bool classic = prob.spec().optimizer == "mma-svanberg";
@@ -216,10 +240,12 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   // objective scale from the initial design (evaluated first, also as the optimizer's first point)
   const Evaluation e0 = c.eval(x.data());
   OptimizeResult res;
-  if (!e0.ok) throw NumericalFailure("the initial design could not be simulated: " + e0.message);
   c.f0 = std::max(std::abs(e0.objective), 1e-300);
   nlopt_result r;
-  if (classic) {
+  if (!e0.ok) {  // the initial design cannot be simulated: nothing to optimize (c.failure says why)
+    c.failure = "the initial design could not be simulated: " + c.failure;
+    r = NLOPT_FORCED_STOP;
+  } else if (classic) {
     r = c.stop ? NLOPT_FORCED_STOP : run_mma_classic(c, x, e0);
   } else {
     c.opt = nlopt_create(alg, n);

@@ -84,10 +84,14 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
       e.max_violation = std::max(e.max_violation, (r.values[k] - ub) / std::max(std::abs(ub), 1e-300));
     }
   }
-  if (row != num_constraints_) {
+  if (row != num_constraints_ && res.ok) {  // a failed run's own message says when and why
     e.ok = false;
     e.message = "a per-step constraint produced " + std::to_string(row) + " values instead of " +
                 std::to_string(num_constraints_) + " (the run did not reach t_end?)";
+  }
+  if (!e.ok) {  // the aggregates of a run that stopped early are not the responses of this design
+    e.objective = NAN;
+    e.max_violation = NAN;
   }
   e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return cache_[key] = e;
@@ -144,6 +148,9 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
   e.objective_gradient = Eigen::Map<const Vec>(g.data(), static_cast<Eigen::Index>(g.size()));
   const auto cg = unhexv(j.at("constraint_gradient"));
   const Eigen::Index rows = j.at("rows").get<Eigen::Index>();
+  if (rows < 0 || (rows > 0 && static_cast<Eigen::Index>(cg.size()) % rows != 0))
+    throw std::invalid_argument("constraint gradient of " + std::to_string(cg.size()) + " values in " +
+                                std::to_string(rows) + " rows");
   e.constraint_gradient = Eigen::Map<const Mat>(cg.data(), rows, rows ? static_cast<Eigen::Index>(cg.size()) / rows : 0);
   e.max_violation = unhex(j.at("max_violation"));
   e.wall_seconds = j.at("wall_seconds").get<double>();

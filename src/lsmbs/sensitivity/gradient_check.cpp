@@ -67,19 +67,28 @@ GradientCheckResult check_gradients(Case& cs, const Vec& p, const std::vector<Re
   res.simulations = counts.simulations;
   if (!res.ok) return res;
   const Vec sd = scale.cwiseProduct(res.direction);
+  // `gradients` may be any subset of the case's responses (optimize checks the objective and the
+  // constraints only): the perturbed runs' responses are matched by name, not by position
+  auto by_name = [](const std::vector<ResponseSensitivity>& all, const std::string& name) -> const ResponseSensitivity* {
+    for (const auto& x : all)
+      if (x.name == name) return &x;
+    return nullptr;
+  };
   for (size_t r = 0; r < gradients.size(); ++r) {
     const auto& g = gradients[r];
     if (g.gradient.size() == 0 || !g.gradient.allFinite()) continue;
     GradientCheckResult::Entry e;
     e.response = g.name;
     const auto nk = static_cast<Eigen::Index>(g.values.size());
-    if (plus[r].values.size() != g.values.size() || minus[r].values.size() != g.values.size()) {
+    const ResponseSensitivity* gp = by_name(plus, g.name);
+    const ResponseSensitivity* gm = by_name(minus, g.name);
+    if (!gp || !gm || gp->values.size() != g.values.size() || gm->values.size() != g.values.size()) {
       res.ok = false;
       res.message = "response '" + g.name + "' changed its number of steps under the check's perturbation";
       return res;
     }
     for (Eigen::Index k = 0; k < nk; ++k) {
-      const double D = (plus[r].values[k] - minus[r].values[k]) / (2 * o.delta);
+      const double D = (gp->values[k] - gm->values[k]) / (2 * o.delta);
       const double G = g.gradient.row(k).dot(sd);
       const double floor = 1e-3 * g.gradient.row(k).cwiseProduct(scale.transpose()).norm();
       const double den = std::max({std::abs(D), std::abs(G), floor});
