@@ -2,7 +2,8 @@
 // lsmbs::load_case(path), the command line's path (JSON parsing included), with the files of
 // data/slider_crank/ (meshes, pressure table) beside it; design and optimization sections too.
 // The loader may reject an input only with lsmbs::Error (exit code 2 in the command line), and
-// the rejection must name the file and either a JSON path or the invalid JSON; anything else —
+// the rejection must name the file and a JSON path (or, for a file that is no valid JSON
+// document, the byte position or the parser's message); anything else —
 // another exception, a crash, a hang, a sanitizer report, a message without a path — is a finding.
 //
 // Built two ways:
@@ -10,12 +11,14 @@
 //   * as an ordinary executable `fuzz_replay` (LSMBS_FUZZ_REPLAY) that ctest runs over every
 //     file of tests/fuzz/corpus/: the inputs found so far stay checked on every build, and the
 //     seeds (seed_*.json, shipped cases) must load.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <unistd.h>
@@ -51,6 +54,26 @@ bool too_large(const nlohmann::json& j) {
   return false;
 }
 
+// Largest bracket depth outside strings.
+int nesting_depth(const std::string& text) {
+  int depth = 0, worst = 0;
+  bool in_string = false, escaped = false;
+  for (char c : text) {
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      worst = std::max(worst, ++depth);
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return worst;
+}
+
 // A folder with links to the files of data/slider_crank/, where inputs are written and loaded.
 const fs::path& work_dir() {
   static const fs::path dir = [] {
@@ -69,19 +92,22 @@ enum class Outcome { kLoaded, kRejected, kRejectedWithoutPath, kSkipped };
 Outcome load(const fs::path& file) {
   {
     std::ifstream in(file, std::ios::binary);
-    const auto j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-    if (!j.is_discarded() && too_large(j)) return Outcome::kSkipped;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (nesting_depth(text) <= 256) {  // deeper documents are the loader's to refuse (recursion)
+      const auto j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+      if (!j.is_discarded() && too_large(j)) return Outcome::kSkipped;
+    }
   }
   try {
     lsmbs::Case cs = lsmbs::load_case(file.string());
     if (cs.design && !cs.optimization.is_null()) lsmbs::parse_optimization(cs);
     return Outcome::kLoaded;
   } catch (const lsmbs::Error& e) {
-    // "FILE: /json/path: …", or for a file that is no JSON "FILE: [byte N: ]invalid JSON: …"
+    // "FILE: /json/path: …"; for a file that is no valid JSON document "FILE: byte N: …" (the
+    // position in the file) or "FILE: invalid JSON: …"
     const std::string msg = e.what(), head = file.string() + ": ";
-    std::string rest = msg.rfind(head, 0) == 0 ? msg.substr(head.size()) : "";
-    if (rest.rfind("byte ", 0) == 0 && rest.find(": ") != std::string::npos) rest = rest.substr(rest.find(": ") + 2);
-    const bool named = rest.rfind("/", 0) == 0 || rest.rfind("invalid JSON:", 0) == 0;
+    const std::string rest = msg.rfind(head, 0) == 0 ? msg.substr(head.size()) : "";
+    const bool named = rest.rfind("/", 0) == 0 || rest.rfind("byte ", 0) == 0 || rest.rfind("invalid JSON:", 0) == 0;
     if (!named) std::fprintf(stderr, "the rejection names no JSON path: %s\n", msg.c_str());
     return named ? Outcome::kRejected : Outcome::kRejectedWithoutPath;
   }
