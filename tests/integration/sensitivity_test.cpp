@@ -120,10 +120,11 @@ TEST(Sensitivity, SliderCrankSpringDamperAllMethodsMatchCentralFiniteDifferences
               "%.2e; refined vs converged %.2e\n",
               e1, w1.c_str(), e2, w2.c_str(), e3, e4);
   // The reference's own error: Δp = 1e-5 relative gives a Δp² truncation of ~1e-10, and
-  // re-simulations converged to tol_r = 1e-12 (the case's) put a noise of up to tol_r / Δp = 1e-7
-  // on the difference quotients (measured 1.6e-8 in total).
-  EXPECT_LT(e1, 2e-7);
-  EXPECT_LT(e2, 2e-7);
+  // re-simulations converged to tol_r = 1e-12 (the case's) put a noise of order tol_r / Δp = 1e-7
+  // on the difference quotients, a few times that on the max side force (measured 2.06e-7 on it
+  // with the crank starting at the case's 60 rad/s, 1.6e-8 with the old 54.36 rad/s start).
+  EXPECT_LT(e1, 5e-7);
+  EXPECT_LT(e2, 5e-7);
   // r is linear in k and c: the semi-analytical central difference of r is exact but for its
   // round-off ε ‖r‖ / (δ |∂r/∂p| p) ~ 1e-10 (δ = 1e-6)
   EXPECT_LT(e3, 1e-9);
@@ -157,7 +158,7 @@ TEST(Sensitivity, ModifiedNewtonAcrossStepsNeedsAnExactSensitivityMatrix) {
     const double e = worst_relative(r, fd);
     std::printf("slider-crank, modified Newton across steps, converged matrix, %d thread(s): vs fd-central %.2e\n",
                 threads, e);
-    EXPECT_LT(e, 2e-7);  // the reference's own error, as in the test above
+    EXPECT_LT(e, 5e-7);  // the reference's own error, as in the test above
   }
 }
 
@@ -173,8 +174,9 @@ TEST(Sensitivity, LastIterationMatrixErrorShrinksWithTighterNewtonIterations) {
   cs.simulation.min_iter = 3;
   const double e3 = worst_relative(run(cs, Method::kDirectAnalytic, 1e-6, true, M::kLastIteration), fd);
   std::printf("last-iteration matrix: worst vs fd-central %.2e (2 Newton iterations/step), %.2e (min_iter 3)\n", e2, e3);
-  EXPECT_LT(e3, 2e-7) << "down to the finite-difference floor (as with the exact matrix above)";
-  EXPECT_GT(e2, 100 * e3) << "the approximation is visible above that floor on this fast mechanism";
+  EXPECT_LT(e3, 5e-7) << "down to the finite-difference floor (as with the exact matrix above)";
+  // measured e2 = 2.0e-5 against the floor's 2.06e-7: a factor 30 leaves room for the floor
+  EXPECT_GT(e2, 30 * e3) << "the approximation is visible above that floor on this fast mechanism";
 }
 
 TEST(Sensitivity, SemiAnalyticalErrorFallsLinearlyWithDeltaThenRisesFromRoundOff) {
