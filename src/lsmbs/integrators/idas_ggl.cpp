@@ -695,22 +695,21 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
       IDASetUserData(sd.mem, &im) || IDASetId(sd.mem, sd.id) || IDASetSuppressAlg(sd.mem, SUNTRUE) ||
       IDASetMaxNumSteps(sd.mem, im.o.max_steps) || IDASetMaxOrd(sd.mem, st.max_order))
     return fail("IDAS set-up failed");
-  {
-    // Initial step: where ½h²‖q̈‖ reaches the position tolerance. IDAS's own estimate bounds
-    // h‖ẏ‖ by the weights of every component, and velocities that start at rest have only their
-    // absolute tolerance, atol·L/t_end: on Andrews' squeezer at rtol ≤ 5e-11 that gave h ~ 1e-19 s,
-    // where the corrector cannot converge in floating point (flag -4 at t = 0).
+  // Initial step (at t0 and at each restart): where ½h²‖q̈‖ reaches the position tolerance.
+  // IDAS's own estimate bounds h‖ẏ‖ by the weights of every component, and velocities that start
+  // at rest have only their absolute tolerance, atol·L/t_end: on Andrews' squeezer at rtol ≤ 5e-11
+  // that gave h ~ 1e-19 s, where the corrector cannot converge in floating point (flag -4 at t = 0).
+  auto set_initial_step = [&](const Vec& q, const Vec& a) -> bool {
     double wa = 0;
     for (int i = 0; i < nq; ++i) {
-      const double w = s0.a[i] / (im.o.rtol * std::abs(s0.q[i]) + im.o.atol * L);
+      const double w = a[i] / (im.o.rtol * std::abs(q[i]) + im.o.atol * L);
       wa += w * w;
     }
     wa = std::sqrt(wa / nq);
-    if (wa > 0 && std::isfinite(wa)) {
-      const double h0 = std::min(0.1 * im.o.h_out, std::sqrt(2.0 / wa));
-      if (IDASetInitStep(sd.mem, h0)) return fail("IDAS set-up failed (initial step)");
-    }
-  }
+    const double h0 = wa > 0 && std::isfinite(wa) ? std::min(0.1 * im.o.h_out, std::sqrt(2.0 / wa)) : 0.0;
+    return IDASetInitStep(sd.mem, h0) == IDA_SUCCESS;  // 0: IDAS's own estimate
+  };
+  if (!set_initial_step(s0.q, s0.a)) return fail("IDAS set-up failed (initial step)");
   const SpMat J0 = im.jacobian(s0.t, 1.0, y.data(), yp.data());
   sd.A = SUNSparseMatrix(N, N, J0.nonZeros(), CSC_MAT, sd.ctx);
   sd.LS = SUNLinSol_KLU(sd.y, sd.A, sd.ctx);
@@ -832,7 +831,7 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
       IDAGetQuad(sd.mem, &tr, sd.yQ);
       if (sens) IDAGetQuadSens(sd.mem, &tr, sd.yQS);
     }
-    if (IDAReInit(sd.mem, tk, sd.y, sd.yp) != IDA_SUCCESS ||
+    if (IDAReInit(sd.mem, tk, sd.y, sd.yp) != IDA_SUCCESS || !set_initial_step(s.q, s.a) ||
         (sens && IDASensReInit(sd.mem, im.o.staggered ? IDA_STAGGERED : IDA_SIMULTANEOUS, sd.yS, sd.ypS) !=
                      IDA_SUCCESS) ||
         (nQ > 0 && IDAQuadReInit(sd.mem, sd.yQ) != IDA_SUCCESS) ||

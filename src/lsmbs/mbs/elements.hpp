@@ -51,8 +51,6 @@ class ForceElement {
   virtual void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const = 0;
   /// Whether ∂r/∂q̈ (the mass matrix) depends on q (rigid bodies with an offset centre of mass).
   virtual bool mass_depends_on_q() const { return false; }
-  /// Appends the times in (t0, t1) where the element's time dependence is not smooth.
-  virtual void time_kinks(double /*t0*/, double /*t1*/, std::vector<double>& /*out*/) const {}
   /// Whether r is linear in (q̇, q̈) at fixed q (then r(q̇ + δq̇, q̈ + δq̈) − r = M δq̈ + C δq̇
   /// exactly). False for rigid inertia (centripetal term quadratic in θ̇).
   virtual bool linear_in_rates() const { return true; }

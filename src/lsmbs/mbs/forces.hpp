@@ -83,10 +83,6 @@ class PointForce : public ForceElement {
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == scale_; }
   void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
-  void time_kinks(double t0, double t1, std::vector<double>& out) const override {
-    fx_->kinks(t0, t1, out);
-    fy_->kinks(t0, t1, out);
-  }
 
  private:
   PointRef a_;
@@ -111,9 +107,6 @@ class PressureForce : public ForceElement {
   void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
   /// Pressure at the given state (for outputs).
   double pressure(double t, double angle) const;
-  void time_kinks(double t0, double t1, std::vector<double>& out) const override {
-    if (angle_dof_ < 0) table_.kinks(t0, t1, out);
-  }
 
  private:
   PointRef a_;
@@ -138,7 +131,6 @@ class Torque : public ForceElement {
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == scale_; }
   void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
-  void time_kinks(double t0, double t1, std::vector<double>& out) const override { law_->kinks(t0, t1, out); }
 
  private:
   std::array<int, 1> dofs_;

@@ -502,7 +502,6 @@ void Model::residual_param_derivative(const State& s, const ModelParams& p, cons
 
 std::vector<double> Model::time_kinks(double t0, double t1) const {
   std::vector<double> t;
-  for (const auto& f : forces_) f->time_kinks(t0, t1, t);
   for (const auto& c : cons_) c->time_kinks(t0, t1, t);
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());

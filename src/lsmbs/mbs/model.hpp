@@ -131,8 +131,9 @@ class Model {
                                     LocalVec& out) const;
   /// Force elements a parameter direction touches (sorted).
   std::vector<int> forces_touched_by(const ParamDirection& dir) const;
-  /// The times in (t0, t1), sorted and distinct, where a driver's acceleration or a load's time
-  /// law is not smooth (a variable-step integrator stops there rather than step across).
+  /// The times in (t0, t1), sorted and distinct, where a driver's prescribed acceleration jumps
+  /// (and with it q̈ and λ): a variable-step integrator stops and restarts there. Loads are left
+  /// out: every load law is continuous, so the accelerations are too.
   std::vector<double> time_kinks(double t0, double t1) const;
   /// Σ_i w_i ∂²Φ_i/∂q² (nq × nq) with the full local pattern of every constraint (explicit zeros
   /// kept, so the pattern does not change between calls).
