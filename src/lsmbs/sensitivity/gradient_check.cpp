@@ -92,9 +92,12 @@ GradientCheckResult check_gradients(Case& cs, const Vec& p, const std::vector<Re
       const double G = g.gradient.row(k).dot(sd);
       const double floor = 1e-3 * g.gradient.row(k).cwiseProduct(scale.transpose()).norm();
       const double den = std::max({std::abs(D), std::abs(G), floor});
-      e.finite_difference = std::max(e.finite_difference, std::abs(D));
-      e.method = std::max(e.method, std::abs(G));
-      if (den > 0) e.relative_error = std::max(e.relative_error, std::abs(D - G) / den);
+      const double rel = den > 0 ? std::abs(D - G) / den : 0.0;
+      if (k == 0 || rel > e.relative_error) {  // the signed derivatives of the worst step
+        e.finite_difference = D;
+        e.method = G;
+        e.relative_error = rel;
+      }
     }
     if (e.relative_error > res.worst || res.worst_response.empty()) {
       res.worst = std::max(res.worst, e.relative_error);
