@@ -1001,6 +1001,17 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   cs.initial.a.setZero(cs.model->nq());
   cs.initial.lambda.setZero(cs.model->nc());
   check_finite_start(cs, L.force_entries, L.joint_paths);
+  // every measure must be finite at the initial state (a point 1e300 m away made a distance, and
+  // every response of it, Inf or NaN in a run reported complete)
+  std::vector<double> vals;
+  for (size_t i = 0; i < cs.measures.size(); ++i) {
+    vals.assign(cs.measures[i]->components().size(), 0.0);
+    cs.measures[i]->evaluate(*cs.model, cs.initial, cs.model->params(), vals.data());
+    for (double v : vals)
+      if (!std::isfinite(v))
+        throw Error(file_label, "/output/measures/" + std::to_string(i),
+                    "measure '" + cs.measures[i]->name() + "' is not finite at t = 0 (a point or value beyond double precision)");
+  }
   return cs;
 }
 
