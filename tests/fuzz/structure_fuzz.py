@@ -358,8 +358,8 @@ def m_set_option(rng, doc, ctx):
     return f"--set {name}={val}"
 
 
-MUTATIONS = [(m_delete_key, 3), (m_retype, 3), (m_number, 5), (m_empty, 2), (m_duplicate_name, 2),
-             (m_reference, 3), (m_enum, 2), (m_units, 2), (m_unknown_key, 1), (m_splice, 2), (m_huge_array, 1),
+MUTATIONS = [(m_delete_key, 3), (m_retype, 3), (m_number, 8), (m_empty, 2), (m_duplicate_name, 2),
+             (m_reference, 3), (m_enum, 2), (m_units, 3), (m_unknown_key, 1), (m_splice, 2), (m_huge_array, 1),
              (m_file, 1), (m_set_option, 1), (m_scale_subtree, 2), (m_reorder, 2)]
 TEXT_MUTATIONS = ["truncate", "duplicate_key", "deep_nest", "garbage_byte"]
 
@@ -420,6 +420,8 @@ def make_input(seeds, seed, i):
             command = "sensitivity"
         elif r < 0.2 and "optimization" in base:
             command = "optimize"
+        elif r < 0.24:
+            command = "geometry"
     args = [command, "@CASE@", "-o", "@OUT@", "-q"]
     if command == "sensitivity":
         args += ["--method", rng.choice(["direct-analytic", "semi-analytical-central", "fd-forward"])]
@@ -587,7 +589,7 @@ def main():
     ap.add_argument("--corpus", default=None, help="corpus folder (default tests/fuzz/corpus/structure)")
     ap.add_argument("--no-corpus", action="store_true", help="do not replay the corpus")
     ap.add_argument("--save", action="store_true", help="store inputs that break the invariant in the corpus")
-    ap.add_argument("--timeout", type=float, default=8.0, help="seconds before a run gets SIGINT")
+    ap.add_argument("--timeout", type=float, default=3.0, help="seconds before a run gets SIGINT")
     ap.add_argument("--write", metavar="DIR", help="with --only: write the input's case.json to DIR and print the command")
     ap.add_argument("-v", "--verbose", action="store_true")
     a = ap.parse_args()

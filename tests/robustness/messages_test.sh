@@ -68,6 +68,10 @@ r = json.load(open(sys.argv[1]))["responses"]
 assert abs(r["max_piston_x"] - 0.1806) < 1e-9, r  # 1e-9 m: the constraint tolerance (1e-12 x length scale) with margin
 assert 0.0906 <= r["min_piston_x"] + 1e-12 and r["min_piston_x"] < 0.0906 + 8e-5, r
 PY
+# A measure that is not finite at t = 0 (a point 1e300 m away: every response of it was NaN in a
+# run reported complete)
+case_ far_point "$rigid" 'c["output"]["measures"][2]["b"]["at"] = [0, 1e300]'
+expect 2 far_point "/output/measures/2: measure 'rod_length_change' is not finite at t = 0"
 # Overflowing geometry: a mesh scale or an origin beyond double precision, named with its path
 case_ huge_scale "$rod" 'c["bodies"][2]["mesh"]["scale"] = 1e306'
 expect 2 huge_scale "/bodies/2/mesh/scale: the scaled mesh coordinates are out of range"
