@@ -3,6 +3,8 @@
 // models (allowed in tests of tiny models only): the iteration matrix S(c_a, c_v, c_q) of
 // eq. (20) and its blocks M, C_t, K_t extracted from it.
 #include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
 
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/simulation_run.hpp"
@@ -10,6 +12,13 @@
 namespace lsmbs::test {
 
 inline Case make_case(const nlohmann::json& j) { return load_case_json(j, "<test>", LSMBS_SOURCE_DIR); }
+
+/// The case's measure of that name (throws if there is none).
+inline const Measure& measure(const Case& cs, const std::string& name) {
+  for (const auto& m : cs.measures)
+    if (m->name() == name) return *m;
+  throw std::runtime_error("no measure " + name);
+}
 
 inline SpMat sparse_iteration_matrix(const Model& m, const State& s, const Coefficients& c, double k, double zeta) {
   std::vector<double> vals;

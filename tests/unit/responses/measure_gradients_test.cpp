@@ -38,11 +38,7 @@ json plate_case() {
   })"_json;
 }
 
-const Measure& measure(const Case& cs, const std::string& name) {
-  for (const auto& m : cs.measures)
-    if (m->name() == name) return *m;
-  throw std::runtime_error("no measure " + name);
-}
+using test::measure;
 
 }  // namespace
 
