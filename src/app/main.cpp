@@ -260,6 +260,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   so.idas.t_end = cs.simulation.t_end;
   lsmbs::ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
   so.progress = &line;
+  lsmbs::install_interrupt_handlers();  // an interrupt stops the generalized-α runs at the next step
   const auto res = lsmbs::compute_sensitivities(cs, p, so);
   std::optional<lsmbs::GradientCheckResult> checked;
   if (check && res.ok) checked = lsmbs::check_gradients(cs, p, res.responses, *check);
@@ -294,7 +295,7 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
   }
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
   S["case_name"] = cs.name;
-  S["status"] = res.ok ? "complete" : "partial";
+  S["status"] = res.ok ? "complete" : res.interrupted ? "interrupted" : "partial";
   if (!res.ok) S["failure"] = res.message;
   nlohmann::json vars = nlohmann::json::object();
   for (int i = 0; i < d.size(); ++i) vars[d.variables[i].name] = p[i];
@@ -366,6 +367,10 @@ int sensitivity(const std::string& case_file, const std::string& out, const std:
     if (checked) print_gradient_check(*checked, *check);
     std::printf("  results in %s\n", out.c_str());
   }
+  if (res.interrupted) {
+    std::fprintf(stderr, "lsmbs sensitivity: %s; partial results in %s\n", res.message.c_str(), out.c_str());
+    return 130;
+  }
   if (!res.ok) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", res.message.c_str());
     return 1;
@@ -431,6 +436,7 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   lsmbs::DesignProblem prob(cs, spec);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
+  o.input_sha256 = cs.sha256;
   o.out_dir = out;
   o.resume = resume;
   o.stop_after = stop_after;
@@ -481,7 +487,9 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
       }
     }
   }
-  lsmbs::install_interrupt_handlers();  // an interrupt ends the run after the current evaluation
+  // an interrupt stops the evaluation in progress at its next step; that evaluation is dropped, and the
+  // checkpoint keeps every one before it (--resume evaluates it again)
+  lsmbs::install_interrupt_handlers();
   const auto res = lsmbs::optimize(prob, o);
   line.clear();
   // final design pictures and summary
@@ -491,14 +499,17 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   const bool plotted = plot_history(out);
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
   S["case_name"] = cs.name;
-  S["status"] = res.final.ok && res.failure.empty() ? (res.interrupted ? "interrupted" : "complete") : "partial";
+  S["status"] = !res.failure.empty() ? "partial" : res.interrupted ? "interrupted" : res.final.ok ? "complete" : "partial";
   if (!res.failure.empty()) S["failure"] = res.failure;
   S["options"] = {{"optimization", spec.to_json()}, {"generalized_alpha", cs.simulation.to_json()}};
   nlohmann::json p0 = nlohmann::json::object(), pf = nlohmann::json::object();
   const lsmbs::Vec init = d.initial();
   for (int i = 0; i < d.size(); ++i) p0[d.variables[i].name] = init[i], pf[d.variables[i].name] = res.p[i];
-  const auto& first = res.history.front();
-  S["initial"] = {{"design", p0}, {"objective", first.objective}, {"max_violation", first.max_violation},
+  // an interrupt during the first evaluation leaves no evaluation at all
+  const lsmbs::Evaluation first = res.history.empty() ? lsmbs::Evaluation{} : res.history.front();
+  const double first_objective = res.history.empty() ? NAN : first.objective;
+  S["initial"] = {{"design", p0}, {"objective", first_objective},
+                  {"max_violation", res.history.empty() ? NAN : first.max_violation},
                   {"constraints_max", first.constraints.empty() ? NAN
                                       : *std::max_element(first.constraints.begin(), first.constraints.end())}};
   S["final"] = {{"design", pf}, {"objective", res.final.objective}, {"max_violation", res.final.max_violation},
@@ -521,7 +532,7 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
   if (!quiet) {
     std::printf("lsmbs optimize: %s after %ld evaluations (%ld simulations in this run), %.1f s\n",
                 res.nlopt_status.c_str(), res.evaluations, res.simulations, res.wall_seconds);
-    std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first.objective, res.final.objective,
+    std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first_objective, res.final.objective,
                 res.final.max_violation);
     if (res.final.ok)
       std::printf("  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; stationarity %.2e, "
@@ -534,6 +545,10 @@ int optimize(const std::string& case_file, const std::string& out, bool resume, 
     std::fprintf(stderr, "lsmbs optimize: numerical failure: %s (results up to it kept; status partial)\n",
                  res.failure.c_str());
     return 1;
+  }
+  if (res.interrupted && res.evaluations == 0) {
+    std::fprintf(stderr, "lsmbs optimize: interrupted during the first evaluation (nothing to resume)\n");
+    return 130;
   }
   if (res.interrupted && (lsmbs::interrupted() || stop_after > 0)) {
     std::fprintf(stderr, "lsmbs optimize: interrupted after %ld evaluations; --resume continues from the checkpoint\n",
@@ -743,6 +758,9 @@ int main(int argc, char** argv) {
       return sensitivity(case_file, out, sets, method, delta, absolute, matrix, full_residual, rtol, atol, threads, quiet,
                          joined_args(argc, argv), check ? &check_opt : nullptr);
     std::cout << app.help();
+    return 2;
+  } catch (const lsmbs::SetupError& e) {  // the library names the subject; the case file has the path
+    std::fprintf(stderr, "lsmbs: error: %s\n", lsmbs::locate(case_file, e).what());
     return 2;
   } catch (const lsmbs::Error& e) {
     std::fprintf(stderr, "lsmbs: error: %s\n", e.what());

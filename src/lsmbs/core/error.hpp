@@ -27,6 +27,21 @@ class Error : public std::runtime_error {
   std::string file_, path_;
 };
 
+/// Invalid use of the library, named by what is wrong rather than by where it came from: the
+/// `subject` is a name such as "design", "responses", "optimization.objective" or
+/// "simulation.newton". The library below io/ knows no files; the JSON front end maps the subject
+/// to the case file and its JSON path (io/case.hpp, `locate`).
+class SetupError : public Error {
+ public:
+  SetupError(const std::string& subject, const std::string& what)
+      : Error(subject + ": " + what), subject_(subject), what_(what) {}
+  const std::string& subject() const { return subject_; }
+  const std::string& reason() const { return what_; }
+
+ private:
+  std::string subject_, what_;
+};
+
 /// A numerical failure (Newton divergence, singular matrix, NaN): exit code 1.
 class NumericalFailure : public std::runtime_error {
  public:

@@ -60,7 +60,7 @@ struct IdasGGL::Impl {
   int nq, nc, N;
   double s1 = 1, s3 = 1, s4 = 1;
   // design-variable parameters for IDAS difference quotients
-  const Design* design = nullptr;
+  const Parameterization* design = nullptr;
   Vec p_nominal;
   std::vector<double> p;  // the array IDAS perturbs
   std::map<std::vector<double>, ModelParams> perturbed;
@@ -586,17 +586,17 @@ IdasGGL::IdasGGL(const Model& model, const ModelParams& params, IdasOptions o)
 IdasGGL::~IdasGGL() = default;
 void IdasGGL::set_quadrature(IdasQuadrature* q) { impl_->quad = q; }
 
-IdasStats IdasGGL::run(State s0, const Output& out) { return run_mode(std::move(s0), Design{}, Vec(), out, Mode::kPrimal); }
+IdasStats IdasGGL::run(State s0, const Output& out) { return run_mode(std::move(s0), nullptr, Vec(), out, Mode::kPrimal); }
 
-IdasStats IdasGGL::run_with_sensitivities(State s0, const Design& design, const Vec& pv, const Output& out) {
-  return run_mode(std::move(s0), design, pv, out, design.size() > 0 ? Mode::kForward : Mode::kPrimal);
+IdasStats IdasGGL::run_with_sensitivities(State s0, const Parameterization& design, const Vec& pv, const Output& out) {
+  return run_mode(std::move(s0), &design, pv, out, design.size() > 0 ? Mode::kForward : Mode::kPrimal);
 }
 
-IdasStats IdasGGL::run_adjoint(State s0, const Design& design, const Vec& pv, const Output& out) {
-  return run_mode(std::move(s0), design, pv, out, Mode::kAdjoint);
+IdasStats IdasGGL::run_adjoint(State s0, const Parameterization& design, const Vec& pv, const Output& out) {
+  return run_mode(std::move(s0), &design, pv, out, Mode::kAdjoint);
 }
 
-IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const Output& out, Mode mode) {
+IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec& pv, const Output& out, Mode mode) {
   auto& im = *impl_;
   const auto t_start = std::chrono::steady_clock::now();
   IdasStats st;
@@ -612,7 +612,7 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
     return fail("IdasOptions::max_order must be 0 (auto) or 1-5, got " + std::to_string(im.o.max_order));
   const Model& m = im.m;
   const int nq = im.nq, nc = im.nc, N = im.N;
-  const int nv = design.size();
+  const int nv = design ? design->size() : 0;
   const bool sens = mode == Mode::kForward && nv > 0, adjoint = mode == Mode::kAdjoint;
   if (adjoint && (nv == 0 || !im.quad || im.quad->size() == 0))
     return fail("an adjoint run needs design variables and at least one time-integral response (quadrature)");
@@ -638,12 +638,12 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
   im.t_start = s0.t;
   Mat dqdd0, dl0;
   if (sens || adjoint) {
-    im.design = &design;
+    im.design = design;
     im.p_nominal = pv;
     im.p.assign(pv.data(), pv.data() + nv);
     // parameter directions ∂(ModelParams)/∂p_i (F_p, consistent sensitivity initial values)
     ModelParams tmp = im.nominal;
-    im.dirs = design.apply_with_directions(pv, tmp);
+    im.dirs = design->apply_with_directions(pv, tmp);
   }
   if (sens) {
     Mat B(m.n(), nv);
@@ -725,6 +725,7 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
     return fail("IDAS linear solver set-up failed");
   std::vector<double> pbar;
   if (sens) {
+    const Vec range = design->upper() - design->lower();
     sd.ns = nv;
     sd.yS = N_VCloneVectorArray(nv, sd.y);
     sd.ypS = N_VCloneVectorArray(nv, sd.y);
@@ -735,7 +736,7 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
       yps.setZero();
       ys.segment(2 * nq, nc) = dl0.col(i);
       yps.segment(nq, nq) = dqdd0.col(i);
-      pbar.push_back(std::max(std::abs(pv[i]), 1e-2 * (design.variables[i].upper - design.variables[i].lower)));
+      pbar.push_back(std::max(std::abs(pv[i]), 1e-2 * range[i]));
     }
     const int ism = im.o.staggered ? IDA_STAGGERED : IDA_SIMULTANEOUS;
     if (IDASensInit(sd.mem, nv, ism, im.o.analytic_sensitivity_residual ? sens_tramp : nullptr, sd.yS, sd.ypS) ||

@@ -19,7 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lsmbs/geometry/design.hpp"
+#include "lsmbs/mbs/parameterization.hpp"
 #include "lsmbs/mbs/model.hpp"
 
 namespace lsmbs {
@@ -126,7 +126,7 @@ class IdasGGL {
   /// Primal run from s0 (q, q̇ approximate; projected and completed to consistency).
   IdasStats run(State s0, const Output& out);
   /// With forward sensitivities with respect to the design variables at p.
-  IdasStats run_with_sensitivities(State s0, const Design& design, const Vec& p, const Output& out);
+  IdasStats run_with_sensitivities(State s0, const Parameterization& design, const Vec& p, const Output& out);
   /// Adjoint sensitivities (IDAAdjInit, IDASolveF, IDASolveB with IDAQuadInitB) of the
   /// quadratures Q_k(t) = ∫_{t0}^{t} g_k dt at the breakpoints and t_end where needs_gradient(k,
   /// t), with respect to the design variables at p. The forward pass is a primal run (outputs
@@ -138,13 +138,13 @@ class IdasGGL {
   /// (the boundary term ξᵀF_ẏ y_p vanishes at t by the final values and at t0 because the
   /// initial positions and velocities do not depend on p). The backward cost does not grow with
   /// the number of design variables; only the quadrature ξᵀ F_p (element-local) does.
-  IdasStats run_adjoint(State s0, const Design& design, const Vec& p, const Output& out);
+  IdasStats run_adjoint(State s0, const Parameterization& design, const Vec& p, const Output& out);
 
   struct Impl;  ///< defined in the .cpp (reached by the C callbacks only)
 
  private:
   enum class Mode { kPrimal, kForward, kAdjoint };
-  IdasStats run_mode(State s0, const Design& design, const Vec& p, const Output& out, Mode mode);
+  IdasStats run_mode(State s0, const Parameterization* design, const Vec& p, const Output& out, Mode mode);
   std::unique_ptr<Impl> impl_;
 };
 

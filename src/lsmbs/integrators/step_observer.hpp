@@ -5,6 +5,7 @@
 // observers; they never see how the integrator or the model work inside.
 #include <string>
 
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/progress.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
 #include "lsmbs/mbs/model.hpp"
@@ -69,6 +70,14 @@ class ProgressObserver : public StepObserver {
   ProgressLine* line_;
   double t_end_;
   std::string label_;
+};
+
+/// Stops the integration at the next step, or within the step in progress, once an interrupt
+/// (SIGINT, SIGTERM) was requested (core/interrupt.hpp); the run is then reported as aborted.
+class InterruptObserver : public StepObserver {
+ public:
+  bool on_step(const StepInfo&) override { return interrupted() == 0; }
+  bool stop_requested() const override { return interrupted() != 0; }
 };
 
 }  // namespace lsmbs

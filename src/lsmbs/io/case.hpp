@@ -10,10 +10,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lsmbs/geometry/design.hpp"
-#include "lsmbs/integrators/generalized_alpha.hpp"
-#include "lsmbs/mbs/model.hpp"
-#include "lsmbs/responses/measure.hpp"
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/mbs/time_law.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
 
@@ -22,29 +21,26 @@ struct OutputSpec {
   int vtu_stride = 0;  ///< every n-th grid step as VTU (0: none)
 };
 
-struct Case {
+/// A case file: the Study it defines (model, initial state, options, measures, responses, design)
+/// and what only the file has (its name, hash and document, output strides, the optimization
+/// section, names of drivers and joints).
+struct Case : Study {
   std::string file;     ///< path as given
   std::string name;
   std::string sha256;   ///< of the case file's bytes
   nlohmann::json raw;
-  std::unique_ptr<Model> model;
-  State initial;
-  GeneralizedAlphaOptions simulation;
   /// simulation.check_constraints: refuse redundant or conflicting constraints at load time
   /// (false only for models that are evaluated, never integrated, e.g. derivative tests).
   bool check_constraints = true;
   OutputSpec output;
-  std::vector<std::unique_ptr<Measure>> measures;
-  std::vector<ResponseSpec> responses;
   std::map<std::string, std::shared_ptr<const TimeLaw>> drivers;  ///< by driver name
   std::map<std::string, std::vector<int>> joint_rows;              ///< constraint rows by joint name
-  nlohmann::json optimization;     ///< the "optimization" section (parsed by parse_optimization)
-  std::unique_ptr<Design> design;  ///< null when the case has no "design" section; when present,
-                                   ///< the model parameters hold the initial design
-
-  /// Column names of the measure history (in the order measures are evaluated).
-  std::vector<std::string> measure_columns() const;
+  nlohmann::json optimization;  ///< the "optimization" section (parsed by parse_optimization)
 };
+
+/// The error of the library (by subject) located in the case file: "design" → /design,
+/// "responses" → /output/responses, "optimization.objective" → /optimization/objective, … .
+Error locate(const std::string& case_file, const SetupError& e);
 
 /// Loads and validates a case file (paths inside are relative to its folder).
 Case load_case(const std::string& path);

@@ -15,11 +15,13 @@
 
 namespace lsmbs {
 
-std::vector<std::string> Case::measure_columns() const {
-  std::vector<std::string> c;
-  for (const auto& m : measures)
-    for (auto& s : m->components()) c.push_back(s);
-  return c;
+Error locate(const std::string& case_file, const SetupError& e) {
+  // subjects are dotted names of the case's sections; responses and measures sit under /output
+  std::string path = "/" + e.subject();
+  for (auto& ch : path)
+    if (ch == '.') ch = '/';
+  if (path.rfind("/responses", 0) == 0 || path.rfind("/measures", 0) == 0) path = "/output" + path;
+  return Error(case_file, path, e.reason());
 }
 
 namespace {

@@ -12,27 +12,6 @@ std::string shown(const nlohmann::json& v) {
 }
 }  // namespace
 
-void check_json_depth(const std::string& text, const std::string& file, int max_depth) {
-  int depth = 0;
-  bool in_string = false, escaped = false;
-  for (size_t i = 0; i < text.size(); ++i) {
-    const char ch = text[i];
-    if (in_string) {
-      if (escaped) escaped = false;
-      else if (ch == '\\') escaped = true;
-      else if (ch == '"') in_string = false;
-    } else if (ch == '"') {
-      in_string = true;
-    } else if (ch == '[' || ch == '{') {
-      if (++depth > max_depth)
-        throw Error(file, "byte " + std::to_string(i),
-                    "invalid JSON: nested deeper than " + std::to_string(max_depth) + " levels");
-    } else if (ch == ']' || ch == '}') {
-      --depth;
-    }
-  }
-}
-
 bool JsonReader::has(const std::string& key) const { return j_->is_object() && j_->contains(key); }
 
 const nlohmann::json& JsonReader::get(const std::string& key) const {

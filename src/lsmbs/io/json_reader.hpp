@@ -11,13 +11,10 @@
 #include <nlohmann/json.hpp>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/json_file.hpp"
 #include "lsmbs/core/types.hpp"
 
 namespace lsmbs {
-
-/// Throws lsmbs::Error (file, byte offset) when `text` nests arrays or objects deeper than
-/// `max_depth`: nlohmann::json parses recursively, and 200,000 levels exhaust the stack.
-void check_json_depth(const std::string& text, const std::string& file, int max_depth = 256);
 
 class JsonReader {
  public:

@@ -14,22 +14,6 @@
 
 namespace lsmbs {
 
-void write_file_atomic(const std::string& path, const std::string& content) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) throw Error(path, "", "cannot write output file");
-    f << content;
-    f.flush();
-    if (!f) throw Error(path, "", "error while writing output file");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(path, "", "cannot rename temporary output file: " + ec.message());
-}
-
-void write_json_atomic(const std::string& path, const nlohmann::json& j) { write_file_atomic(path, j.dump(2) + "\n"); }
-
 void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<std::vector<double>>& rows) {
   std::ostringstream os;

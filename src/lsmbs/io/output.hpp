@@ -1,7 +1,6 @@
 #pragma once
-// Output writers. Every file is written atomically (temporary file in the same folder, then
-// rename), so an interrupted run never leaves a half-written file that looks complete.
-//  * write_file_atomic: any text;
+// Output writers. Every file is written atomically (core/json_file.hpp: write_file_atomic,
+// write_json_atomic), so an interrupted run never leaves a half-written file that looks complete.
 //  * write_csv: a header and rows;
 //  * write_vtu: one flexible body at one instant (ParaView), with displacement, μ_e and the
 //    von Mises stress of the Cauchy stress at the element centre;
@@ -12,12 +11,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lsmbs/core/json_file.hpp"
 #include "lsmbs/mbs/model.hpp"
 
 namespace lsmbs {
 
-void write_file_atomic(const std::string& path, const std::string& content);
-void write_json_atomic(const std::string& path, const nlohmann::json& j);
 void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<std::vector<double>>& rows);
 void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q, const ModelParams& p);

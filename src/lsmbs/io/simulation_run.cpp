@@ -75,14 +75,6 @@ class Recorder : public StepObserver {
 
 }  // namespace
 
-namespace {
-// Stops the integration at the next step once an interrupt was requested (core/interrupt.hpp).
-struct InterruptObserver : StepObserver {
-  bool on_step(const StepInfo&) override { return interrupted() == 0; }
-  bool stop_requested() const override { return interrupted() != 0; }
-};
-}  // namespace
-
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   SimulationResult res;
   res.columns = cs.measure_columns();

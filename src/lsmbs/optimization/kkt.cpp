@@ -13,7 +13,7 @@ nlohmann::json KktReport::to_json() const {
 
 KktReport kkt_report(const DesignProblem& prob, const Evaluation& e, double tol_active, double tol_bound) {
   KktReport r;
-  auto& cs = const_cast<DesignProblem&>(prob).case_data();
+  const Study& cs = prob.study();
   const Vec lo = cs.design->lower(), range = cs.design->upper() - cs.design->lower();
   const int n = static_cast<int>(e.p.size());
   const double fs = std::max(std::abs(e.objective), 1e-300);

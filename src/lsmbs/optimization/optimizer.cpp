@@ -10,8 +10,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
-#include "lsmbs/io/json_reader.hpp"
-#include "lsmbs/io/output.hpp"
+#include "lsmbs/core/json_file.hpp"
 #include "lsmbs/optimization/mma_classic.hpp"
 
 namespace lsmbs {
@@ -47,6 +46,11 @@ struct Context {
     // checkpoint: the history of a resumed run is the uninterrupted run's, from evaluation 1.
     const bool known = !seen.insert(key).second;
     const Evaluation& e = prob.evaluate(p);
+    if (e.interrupted) {  // the evaluation in progress is dropped; the checkpoint has the ones before
+      interrupted = true;
+      request_stop();
+      return e;
+    }
     if (!known) {
       history.push_back(e);
       if (prob.simulations() > before) {
@@ -164,7 +168,7 @@ nlopt_result run_mma_classic(Context& c, std::vector<double>& xs, const Evaluati
 }  // namespace
 
 void write_history(const std::string& path, const DesignProblem& problem, const std::vector<Evaluation>& h) {
-  const auto& d = *const_cast<DesignProblem&>(problem).case_data().design;
+  const auto& d = *problem.study().design;
   std::ostringstream os;
   os.precision(12);
   os << "evaluation,objective,max_constraint_violation,feasible,wall_seconds";
@@ -181,13 +185,13 @@ void write_history(const std::string& path, const DesignProblem& problem, const 
 
 OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  Case& cs = prob.case_data();
+  Study& cs = prob.study();
   const Design& d = *cs.design;
   const int n = d.size(), m = prob.num_constraints();
   Context c(prob, o);
   c.lower = d.lower();
   c.range = d.upper() - d.lower();
-  c.case_sha = cs.sha256;
+  c.case_sha = o.input_sha256;
   c.spec_json = prob.spec().to_json().dump();
 
   if (o.resume) {
@@ -204,7 +208,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
       throw Error(path, "", std::string("cannot resume: damaged checkpoint (") + e.what() + ")");
     }
     if (!j.is_object()) throw Error(path, "/", "cannot resume: damaged checkpoint (expected an object)");
-    if (!j.contains("case_sha256") || j["case_sha256"] != cs.sha256)
+    if (!j.contains("case_sha256") || j["case_sha256"] != o.input_sha256)
       throw Error(path, "/case_sha256", "cannot resume: the case file changed since the checkpoint was written");
     if (!j.contains("spec") || j["spec"] != c.spec_json)
       throw Error(path, "/spec", "cannot resume: the optimization options changed since the checkpoint was written");
@@ -242,7 +246,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   OptimizeResult res;
   c.f0 = std::max(std::abs(e0.objective), 1e-300);
   nlopt_result r;
-  if (!e0.ok) {  // the initial design cannot be simulated: nothing to optimize (c.failure says why)
+  if (!e0.ok && !e0.interrupted) {  // the initial design cannot be simulated: nothing to optimize (c.failure says why)
     c.failure = "the initial design could not be simulated: " + c.failure;
     r = NLOPT_FORCED_STOP;
   } else if (classic) {
@@ -280,6 +284,12 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
       best = static_cast<int>(k);
   if (best >= 0) {
     res.final = c.history[best];
+  } else if (c.interrupted && lsmbs::interrupted()) {  // no simulation after Ctrl-C: NLopt's last point, unevaluated
+    res.final.p = c.to_p(x.data());
+    res.final.ok = false;
+    res.final.interrupted = true;
+    res.final.objective = res.final.max_violation = NAN;
+    res.final.message = "interrupted before a feasible design was evaluated";
   } else {
     res.final = prob.evaluate(c.to_p(x.data()));
   }

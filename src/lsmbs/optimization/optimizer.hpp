@@ -20,6 +20,9 @@ namespace lsmbs {
 struct OptimizeOptions {
   std::string out_dir;       ///< history.csv, checkpoint.json (empty: nothing written)
   bool resume = false;       ///< seed from out_dir/checkpoint.json
+  /// Hash of the input the problem was built from (a case file's SHA-256): a checkpoint of another
+  /// input is refused on resume.
+  std::string input_sha256;
   std::function<void(int, const Evaluation&)> on_evaluation;  ///< progress (evaluation index, result)
   long stop_after = -1;      ///< testing: stop (as if killed) after this many new simulations
 };

@@ -18,19 +18,15 @@ nlohmann::json OptimizationSpec::to_json() const {
           {"inner_max_evaluations", inner_max_evaluations}, {"move_limit", move_limit}};
 }
 
-DesignProblem::DesignProblem(Case& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {
-  auto find = [&](const std::string& n) {
-    for (size_t i = 0; i < cs_.responses.size(); ++i)
-      if (cs_.responses[i].name == n) return static_cast<int>(i);
-    return -1;
-  };
+DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {
+  auto find = [&](const std::string& n) { return cs_.response_index(n); };
   objective_index_ = find(spec_.objective);
-  if (objective_index_ < 0) throw Error(cs_.file, "/optimization/objective", "unknown response '" + spec_.objective + "'");
+  if (objective_index_ < 0) throw SetupError("optimization.objective", "unknown response '" + spec_.objective + "'");
   if (cs_.responses[objective_index_].kind == ResponseSpec::Kind::kPerStep)
-    throw Error(cs_.file, "/optimization/objective", "the objective must be a scalar response (not per_step)");
+    throw SetupError("optimization.objective", "the objective must be a scalar response (not per_step)");
   for (const auto& c : spec_.constraints) {
     const int k = find(c.response);
-    if (k < 0) throw Error(cs_.file, "/optimization/constraints", "unknown response '" + c.response + "'");
+    if (k < 0) throw SetupError("optimization.constraints", "unknown response '" + c.response + "'");
     constraint_index_.push_back(k);
   }
   // per-step constraints: count the steps of the window on the time grid
@@ -94,6 +90,10 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
     e.max_violation = NAN;
   }
   e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (res.interrupted) {  // not a result of p: evaluated again when the run resumes
+    e.interrupted = true;
+    return interrupted_ = e;
+  }
   return cache_[key] = e;
 }
 

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lsmbs/io/case.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
@@ -44,12 +44,14 @@ struct Evaluation {
   double max_violation = 0;          ///< max_j (g_j − ū_j)/|ū_j|  (≤ 0: feasible)
   double wall_seconds = 0;
   bool ok = true;
+  /// Stopped by an interrupt before the simulation ended: not a result of p (never cached).
+  bool interrupted = false;
   std::string message;
 };
 
 class DesignProblem {
  public:
-  DesignProblem(Case& cs, OptimizationSpec spec);
+  DesignProblem(Study& cs, OptimizationSpec spec);
   int num_variables() const { return cs_.design->size(); }
   /// Number of scalar constraints (per-step responses count one per step).
   int num_constraints() const { return num_constraints_; }
@@ -60,15 +62,17 @@ class DesignProblem {
   void seed(const Evaluation& e);
   const std::map<std::vector<double>, Evaluation>& cache() const { return cache_; }
   const OptimizationSpec& spec() const { return spec_; }
-  Case& case_data() { return cs_; }
+  Study& study() { return cs_; }
+  const Study& study() const { return cs_; }
 
  private:
-  Case& cs_;
+  Study& cs_;
   OptimizationSpec spec_;
   int objective_index_ = -1;
   std::vector<int> constraint_index_;
   int num_constraints_ = 0;
   std::map<std::vector<double>, Evaluation> cache_;
+  Evaluation interrupted_;  // the last interrupted evaluation (not cached)
   long simulations_ = 0, cache_hits_ = 0;
 };
 

@@ -33,9 +33,9 @@ nlohmann::json GradientCheckResult::to_json(const GradientCheckOptions& o) const
           {"verdict", verdict(o)}};
 }
 
-GradientCheckResult check_gradients(Case& cs, const Vec& p, const std::vector<ResponseSensitivity>& gradients,
+GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o) {
-  if (!cs.design) throw Error(cs.file, "/design", "a gradient check needs design variables");
+  if (!cs.design) throw SetupError("design", "a gradient check needs design variables");
   const Design& d = *cs.design;
   const int nv = d.size();
   GradientCheckResult res;

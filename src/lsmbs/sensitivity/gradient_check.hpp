@@ -43,7 +43,7 @@ struct GradientCheckResult {
 
 /// Checks `gradients` (as computed by compute_sensitivities at p) along one random direction.
 /// Responses without gradients (NaN, e.g. idas-adjoint's grid aggregates) are skipped.
-GradientCheckResult check_gradients(Case& cs, const Vec& p, const std::vector<ResponseSensitivity>& gradients,
+GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o = {});
 
 }  // namespace lsmbs

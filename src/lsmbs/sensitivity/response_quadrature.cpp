@@ -5,7 +5,7 @@
 
 namespace lsmbs {
 
-ResponseQuadrature::ResponseQuadrature(const Case& cs, std::vector<ParamDirection> directions, double t_start,
+ResponseQuadrature::ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions, double t_start,
                                        double t_end)
     : cs_(cs), tracker_(cs, directions), t_start_(t_start), t_end_(t_end), nv_(static_cast<int>(directions.size())) {
   using K = ResponseSpec::Kind;

@@ -20,7 +20,7 @@ namespace lsmbs {
 class ResponseQuadrature : public IdasQuadrature {
  public:
   /// directions: ∂(ModelParams)/∂p_i (empty for values only). Run from t_start to t_end.
-  ResponseQuadrature(const Case& cs, std::vector<ParamDirection> directions, double t_start, double t_end);
+  ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions, double t_start, double t_end);
   /// Whether the case has any time-integral response.
   bool empty() const { return responses_.empty(); }
 
@@ -47,7 +47,7 @@ class ResponseQuadrature : public IdasQuadrature {
     bool square;      ///< rms: ∫ f²
     double a, b;      ///< window clipped to [t_start, t_end]
   };
-  const Case& cs_;
+  const Study& cs_;
   ResponseTracker tracker_;
   std::vector<Item> responses_;
   double t_start_, t_end_;

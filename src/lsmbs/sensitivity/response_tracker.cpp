@@ -5,7 +5,7 @@
 
 namespace lsmbs {
 
-ResponseTracker::ResponseTracker(const Case& cs, std::vector<ParamDirection> directions)
+ResponseTracker::ResponseTracker(const Study& cs, std::vector<ParamDirection> directions)
     : cs_(cs), dirs_(std::move(directions)), scratch_(cs.model->params()) {
   // flattened measure columns → (measure, component)
   std::vector<std::pair<const Measure*, int>> flat;

@@ -5,7 +5,7 @@
 // then aggregates them into the responses' values and gradients.
 #include <vector>
 
-#include "lsmbs/io/case.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
@@ -13,7 +13,7 @@ namespace lsmbs {
 class ResponseTracker {
  public:
   /// directions[i] = ∂(ModelParams)/∂p_i (for the explicit ∂f/∂p); empty for values only.
-  ResponseTracker(const Case& cs, std::vector<ParamDirection> directions);
+  ResponseTracker(const Study& cs, std::vector<ParamDirection> directions);
   /// Records the columns used by responses at a grid step; derivatives may be null.
   void record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl);
   std::vector<ResponseSensitivity> results() const;
@@ -28,7 +28,7 @@ class ResponseTracker {
   double response_partials(size_t r, const State& s, const ModelParams& p, MeasureGradient& g, Eigen::RowVectorXd& gp);
 
  private:
-  const Case& cs_;
+  const Study& cs_;
   std::vector<ParamDirection> dirs_;
   struct Column {
     const Measure* measure;

@@ -101,7 +101,7 @@ std::string run_label(long k, long n) {
 
 }  // namespace
 
-std::vector<ResponseSensitivity> simulate_responses_at_current_design(Case& cs, SensitivityCounts& counts, IntegratorSummary* primal,
+std::vector<ResponseSensitivity> simulate_responses_at_current_design(Study& cs, SensitivityCounts& counts, IntegratorSummary* primal,
                                             ProgressLine* line, long n_runs) {
   ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()));
   struct Obs : StepObserver {
@@ -118,15 +118,17 @@ std::vector<ResponseSensitivity> simulate_responses_at_current_design(Case& cs, 
     }
   } obs(tr, cs.model->params());
   ProgressObserver prog(line, cs.simulation.t_end, run_label(counts.simulations + 1, n_runs));
-  const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs, &prog});
+  InterruptObserver stop;
+  const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs, &prog, &stop});
   add_primal(counts, s);
   if (primal) *primal = s;
   if (!s.ok) throw NumericalFailure("simulation failed during finite differences: " + s.message);
+  if (s.aborted) throw NumericalFailure("simulation stopped at t = " + std::to_string(s.t_reached) + " s");
   return tr.results();
 }
 
 
-std::vector<ResponseSensitivity> simulate_responses(Case& cs, const Vec& p, SensitivityCounts& counts,
+std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p, SensitivityCounts& counts,
                                                     ProgressLine* line) {
   cs.design->apply(p, cs.model->params());
   return simulate_responses_at_current_design(cs, counts, nullptr, line, 1);
@@ -162,21 +164,26 @@ void flag_non_finite(SensitivityResult& res, const Design& d, bool grid_gradient
   }
 }
 
-SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const SensitivityOptions& o);
+SensitivityResult compute_sensitivities_unchecked(Study& cs, const Vec& p, const SensitivityOptions& o);
 
 }  // namespace
 
-SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const SensitivityOptions& o) {
+SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o) {
   SensitivityResult res = compute_sensitivities_unchecked(cs, p, o);
+  if (!res.ok && interrupted()) {  // stopped by SIGINT/SIGTERM: not a numerical failure
+    res.interrupted = true;
+    res.message = "interrupted by signal " + std::to_string(interrupted()) + " (" + res.message + ")";
+    return res;
+  }
   flag_non_finite(res, *cs.design, o.method != SensitivityOptions::Method::kIdasAdjoint);
   return res;
 }
 
 namespace {
 
-SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const SensitivityOptions& o) {
-  if (!cs.design) throw Error(cs.file, "/design", "sensitivities need a design section (design variables)");
-  if (cs.responses.empty()) throw Error(cs.file, "/output/responses", "sensitivities need at least one response");
+SensitivityResult compute_sensitivities_unchecked(Study& cs, const Vec& p, const SensitivityOptions& o) {
+  if (!cs.design) throw SetupError("design", "sensitivities need a design section (design variables)");
+  if (cs.responses.empty()) throw SetupError("responses", "sensitivities need at least one response");
   const auto t0 = std::chrono::steady_clock::now();
   const Design& d = *cs.design;
   const int nv = d.size();
@@ -193,7 +200,7 @@ SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const 
     IdasGGL idas(*cs.model, params, io);
     ResponseQuadrature quad(cs, d.apply_with_directions(p, params), cs.initial.t, io.t_end);
     if (adjoint && quad.empty())
-      throw Error(cs.file, "/output/responses",
+      throw SetupError("responses",
                   "the idas-adjoint method differentiates time-integral responses (aggregate integral, average, "
                   "average_eq45 or rms), and the case has none");
     if (!quad.empty()) idas.set_quadrature(&quad);
@@ -255,7 +262,7 @@ SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const 
   } else {
     if (cs.simulation.newton != GeneralizedAlphaOptions::Newton::kFull &&
         o.matrix == SensitivityOptions::Matrix::kLastIteration)
-      throw Error(cs.file, "/simulation/newton",
+      throw SetupError("simulation.newton",
                   std::string("\"") + GeneralizedAlphaOptions::newton_name(cs.simulation.newton) +
                       "\" keeps factorizations of earlier iterations or steps, which the last-iteration matrix of "
                       "Algorithm 2 cannot back-solve with: use the sensitivity matrix \"converged\" (the default) or "
@@ -315,10 +322,13 @@ SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const 
     go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
     go.threads = o.threads;
     ProgressObserver prog(o.progress, go.t_end);
-    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog});
+    InterruptObserver stop;
+    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog, &stop});
     add_primal(res.counts, res.primal);
-    res.ok = res.primal.ok;
-    res.message = res.primal.message;
+    res.ok = res.primal.ok && !res.primal.aborted;  // aborted: stopped by an observer (an interrupt)
+    res.message = res.primal.aborted && res.primal.message.empty()
+                      ? "stopped at t = " + std::to_string(res.primal.t_reached) + " s"
+                      : res.primal.message;
     res.responses = tracker.results();
     if (o.matrix == SensitivityOptions::Matrix::kLastIteration && res.counts.predictor_matrix_steps > 0)
       res.warnings.push_back(

@@ -23,7 +23,7 @@
 
 #include "lsmbs/core/progress.hpp"
 #include "lsmbs/integrators/idas_ggl.hpp"
-#include "lsmbs/io/case.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
 
@@ -105,6 +105,9 @@ struct SensitivityCounts {
 
 struct SensitivityResult {
   bool ok = true;
+  /// The run was stopped by an interrupt (SIGINT/SIGTERM, core/interrupt.hpp): ok is false and the
+  /// results are partial; not a numerical failure.
+  bool interrupted = false;
   std::string message;
   /// Conditions the user should know about, e.g. inexact back-solves with `--matrix last`.
   std::vector<std::string> warnings;
@@ -120,14 +123,14 @@ struct SensitivityResult {
 
 /// Response values of one generalized-α simulation at design p (gradients empty); the case's
 /// model parameters are left at p. Throws NumericalFailure when the simulation fails.
-std::vector<ResponseSensitivity> simulate_responses(Case& cs, const Vec& p, SensitivityCounts& counts,
+std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p, SensitivityCounts& counts,
                                                     ProgressLine* line = nullptr);
 /// The same at the case's current parameters; `primal` receives the integrator summary.
-std::vector<ResponseSensitivity> simulate_responses_at_current_design(Case& cs, SensitivityCounts& counts,
+std::vector<ResponseSensitivity> simulate_responses_at_current_design(Study& cs, SensitivityCounts& counts,
                                                                       IntegratorSummary* primal, ProgressLine* line,
                                                                       long n_runs);
 
 /// Sensitivities at design p (the case's model parameters are left at p).
-SensitivityResult compute_sensitivities(Case& cs, const Vec& p, const SensitivityOptions& o);
+SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o);
 
 }  // namespace lsmbs

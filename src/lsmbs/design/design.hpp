@@ -9,6 +9,7 @@
 
 #include "lsmbs/geometry/design_map.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/mbs/parameterization.hpp"
 
 namespace lsmbs {
 
@@ -29,24 +30,25 @@ struct ParameterBinding {
   double offset = 0, scale = 1;
 };
 
-class Design {
+class Design final : public Parameterization {
  public:
   std::vector<DesignVariable> variables;
   std::vector<BodyDesign> bodies;
   std::vector<ParameterBinding> bindings;
 
-  int size() const { return static_cast<int>(variables.size()); }
+  int size() const override { return static_cast<int>(variables.size()); }
   Vec initial() const;
-  Vec lower() const;
-  Vec upper() const;
+  Vec lower() const override;
+  Vec upper() const override;
   int variable_index(const std::string& name) const;  ///< −1 if unknown
 
   /// Writes μ(p) into each designed body's field and bound parameter values into scalars.
   /// If dmu is given it receives ∂μ/∂p per designed body (same order as `bodies`).
-  void apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu = nullptr) const;
+  void apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu) const;
+  void apply(const Vec& p, ModelParams& params) const override { apply(p, params, nullptr); }
   /// apply() with ∂μ/∂p, returned as one parameter direction ∂(ModelParams)/∂p_i per variable
   /// (the mapping runs once).
-  std::vector<ParamDirection> apply_with_directions(const Vec& p, ModelParams& params) const;
+  std::vector<ParamDirection> apply_with_directions(const Vec& p, ModelParams& params) const override;
   /// Mass of a designed body and its gradient m(p), ∂m/∂p = ρ t Σ_e A_e ∂μ_e/∂p.
   static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params, Vec& grad);
 };

@@ -1,4 +1,4 @@
-#include "lsmbs/geometry/design.hpp"
+#include "lsmbs/design/design.hpp"
 
 namespace lsmbs {
 

@@ -1,0 +1,18 @@
+#pragma once
+// Files every layer writes or reads safely: atomic writes (a temporary file in the same folder,
+// then rename, so an interrupted run never leaves a half-written file that looks complete) and a
+// nesting-depth check before JSON parsing.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace lsmbs {
+
+void write_file_atomic(const std::string& path, const std::string& content);
+void write_json_atomic(const std::string& path, const nlohmann::json& j);
+
+/// Throws lsmbs::Error (file, byte offset) when `text` nests arrays or objects deeper than
+/// `max_depth`: nlohmann::json parses recursively, and 200,000 levels exhaust the stack.
+void check_json_depth(const std::string& text, const std::string& file, int max_depth = 256);
+
+}  // namespace lsmbs

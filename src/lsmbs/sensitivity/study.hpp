@@ -1,0 +1,34 @@
+#pragma once
+// Study — what a simulation, a sensitivity analysis or an optimization needs, whatever built it
+// (a case file, or code): the model, its initial state, the generalized-α options, the measures
+// recorded at every step, the responses aggregated from them and, optionally, the design
+// variables. Responses name their measure column; the library reports errors by these names.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lsmbs/design/design.hpp"
+#include "lsmbs/integrators/generalized_alpha.hpp"
+#include "lsmbs/mbs/model.hpp"
+#include "lsmbs/responses/measure.hpp"
+
+namespace lsmbs {
+
+struct Study {
+  std::unique_ptr<Model> model;
+  State initial;
+  GeneralizedAlphaOptions simulation;
+  std::vector<std::unique_ptr<Measure>> measures;
+  std::vector<ResponseSpec> responses;
+  /// Null without design variables; when present, the model parameters hold a design of it.
+  std::unique_ptr<Design> design;
+
+  /// Column names of the measure history (in the order measures are evaluated).
+  std::vector<std::string> measure_columns() const;
+  /// Index of the measure column `name`, −1 if there is none.
+  int measure_column(const std::string& name) const;
+  /// Index of the response `name`, −1 if there is none.
+  int response_index(const std::string& name) const;
+};
+
+}  // namespace lsmbs
