@@ -109,8 +109,8 @@ TEST(GradientDefaults, ModifiedNewtonKeepsTheDefaultExactAndRefusesLast) {
     try {
       compute_sensitivities(cs, cs.design->initial(), o);
       ADD_FAILURE() << nw << ": --matrix last accepted";
-    } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find("/simulation/newton"), std::string::npos) << e.what();
+    } catch (const SetupError& e) {
+      EXPECT_EQ(locate("c.json", e).json_path(), "/simulation/newton") << e.what();
     }
   }
 }

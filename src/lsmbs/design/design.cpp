@@ -1,5 +1,7 @@
 #include "lsmbs/design/design.hpp"
 
+#include "lsmbs/core/error.hpp"
+
 namespace lsmbs {
 
 Vec Design::initial() const {
@@ -16,6 +18,43 @@ Vec Design::upper() const {
   Vec v(size());
   for (int i = 0; i < size(); ++i) v[i] = variables[i].upper;
   return v;
+}
+
+int Design::add_variable(const std::string& name, double initial, double lower, double upper) {
+  if (variable_index(name) >= 0) throw SetupError("design.variables", "duplicate design variable '" + name + "'");
+  if (!(upper > lower) || !(initial >= lower && initial <= upper))
+    throw SetupError("design.variables", "variable '" + name + "': expected lower < upper and lower <= initial <= upper");
+  variables.push_back({name, initial, lower, upper});
+  return size() - 1;
+}
+
+ParamBinding Design::variable(const std::string& name, double scale, double offset) const {
+  const int k = variable_index(name);
+  if (k < 0) throw SetupError("design.variables", "unknown design variable '" + name + "'");
+  return ParamBinding{offset, scale, k};
+}
+
+void Design::add_geometry(const FlexibleBody& body, std::vector<Feature> features, MappingOptions o) {
+  for (const auto& b : bodies)
+    if (b.body == &body) throw SetupError("design.geometry", "body '" + body.name + "' has two geometries");
+  LevelSetNode root;
+  root.op = LevelSetNode::Op::kAnd;
+  for (size_t i = 0; i < features.size(); ++i) {
+    LevelSetNode leaf;
+    leaf.feature = static_cast<int>(i);
+    root.children.push_back(leaf);
+  }
+  BodyDesign bd;
+  bd.body = &body;
+  bd.map = std::make_unique<DesignMap>(body.mesh, LevelSet(std::move(features), std::move(root), size()), o);
+  bodies.push_back(std::move(bd));
+}
+
+void Design::bind(int parameter, const std::string& variable, double scale, double offset) {
+  const int k = variable_index(variable);
+  if (k < 0) throw SetupError("design.parameters", "unknown design variable '" + variable + "'");
+  if (parameter < 0) throw SetupError("design.parameters", "unknown model parameter (index " + std::to_string(parameter) + ")");
+  bindings.push_back({parameter, k, offset, scale});
 }
 
 int Design::variable_index(const std::string& name) const {

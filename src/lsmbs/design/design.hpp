@@ -36,6 +36,20 @@ class Design final : public Parameterization {
   std::vector<BodyDesign> bodies;
   std::vector<ParameterBinding> bindings;
 
+  // ---------------------------------------------------------- building a design in code
+  /// Adds a variable lower < upper with lower ≤ initial ≤ upper and returns its index
+  /// (SetupError "design.variables" otherwise, or for a name in use).
+  int add_variable(const std::string& name, double initial, double lower, double upper);
+  /// The feature parameter `offset + scale · p_variable` (Table 2's linked parameters).
+  ParamBinding variable(const std::string& name, double scale = 1, double offset = 0) const;
+  /// A constant feature parameter.
+  static ParamBinding constant(double value) { return ParamBinding{value, 0, -1}; }
+  /// Level-set features on a flexible body: material where every feature is positive (the
+  /// paper's intersection of holes, eq. 4), mapped to μ_e on the body's mesh.
+  void add_geometry(const FlexibleBody& body, std::vector<Feature> features, MappingOptions o = {});
+  /// model parameter `parameter` (Model::parameter_index) = offset + scale · p_variable.
+  void bind(int parameter, const std::string& variable, double scale = 1, double offset = 0);
+
   int size() const override { return static_cast<int>(variables.size()); }
   Vec initial() const;
   Vec lower() const override;

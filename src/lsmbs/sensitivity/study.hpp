@@ -23,6 +23,21 @@ struct Study {
   /// Null without design variables; when present, the model parameters hold a design of it.
   std::unique_ptr<Design> design;
 
+  // ---------------------------------------------------------- building a study in code
+  /// Takes the model and its initial state (e.g. ModelBuilder::build() and initial_state()).
+  Study(std::unique_ptr<Model> m, State s0, GeneralizedAlphaOptions o)
+      : model(std::move(m)), initial(std::move(s0)), simulation(std::move(o)) {}
+  Study() = default;
+  /// Adds a measure; its names must be new (SetupError "measures" otherwise).
+  Measure& add_measure(std::unique_ptr<Measure> m);
+  /// Adds a response of the measure column `measure` (a measure's name, or "name.x" / "name.y"
+  /// for a point's components), aggregated over [t0, t1]; SetupError "responses" for an unknown
+  /// column or a name in use.
+  ResponseSpec& add_response(const std::string& name, const std::string& measure, ResponseSpec::Kind kind,
+                             double t0 = -1e300, double t1 = 1e300);
+  /// Sets the design variables and writes their initial values into the model's parameters.
+  void set_design(std::unique_ptr<Design> d);
+
   /// Column names of the measure history (in the order measures are evaluated).
   std::vector<std::string> measure_columns() const;
   /// Index of the measure column `name`, −1 if there is none.
