@@ -25,7 +25,7 @@ int main() {
   spec.optimizer = "mma";
   spec.sensitivity.method = SensitivityOptions::Method::kDirectAnalytic;
   spec.tol_objective = 5e-4;
-  spec.max_evaluations = 40;
+  spec.max_evaluations = 20;  // a short run: enough to reach a feasible, lighter design
   DesignProblem problem(study, spec);
 
   // 3. The loop: NLopt asks for values and gradients; each design is simulated once (cached).

@@ -40,7 +40,8 @@ int main() {
   ga.t_end = 1.0;
   ga.h = 1e-3;
   ga.rho_inf = 0.8;
-  Study study(b.build(), b.initial_state(), ga);
+  std::unique_ptr<Model> model = b.build();  // then the initial state is known
+  Study study(std::move(model), b.initial_state(), ga);
 
   // 3. What to record at every step (measures) and the responses aggregated from them.
   study.add_measure(std::make_unique<AngleMeasure>("theta", b.angle_dof("bar")));

@@ -50,7 +50,8 @@ inline Study robot_arm(int nx, int ny) {
   ga.t_end = 2.5;
   ga.h = 0.005;
   ga.rho_inf = 0.8;
-  Study s(b.build(), b.initial_state(), ga);
+  std::unique_ptr<Model> model = b.build();  // then the initial state is known
+  Study s(std::move(model), b.initial_state(), ga);
 
   // 4. Measures and responses; the deviation is measured from the rigid two-link chain that the
   //    drivers prescribe, and averaged over the constant-speed phase of arm 1's law.

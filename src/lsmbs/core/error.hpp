@@ -4,6 +4,7 @@
 // number, got -0.001".  Numerical failures are not Errors: they are reported as Status.
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace lsmbs {
 
@@ -40,6 +41,31 @@ class SetupError : public Error {
 
  private:
   std::string subject_, what_;
+};
+
+/// An invalid model built in code (mbs/model_builder.hpp): it names the entity ("joint 'pivot'")
+/// and the argument at fault as the case format names it ("a/body", "node_set"; empty for the
+/// entity as a whole), but no file or JSON path:  "joint 'pivot', a/body: unknown body 'crnk'".
+/// The JSON loader maps the argument to the JSON path of the entry it reads.
+class ModelError : public Error {
+ public:
+  ModelError(std::string entity, std::string field, std::string message)
+      : Error(format(entity, field, message)),
+        entity_(std::move(entity)),
+        field_(std::move(field)),
+        message_(std::move(message)) {}
+
+  const std::string& entity() const { return entity_; }    ///< "joint 'pivot'", or empty
+  const std::string& field() const { return field_; }      ///< "a/body", or empty
+  const std::string& message() const { return message_; }  ///< what is wrong, without the names
+
+ private:
+  static std::string format(const std::string& entity, const std::string& field, const std::string& message) {
+    std::string out = entity;
+    if (!field.empty()) out += (out.empty() ? "" : ", ") + field;
+    return out.empty() ? message : out + ": " + message;
+  }
+  std::string entity_, field_, message_;
 };
 
 /// A numerical failure (Newton divergence, singular matrix, NaN): exit code 1.

@@ -4,7 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <set>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "lsmbs/core/file_check.hpp"
@@ -12,6 +13,12 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/json_reader.hpp"
 #include "lsmbs/io/sha256.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
+
+// The JSON loader: JSON → ModelBuilder calls (mbs/model_builder.hpp owns what a body, joint or
+// force means), plus the sections that are the case file's own (simulation options, output
+// measures and responses, design). It checks types, ranges and unknown keys, and maps the
+// builder's errors, which name an entity and an argument, to the JSON path of the entry.
 
 namespace lsmbs {
 
@@ -34,22 +41,50 @@ std::string format_g(double v) {
   return b;
 }
 
+// A builder error at the JSON entry `r`: the builder names the argument at fault as the case format
+// does ("a/body", "node_set", or nothing for the entry as a whole), a path below the entry.
+[[noreturn]] void fail_at(const JsonReader& r, const ModelError& e) {
+  if (e.field().empty()) r.fail(e.message());
+  r.fail(e.field(), e.message());
+}
+
+// Runs a builder call for the JSON entry `r` (errors: fail_at).
+template <class F>
+decltype(auto) at_entry(const JsonReader& r, F&& call) {
+  try {
+    return call();
+  } catch (const ModelError& e) {
+    fail_at(r, e);
+  }
+}
+
+// Runs a query by name (a body, joint or driver named by the key `key` of `r`): its error is
+// reported at that key.
+template <class F>
+decltype(auto) at_key(const JsonReader& r, const std::string& key, F&& call) {
+  try {
+    return call();
+  } catch (const ModelError& e) {
+    r.fail(key, e.message());
+  }
+}
+
 struct Loader {
   Loader(Case& c, std::string dir) : cs(c), base_dir(std::move(dir)) {}
   Case& cs;
   std::string base_dir;
-  Model& model() { return *cs.model; }
-  std::set<std::string> names;  // bodies, joints, forces share one namespace
+  ModelBuilder builder;
+  std::map<std::string, std::string> paths;  ///< JSON path of each body, joint and force by name
 
   std::string resolve(const std::string& f) const {
     return fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
   }
 
-  void unique_name(const JsonReader& r, const std::string& name) {
-    if (!names.insert(name).second) r.fail("name", "duplicate name '" + name + "' (bodies, joints and forces need unique names)");
+  // A named entry (body, joint or force): its name is checked as soon as it is read.
+  void entry(const JsonReader& r, const std::string& name, bool body) {
+    at_entry(r, [&] { builder.check_name(name, body); });
+    paths.emplace(name, r.path());
   }
-
-  int param(const std::string& name, double value) { return model().add_parameter(name, value); }
 
   // ---------------------------------------------------------------- time laws
   std::shared_ptr<const TimeLaw> law(const JsonReader& r) {
@@ -104,104 +139,56 @@ struct Loader {
   }
 
   // ---------------------------------------------------------------- points
-  PointRef point(const JsonReader& r) {
-    PointRef p;
+  // Which keys a point object may have depends on its body: "at" / "at_global" on a rigid body,
+  // "node" / "nearest" on a flexible one. The builder resolves the point (unknown body, node
+  // index out of range) while the object is read.
+  Point point(const JsonReader& r) {
     if (r.is_string()) {
       if (r.as_string() == "ground") r.fail("a ground point needs coordinates: {\"ground\": [x, y]}");
       r.fail("expected a point object ({\"ground\": [x, y]}, {\"body\": name, \"at\": [x, y]}, {\"body\": name, \"node\": i})");
     }
     if (!r.is_object()) r.fail("expected a point object");
     if (r.has("ground")) {
-      p.kind = PointRef::Kind::kGround;
-      p.local = r.vec2("ground");
+      const Point p = Point::ground(r.vec2("ground"));
       r.finish();
       return p;
     }
     const std::string body = r.string("body");
-    if (const RigidBody* rb = model().find_rigid(body)) {
-      p.kind = PointRef::Kind::kBody;
-      p.dof0 = rb->dof0;
-      if (r.has("at_global")) p.local = rotation(rb->angle0).transpose() * (r.vec2("at_global") - rb->position0);
-      else p.local = r.vec2("at", Vec2::Zero());
-    } else if (const FlexibleBody* fb = model().find_flexible(body)) {
-      p.kind = PointRef::Kind::kNode;
-      int node = -1;
-      if (r.has("node")) {
-        node = r.integer("node", 0);
-        if (node >= fb->mesh.num_nodes())
-          r.fail("node", "node index " + std::to_string(node) + " out of range (body '" + body + "' has " +
-                             std::to_string(fb->mesh.num_nodes()) + " nodes)");
-      } else if (r.has("nearest")) {
-        node = fb->mesh.nearest_node(r.vec2("nearest"));
-      } else {
-        r.fail("a point on a flexible body needs \"node\": index or \"nearest\": [x, y] (mesh frame)");
-      }
-      p.dof0 = fb->node_dof(node);
-    } else {
-      r.fail("body", "unknown body '" + body + "'");
+    Point p = Point::at(body);  // an unknown body: the builder names it below
+    switch (builder.body_kind(body)) {
+      case ModelBuilder::BodyKind::kRigid:
+        if (r.has("at_global")) p = Point::at_global(body, r.vec2("at_global"));
+        else p = Point::at(body, r.vec2("at", Vec2::Zero()));
+        break;
+      case ModelBuilder::BodyKind::kFlexible:
+        if (r.has("node")) p = Point::node(body, r.integer("node", 0));
+        else if (r.has("nearest")) p = Point::nearest(body, r.vec2("nearest"));
+        else r.fail("a point on a flexible body needs \"node\": index or \"nearest\": [x, y] (mesh frame)");
+        break;
+      case ModelBuilder::BodyKind::kNone:
+        break;
     }
+    at_entry(r, [&] { return builder.resolve(p); });
     r.finish();
     return p;
   }
 
-  Vec2 initial_position(const PointRef& p) const {
-    if (p.kind == PointRef::Kind::kGround) return p.local;
-    const Vec q = cs.model->initial_positions();
-    double b[3] = {q[p.dof0], q[p.dof0 + 1], p.kind == PointRef::Kind::kBody ? q[p.dof0 + 2] : 0};
-    return PointKinematics::position(p, b);
-  }
-
-  const RigidBody& rigid(const JsonReader& r, const std::string& key) {
-    const std::string n = r.string(key);
-    const RigidBody* b = model().find_rigid(n);
-    if (!b) {
-      if (model().find_flexible(n)) r.fail(key, "'" + n + "' is a flexible body; a rigid body is expected here");
-      r.fail(key, "unknown rigid body '" + n + "'");
-    }
-    return *b;
-  }
-
-  const FlexibleBody& flexible(const JsonReader& r, const std::string& key) {
-    const std::string n = r.string(key);
-    const FlexibleBody* b = model().find_flexible(n);
-    if (!b) r.fail(key, "unknown flexible body '" + n + "'");
-    return *b;
-  }
-
-  std::vector<int> node_set(const JsonReader& r, const std::string& key, const FlexibleBody& b) {
-    const std::string n = r.string(key);
-    auto it = b.mesh.node_sets.find(n);
-    if (it == b.mesh.node_sets.end()) {
-      std::string avail;
-      for (const auto& [k, v] : b.mesh.node_sets) avail += (avail.empty() ? "" : ", ") + k;
-      r.fail(key, "body '" + b.name + "' has no node set '" + n + "' (available: " + avail + ")");
-    }
-    return it->second;
-  }
-
   // ---------------------------------------------------------------- bodies
   void rigid_body(const JsonReader& r, const std::string& name) {
-    RigidBody b;
-    b.name = name;
-    b.position0 = r.vec2("position", Vec2::Zero());
-    b.angle0 = r.number("angle", 0.0);
-    b.com_offset = r.vec2("com", Vec2::Zero());
-    b.mass_param = param(name + ".mass", r.non_negative("mass", 0.0));
-    b.inertia_param = param(name + ".inertia", r.non_negative("inertia", 0.0));
-    const Vec2 v0 = r.vec2("velocity", Vec2::Zero());
-    const double w0 = r.number("angular_velocity", 0.0);
+    RigidBodyOptions o;
+    o.position = r.vec2("position", Vec2::Zero());
+    o.angle = r.number("angle", 0.0);
+    o.com = r.vec2("com", Vec2::Zero());
+    o.mass = r.non_negative("mass", 0.0);
+    o.inertia = r.non_negative("inertia", 0.0);
+    if (r.has("velocity")) o.velocity = r.vec2("velocity");
+    if (r.has("angular_velocity")) o.angular_velocity = r.number("angular_velocity");
     r.finish();
-    const RigidBody& rb = model().add_rigid_body(b);
-    model().add_force(std::make_unique<RigidInertia>(rb.dof0, rb.mass_param, rb.inertia_param, rb.com_offset,
-                                                     "rigid body '" + name + "'"));
-    init_v.conservativeResize(model().nq());
-    init_v.segment<3>(rb.dof0) << v0.x(), v0.y(), w0;
-    given_velocity(r, rb.dof0, rb.dof0 + 2, r.has("velocity"), r.has("angular_velocity"));
+    at_entry(r, [&] { builder.rigid_body(name, o); });
   }
 
   void flexible_body(const JsonReader& r, const std::string& name) {
-    FlexibleBody b;
-    b.name = name;
+    Mesh2D mesh;
     const JsonReader m = r.child("mesh");
     const std::string mt = m.one_of("type", {"rectangle", "gmsh"});
     if (mt == "rectangle") {
@@ -212,59 +199,59 @@ struct Loader {
       const double nx = el.at(0).as_number(), ny = el.at(1).as_number();
       if (nx < 1 || ny < 1 || nx != std::floor(nx) || ny != std::floor(ny) || nx * ny > 5e6)
         el.fail("expected two positive integers [nx, ny]");
-      b.mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx), static_cast<int>(ny));
+      mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx), static_cast<int>(ny));
     } else {
       const std::string f = resolve(m.string("file"));
       try {
-        b.mesh = Mesh2D::read_gmsh(f);
+        mesh = Mesh2D::read_gmsh(f);
       } catch (const Error& e) {
         throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() + "/file)");
       }
       const double sc = m.positive("scale", 1.0);
-      for (auto& x : b.mesh.nodes) {
+      for (auto& x : mesh.nodes) {
         x *= sc;
         if (!x.allFinite() || x.norm() > 1e100)  // lengths beyond 1e100 m overflow in the element integrals
           m.fail("scale", "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
       }
     }
     m.finish();
+    FlexibleBodyOptions o;
     if (auto pl = r.optional_child("placement")) {
-      b.origin = pl->vec2("origin", Vec2::Zero());
-      b.angle = pl->number("angle", 0.0);
+      o.origin = pl->vec2("origin", Vec2::Zero());
+      o.angle = pl->number("angle", 0.0);
       pl->finish();
     }
     const JsonReader mat = r.child("material");
-    b.E_param = param(name + ".E", mat.positive("E"));
-    const double nu = mat.number("nu");
-    if (!(nu >= 0 && nu < 0.5)) mat.fail("nu", "expected Poisson's ratio in [0, 0.5)");
-    b.nu_param = param(name + ".nu", nu);
-    b.rho_param = param(name + ".rho", mat.positive("rho"));
+    o.E = mat.positive("E");
+    o.nu = mat.number("nu");
+    if (!(o.nu >= 0 && o.nu < 0.5)) mat.fail("nu", "expected Poisson's ratio in [0, 0.5)");
+    o.rho = mat.positive("rho");
     mat.finish();
-    b.thickness_param = param(name + ".thickness", r.positive("thickness"));
-    b.integration = r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full"
+    o.thickness = r.positive("thickness");
+    o.integration = r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full"
                         ? QuadIntegration::kFull
                         : QuadIntegration::kSelectiveShear;
-    // Node sets by selector (mesh frame).
+    // Node sets by selector (mesh frame), added to the mesh's own (rectangle sides, Gmsh groups).
     if (auto ns = r.optional_child("node_sets")) {
       if (!ns->is_object()) ns->fail("expected an object {name: selector}");
       for (const auto& key : ns->keys()) {
         const JsonReader s = ns->child(key);
         const double tol = s.has("tolerance") ? s.positive("tolerance") : -1.0;  // -1: the mesh's default
         std::vector<int> sel;
-        if (s.has("line_x")) sel = b.mesh.nodes_on_line_x(s.number("line_x"), tol);
-        else if (s.has("line_y")) sel = b.mesh.nodes_on_line_y(s.number("line_y"), tol);
+        if (s.has("line_x")) sel = mesh.nodes_on_line_x(s.number("line_x"), tol);
+        else if (s.has("line_y")) sel = mesh.nodes_on_line_y(s.number("line_y"), tol);
         else if (s.has("circle")) {
           const JsonReader c = s.child("circle");
-          sel = b.mesh.nodes_on_circle(c.vec2("center"), c.positive("radius"), tol);
+          sel = mesh.nodes_on_circle(c.vec2("center"), c.positive("radius"), tol);
           c.finish();
         } else if (s.has("box")) {
           const JsonReader c = s.child("box");
-          sel = b.mesh.nodes_in_box(c.vec2("min"), c.vec2("max"));
+          sel = mesh.nodes_in_box(c.vec2("min"), c.vec2("max"));
           c.finish();
         } else if (s.has("nodes")) {
           for (const auto& it : s.items("nodes")) {
             const double v = it.as_number();
-            if (v < 0 || v >= b.mesh.num_nodes() || v != std::floor(v)) it.fail("expected a node index of the mesh");
+            if (v < 0 || v >= mesh.num_nodes() || v != std::floor(v)) it.fail("expected a node index of the mesh");
             sel.push_back(static_cast<int>(v));
           }
         } else {
@@ -272,26 +259,18 @@ struct Loader {
         }
         s.finish();
         if (sel.empty()) s.fail("the selector selects no node of body '" + name + "'");
-        b.mesh.node_sets[key] = sel;
+        mesh.node_sets[key] = sel;
       }
     }
-    const Vec2 v0 = r.vec2("velocity", Vec2::Zero());
-    const double w0 = r.number("angular_velocity", 0.0);
+    if (r.has("velocity")) o.velocity = r.vec2("velocity");
+    if (r.has("angular_velocity")) o.angular_velocity = r.number("angular_velocity");
     r.finish();
-    const FlexibleBody* added = nullptr;
-    try {  // the element geometry is checked here (inverted or degenerate quadrilaterals)
-      added = &model().add_flexible_body(std::move(b));
-    } catch (const Error& e) {
-      r.fail("mesh", std::string(e.what()) + " (check the mesh's coordinates: origin, size, scale)");
+    try {  // the builder checks the element geometry (inverted or degenerate quadrilaterals)
+      builder.flexible_body(name, std::move(mesh), o);
+    } catch (const ModelError& e) {
+      if (e.field() == "mesh") r.fail("mesh", e.message() + " (check the mesh's coordinates: origin, size, scale)");
+      fail_at(r, e);
     }
-    const FlexibleBody& fb = *added;
-    init_v.conservativeResize(model().nq());
-    for (int i = 0; i < fb.mesh.num_nodes(); ++i) {
-      const Vec2 x = fb.placed(i) - fb.origin;
-      init_v.segment<2>(fb.node_dof(i)) = v0 + w0 * Vec2(-x.y(), x.x());
-    }
-    const bool given = r.has("velocity") || r.has("angular_velocity");  // the whole rigid field
-    given_velocity(r, fb.node_dof(0), model().nq(), given, given);
   }
 
   // ---------------------------------------------------------------- joints and drivers
@@ -299,76 +278,42 @@ struct Loader {
     const std::string type =
         r.one_of("type", {"revolute", "prismatic", "rigid_connection", "clamp", "rotation_driver", "translation_driver"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
-    unique_name(r, name);
-    joint_paths[name] = r.path();
-    const size_t first = model().constraints().size();
-    auto add = [&](std::unique_ptr<ConstraintElement> c) {
-      c->set_name(name);
-      model().add_constraint(std::move(c));
-    };
+    entry(r, name, false);
     if (type == "revolute") {
-      const PointRef a = point(r.child("a"));
-      PointRef b;
+      const Point a = point(r.child("a"));
+      std::optional<Point> b;  // none: the builder's default, ground at a's initial position
       if (r.has("b")) {
         const JsonReader rb = r.child("b");
-        if (rb.is_string() && rb.as_string() == "ground") b = {PointRef::Kind::kGround, -1, initial_position(a)};
-        else b = point(rb);
-      } else {
-        b = {PointRef::Kind::kGround, -1, initial_position(a)};
+        if (!(rb.is_string() && rb.as_string() == "ground")) b = point(rb);
       }
-      if (a.kind == PointRef::Kind::kGround && b.kind == PointRef::Kind::kGround) r.fail("both points are ground");
-      add(std::make_unique<PointCoincidence>(a, b));
+      at_entry(r, [&] { builder.revolute(name, a, b); });
     } else if (type == "prismatic") {
-      const PointRef a = point(r.child("a"));
-      if (a.kind == PointRef::Kind::kGround) r.fail("a", "the sliding point must be on a body");
+      const Point a = point(r.child("a"));
       const Vec2 u = r.vec2("direction");
-      if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
-      const Vec2 x0 = r.vec2("through", initial_position(a));
-      const bool lock = r.boolean("lock_rotation", true);
-      double th0 = 0;
-      if (a.kind == PointRef::Kind::kBody) th0 = model().initial_positions()[a.dof0 + 2];
-      add(std::make_unique<Prismatic>(a, x0, u, lock, th0));
+      PrismaticOptions o;
+      if (r.has("through")) o.through = r.vec2("through");
+      o.lock_rotation = r.boolean("lock_rotation", true);
+      at_entry(r, [&] { builder.prismatic(name, a, u, o); });
     } else if (type == "rigid_connection") {
-      const RigidBody& rb = rigid(r, "rigid");
-      const FlexibleBody& fb = flexible(r, "flexible");
-      const auto nodes = node_set(r, "node_set", fb);
-      for (int nd : nodes) {
-        const Vec2 off = rotation(rb.angle0).transpose() * (fb.placed(nd) - rb.position0);
-        add(std::make_unique<PointCoincidence>(PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
-                                               PointRef{PointRef::Kind::kBody, rb.dof0, off}));
-      }
+      const std::string rigid = r.string("rigid"), flexible = r.string("flexible"), set = r.string("node_set");
+      at_entry(r, [&] { builder.rigid_connection(name, rigid, flexible, set); });
     } else if (type == "clamp") {
-      const FlexibleBody& fb = flexible(r, "flexible");
-      for (int nd : node_set(r, "node_set", fb))
-        add(std::make_unique<PointCoincidence>(PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
-                                               PointRef{PointRef::Kind::kGround, -1, fb.placed(nd)}));
+      const std::string flexible = r.string("flexible"), set = r.string("node_set");
+      at_entry(r, [&] { builder.clamp(name, flexible, set); });
     } else if (type == "rotation_driver") {
-      const RigidBody& b = rigid(r, "body");
-      int a_dof = -1;
+      const std::string body = r.string("body");
       const std::string rel = r.string("relative_to", "ground");
-      if (rel != "ground") {
-        const RigidBody* a = model().find_rigid(rel);
-        if (!a) r.fail("relative_to", "unknown rigid body '" + rel + "' (or \"ground\")");
-        if (a == &b) r.fail("relative_to", "a body cannot be driven relative to itself");
-        a_dof = a->dof0 + 2;
-      }
       auto l = law(r.child("law"));
-      cs.drivers[name] = l;
-      driver_relative[name] = a_dof >= 0;
-      add(std::make_unique<AngleDriver>(a_dof, b.dof0 + 2, l));
+      at_entry(r, [&] { builder.rotation_driver(name, body, l, rel); });
     } else {  // translation_driver
-      const PointRef a = point(r.child("point"));
+      const Point a = point(r.child("point"));
       const Vec2 u = r.vec2("direction");
-      if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
-      const Vec2 x0 = r.vec2("through", initial_position(a));
+      std::optional<Vec2> through;
+      if (r.has("through")) through = r.vec2("through");
       auto l = law(r.child("law"));
-      cs.drivers[name] = l;
-      driver_relative[name] = false;
-      add(std::make_unique<TranslationDriver>(a, x0, u, l));
+      at_entry(r, [&] { builder.translation_driver(name, a, u, l, through); });
     }
     r.finish();
-    // rows are numbered at finalize(); remember the element range of this joint
-    joint_elements[name] = {first, model().constraints().size()};
   }
 
   // ---------------------------------------------------------------- forces
@@ -376,83 +321,67 @@ struct Loader {
     const std::string type = r.one_of(
         "type", {"point_force", "spring_damper", "pressure", "point_mass", "torque", "rotational_spring_damper"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
-    unique_name(r, name);
-    begin_entry(r, name);
+    entry(r, name, false);
     if (type == "point_mass") {
       const double m = r.non_negative("mass");
-      const PointRef p = point(r.child("point"));
-      if (p.kind == PointRef::Kind::kGround) r.fail("point", "a point mass must sit on a body");
-      const int mp = param(name + ".mass", m);
-      if (p.kind == PointRef::Kind::kNode) model().add_force(std::make_unique<NodeMass>(p.dof0, mp, "point mass '" + name + "'"));
-      else model().add_force(std::make_unique<RigidInertia>(p.dof0, mp, -1, p.local, "point mass '" + name + "'"));
+      const Point p = point(r.child("point"));
+      at_entry(r, [&] { builder.point_mass(name, p, m); });
     } else if (type == "point_force") {
-      const PointRef p = point(r.child("point"));
-      if (p.kind == PointRef::Kind::kGround) r.fail("point", "a force must act on a body");
-      std::shared_ptr<const TimeLaw> fx, fy;
+      const Point p = point(r.child("point"));
+      std::shared_ptr<const TimeLaw> fx, fy;  // null: zero
+      std::optional<Vec2> f;
       if (r.has("force")) {
-        const Vec2 f = r.vec2("force");
-        fx = std::make_shared<ConstantLaw>(f.x());
-        fy = std::make_shared<ConstantLaw>(f.y());
+        f = r.vec2("force");
       } else {
-        fx = r.has("fx") ? law(r.child("fx")) : std::make_shared<ConstantLaw>(0.0);
-        fy = r.has("fy") ? law(r.child("fy")) : std::make_shared<ConstantLaw>(0.0);
+        if (r.has("fx")) fx = law(r.child("fx"));
+        if (r.has("fy")) fy = law(r.child("fy"));
       }
-      const int sp = param(name + ".scale", r.number("scale", 1.0));
-      model().add_force(std::make_unique<PointForce>(p, fx, fy, sp, "force '" + name + "'"));
+      const double scale = r.number("scale", 1.0);
+      at_entry(r, [&] {
+        if (f) builder.point_force(name, p, *f, scale);
+        else builder.point_force(name, p, fx, fy, scale);
+      });
     } else if (type == "spring_damper") {
-      const PointRef a = point(r.child("a")), b = point(r.child("b"));
-      const double l_init = (initial_position(b) - initial_position(a)).norm();
-      const int kp = param(name + ".stiffness", r.non_negative("stiffness"));
-      const int cp = param(name + ".damping", r.non_negative("damping", 0.0));
-      const int lp = param(name + ".free_length", r.non_negative("free_length", l_init));
-      if (!(l_init > 0)) r.fail("the spring's end points coincide initially (direction undefined)");
-      model().add_force(std::make_unique<SpringDamper>(a, b, kp, cp, lp, "spring '" + name + "'"));
+      const Point a = point(r.child("a")), b = point(r.child("b"));
+      SpringOptions o;
+      o.stiffness = r.non_negative("stiffness");
+      o.damping = r.non_negative("damping", 0.0);
+      if (r.has("free_length")) o.free_length = r.non_negative("free_length");
+      at_entry(r, [&] { builder.spring_damper(name, a, b, o); });
     } else if (type == "torque") {
-      const RigidBody& b = rigid(r, "body");
+      const std::string body = r.string("body");
       if (r.has("torque") == r.has("law")) r.fail("expected either \"torque\": T or \"law\": {...} (one of them)");
       std::shared_ptr<const TimeLaw> l =
           r.has("torque") ? std::make_shared<ConstantLaw>(r.number("torque")) : law(r.child("law"));
-      const int sp = param(name + ".scale", r.number("scale", 1.0));
-      model().add_force(std::make_unique<Torque>(b.dof0 + 2, l, sp, "torque '" + name + "'"));
+      const double scale = r.number("scale", 1.0);
+      at_entry(r, [&] { builder.torque(name, body, l, scale); });
     } else if (type == "rotational_spring_damper") {
-      const RigidBody& a = rigid(r, "a");
-      int b_dof = -1;
-      double th_b = 0;
-      const std::string bn = r.string("b");
-      if (bn != "ground") {
-        const RigidBody& b = rigid(r, "b");
-        if (&b == &a) r.fail("b", "a rotational spring cannot connect a body to itself");
-        b_dof = b.dof0 + 2;
-        th_b = b.angle0;
-      }
-      const int kp = param(name + ".stiffness", r.non_negative("stiffness"));
-      const int cp = param(name + ".damping", r.non_negative("damping", 0.0));
-      const int tp = param(name + ".free_angle", r.number("free_angle", a.angle0 - th_b));
-      model().add_force(
-          std::make_unique<RotationalSpringDamper>(a.dof0 + 2, b_dof, kp, cp, tp, "rotational spring '" + name + "'"));
+      const std::string a = r.string("a"), b = r.string("b");
+      RotationalSpringOptions o;
+      o.stiffness = r.non_negative("stiffness");
+      o.damping = r.non_negative("damping", 0.0);
+      if (r.has("free_angle")) o.free_angle = r.number("free_angle");
+      at_entry(r, [&] { builder.rotational_spring_damper(name, a, b, o); });
     } else {  // pressure
-      const PointRef p = point(r.child("point"));
-      if (p.kind == PointRef::Kind::kGround) r.fail("point", "a pressure force must act on a body");
+      const Point p = point(r.child("point"));
       const Vec2 u = r.vec2("direction");
-      if (!(u.norm() > 0)) r.fail("direction", "expected a non-zero direction");
-      const int ap = param(name + ".area", r.positive("area"));
+      const double area = r.positive("area");
       const JsonReader tr = r.child("table");
       Table1D t = table(tr);
       tr.finish();  // a misspelt table option (e.g. "x_scal") is an error, not ignored
-      int angle_dof = -1;
-      double offset = 0;
+      PressureArgument arg;
       if (r.has("argument")) {
         const JsonReader a = r.child("argument");
         if (a.is_string()) {
           if (a.as_string() != "time") a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
         } else {
-          angle_dof = rigid(a, "angle_of").dof0 + 2;
-          offset = a.number("offset", 0.0);
+          arg.angle_of = a.string("angle_of");
+          arg.offset = a.number("offset", 0.0);
           a.finish();
         }
       }
-      if (angle_dof < 0) offset = r.number("time_offset", 0.0);
-      model().add_force(std::make_unique<PressureForce>(p, u, ap, std::move(t), angle_dof, offset, "pressure '" + name + "'"));
+      if (arg.angle_of.empty()) arg.offset = r.number("time_offset", 0.0);
+      at_entry(r, [&] { builder.pressure(name, p, u, area, std::move(t), arg); });
     }
     r.finish();
   }
@@ -463,44 +392,56 @@ struct Loader {
         r.one_of("type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation", "path_deviation",
                           "constraint_force", "kinetic_energy", "strain_energy", "mass"});
     const std::string name = r.string("name");
-    // constraint_force measures are placeholders (null) until finalize: their names are pending
+    // constraint_force measures are placeholders (null) until the model is built: their names are pending
     for (const auto& m : cs.measures)
       if (m && m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
     for (const auto& pending : pending_forces)
       if (pending.first == name) r.fail("name", "duplicate measure name '" + name + "'");
+    auto point_ref = [&](const std::string& key) { return builder.resolve(point(r.child(key))); };
+    auto angle_dof = [&] {
+      const std::string body = r.string("body");
+      return at_key(r, "body", [&] { return builder.angle_dof(body); });
+    };
     std::unique_ptr<Measure> m;
-    if (type == "position") m = std::make_unique<PositionMeasure>(name, point(r.child("point")));
-    else if (type == "velocity") m = std::make_unique<VelocityMeasure>(name, point(r.child("point")));
-    else if (type == "angle") m = std::make_unique<AngleMeasure>(name, rigid(r, "body").dof0 + 2);
-    else if (type == "angular_velocity") m = std::make_unique<AngularVelocityMeasure>(name, rigid(r, "body").dof0 + 2);
+    if (type == "position") m = std::make_unique<PositionMeasure>(name, point_ref("point"));
+    else if (type == "velocity") m = std::make_unique<VelocityMeasure>(name, point_ref("point"));
+    else if (type == "angle") m = std::make_unique<AngleMeasure>(name, angle_dof());
+    else if (type == "angular_velocity") m = std::make_unique<AngularVelocityMeasure>(name, angle_dof());
     else if (type == "distance" || type == "elongation") {
-      const PointRef a = point(r.child("a")), b = point(r.child("b"));
-      const double ref = type == "elongation" ? (initial_position(b) - initial_position(a)).norm() : 0.0;
+      const PointRef a = point_ref("a"), b = point_ref("b");
+      const double ref =
+          type == "elongation" ? (builder.initial_position(b) - builder.initial_position(a)).norm() : 0.0;
       m = std::make_unique<DistanceMeasure>(name, a, b, ref);
     } else if (type == "path_deviation") {
-      const PointRef p = point(r.child("point"));
+      const PointRef p = point_ref("point");
       const JsonReader pr = r.child("path");
       pr.one_of("type", {"planar_chain"});
       ChainPath path;
       path.origin = pr.vec2("origin", Vec2::Zero());
       for (const auto& l : pr.items("links", true)) {
         const std::string d = l.string("driver");
-        if (!cs.drivers.count(d)) l.fail("driver", "unknown driver '" + d + "'");
-        path.links.push_back({cs.drivers[d], driver_relative[d], l.positive("length")});
+        const DriverInfo* drv = builder.driver(d);
+        if (!drv) l.fail("driver", "unknown driver '" + d + "'");
+        path.links.push_back({drv->law, drv->relative, l.positive("length")});
         l.finish();
       }
       pr.finish();
       m = std::make_unique<PathDeviationMeasure>(name, p, std::move(path));
     } else if (type == "constraint_force") {
       const std::string j = r.string("joint");
-      if (!joint_elements.count(j)) r.fail("joint", "unknown joint '" + j + "'");
+      at_key(r, "joint", [&] { return builder.joint_equations(j); });
       pending_forces.emplace_back(name, j);
       r.finish();
-      cs.measures.push_back(nullptr);  // filled after finalize (rows known then)
+      cs.measures.push_back(nullptr);  // filled after build() (rows known then)
       return;
     } else if (type == "kinetic_energy") m = std::make_unique<KineticEnergyMeasure>(name);
     else if (type == "strain_energy") m = std::make_unique<StrainEnergyMeasure>(name);
-    else m = std::make_unique<FlexibleMassMeasure>(name, &flexible(r, "body"));
+    else {
+      const std::string body = r.string("body");
+      m = std::make_unique<FlexibleMassMeasure>(name, &at_key(r, "body", [&]() -> const FlexibleBody& {
+        return builder.flexible(body);
+      }));
+    }
     r.finish();
     cs.measures.push_back(std::move(m));
   }
@@ -525,11 +466,12 @@ struct Loader {
     if (auto w = r.optional_child("window")) {
       if (w->has("phase")) {
         const std::string d = w->string("driver");
-        if (!cs.drivers.count(d)) w->fail("driver", "unknown driver '" + d + "'");
+        const DriverInfo* drv = builder.driver(d);
+        if (!drv) w->fail("driver", "unknown driver '" + d + "'");
         const std::string ph = w->string("phase");
         bool found = false;
         std::string avail;
-        for (const auto& p : cs.drivers[d]->phases()) {
+        for (const auto& p : drv->law->phases()) {
           avail += (avail.empty() ? "" : ", ") + p.name;
           if (p.name == ph) {
             s.t0 = p.t0, s.t1 = p.t1, found = true;
@@ -558,11 +500,9 @@ struct Loader {
     for (size_t i = 0; i < cs.measures.size(); ++i) {
       if (cs.measures[i]) {
         for (auto& s : cs.measures[i]->components()) c.push_back(s);
-      } else {  // constraint-force measure (built after finalize): components from the joint's equations
+      } else {  // constraint-force measure (built after build()): components from the joint's equations
         const auto& [nm, j] = pending_forces[pending_index(i)];
-        const auto [b, e] = joint_elements.at(j);
-        int m = 0;
-        for (size_t k = b; k < e; ++k) m += cs.model->constraints()[k]->size();
+        const int m = builder.joint_equations(j);
         for (int k = 0; k < m; ++k) c.push_back(nm + "." + std::to_string(k));
       }
     }
@@ -690,7 +630,8 @@ struct Loader {
     }
     if (d->variables.empty()) r.fail("variables", "expected at least one design variable");
     for (const auto& g : r.items("geometry")) {
-      const FlexibleBody& fb = flexible(g, "body");
+      const std::string body = g.string("body");
+      const FlexibleBody& fb = at_key(g, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); });
       for (const auto& other : d->bodies)
         if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
       std::vector<Feature> feats;
@@ -749,10 +690,10 @@ struct Loader {
     for (const auto& b : r.items("parameters")) {
       ParameterBinding pb;
       const std::string pname = b.string("parameter");
-      pb.parameter = model().parameter_index(pname);
+      pb.parameter = builder.parameter(pname);
       if (pb.parameter < 0) {
         std::string avail;
-        for (const auto& n : model().parameter_names()) avail += (avail.empty() ? "" : ", ") + n;
+        for (const auto& n : builder.model().parameter_names()) avail += (avail.empty() ? "" : ", ") + n;
         b.fail("parameter", "unknown model parameter '" + pname + "' (parameters: " + avail + ")");
       }
       const std::string vname = b.string("variable");
@@ -769,55 +710,8 @@ struct Loader {
     cs.design = std::move(d);
   }
 
-  /// The JSON entry each force element comes from, in the order they were added: the index of
-  /// its first element, its JSON path and its name (bodies: inertia or finite elements; forces).
-  struct Entry {
-    size_t first;
-    std::string path, name;
-  };
-  std::vector<Entry> force_entries;
-  std::map<std::string, std::string> joint_paths;  ///< joint name → JSON path
-  void begin_entry(const JsonReader& r, const std::string& name) {
-    force_entries.push_back({model().forces().size(), r.path(), name});
-  }
-
-  Vec init_v;
-  // Velocities the case gives (kept by the initial projection) and, per body that gives any,
-  // its JSON path and unknowns [first, end).
-  std::vector<char> held_v;
-  struct GivenVelocity {
-    std::string path;
-    int first, end;
-  };
-  std::vector<GivenVelocity> given_v;
-  // A body's unknowns [first, end) with the angle (rigid) or all (flexible) from `rotation_dof` on:
-  // translations held when `translation`, the rest when `rotation`.
-  void given_velocity(const JsonReader& r, int first, int rotation_dof, bool translation, bool rotation) {
-    const int end = model().nq();
-    held_v.resize(end, 0);
-    for (int i = first; i < end; ++i) held_v[i] = i < rotation_dof ? translation : rotation;
-    if (translation || rotation)
-      given_v.push_back({r.path() + (r.has("velocity") ? "/velocity" : "/angular_velocity"), first, end});
-  }
-  std::map<std::string, bool> driver_relative;
-  std::map<std::string, std::pair<size_t, size_t>> joint_elements;
-  std::vector<std::pair<std::string, std::string>> pending_forces;
+  std::vector<std::pair<std::string, std::string>> pending_forces;  ///< constraint-force measures: name, joint
 };
-
-// Bodies that no constraint, mass or force touches would make the iteration matrix singular;
-// report them by name before running.
-void check_determined(const Case& cs, const JsonReader& root) {
-  const Model& m = *cs.model;
-  std::vector<char> touched(m.nq(), 0);
-  for (const auto& c : m.constraints())
-    for (int d : c->dofs()) touched[d] = 1;
-  for (const auto& b : m.rigid_bodies()) {
-    const double mass = m.params().scalars[b.mass_param], J = m.params().scalars[b.inertia_param];
-    const bool constrained = touched[b.dof0] || touched[b.dof0 + 1] || touched[b.dof0 + 2];
-    if (!constrained && mass == 0 && J == 0)
-      root.fail("bodies", "rigid body '" + b.name + "' has no mass and no joint: its motion is not determined");
-  }
-}
 
 }  // namespace
 
@@ -850,30 +744,31 @@ static void check_constraint_rank(const Case& cs) {
 // Algorithm 1, S = β′M + γ′C_t + K_t), the assembled matrix with the automatic scaling k = ζ, and
 // the constraints Φ, Φ_t and γ at t = 0 must be finite. A mass of 1e308 kg, for instance,
 // overflows in β′M; without this check the KLU factorization of the start system fails and blames
-// an unrelated joint. The message names the JSON entry and its parameters.
-static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>& entries,
-                               const std::map<std::string, std::string>& joint_paths) {
+// an unrelated joint. The message names the JSON entry (`paths`: by entity name) and its parameters.
+static void check_finite_start(const Case& cs, const ModelBuilder& builder,
+                               const std::map<std::string, std::string>& paths) {
   const Model& m = *cs.model;
   const ModelParams& p = m.params();
   const AlphaCoefficients c = AlphaCoefficients::make(cs.simulation.rho_inf, cs.simulation.h);
   const Coefficients co{c.beta_p, c.gamma_p, 1.0};
   char when[160];
   std::snprintf(when, sizeof when, "at t = 0 with h = %g s (β′ = %.3g s⁻²)", cs.simulation.h, c.beta_p);
-  auto entry_of = [&](size_t force) -> const Loader::Entry* {
-    const Loader::Entry* e = nullptr;
-    for (const auto& x : entries)
-      if (x.first <= force) e = &x;
-    return e;
+  struct Entry {
+    std::string path, name;
   };
-  auto parameters_of = [&](const std::string& name) {
+  auto entry_of = [&](size_t force) -> std::optional<Entry> {  // the body or force that added it
+    const std::string& name = builder.force_owner(force);
+    const auto it = paths.find(name);
+    if (it == paths.end()) return std::nullopt;
+    return Entry{it->second, name};
+  };
+  auto parameters_of = [&](const std::string& name) {  // "(mass = 1e+308, inertia = 0.1)"
     std::string out;
     char buf[64];
-    const auto& names = m.parameter_names();
-    for (size_t i = 0; i < names.size(); ++i)
-      if (names[i].rfind(name + ".", 0) == 0) {
-        std::snprintf(buf, sizeof buf, "%s = %g", names[i].substr(name.size() + 1).c_str(), p.scalars[i]);
-        out += (out.empty() ? "" : ", ") + std::string(buf);
-      }
+    for (int i : builder.parameters_of(name)) {
+      std::snprintf(buf, sizeof buf, "%s = %g", m.parameter_names()[i].substr(name.size() + 1).c_str(), p.scalars[i]);
+      out += (out.empty() ? "" : ", ") + std::string(buf);
+    }
     return out.empty() ? std::string() : " (" + out + ")";
   };
   const Vec& q = cs.initial.q;
@@ -894,7 +789,7 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
       if (nd && S.cwiseAbs().maxCoeff() > s_max) s_max = S.cwiseAbs().maxCoeff(), f_max = f;
       continue;
     }
-    const Loader::Entry* e = entry_of(f);
+    const auto e = entry_of(f);
     throw Error(cs.file, e ? e->path : "", forces[f]->describe() + ": its forces or iteration matrix are not finite " +
                                                when + ": a value is beyond double precision; check its parameters" +
                                                (e ? parameters_of(e->name) : "") + ", its initial velocity and the gravity");
@@ -906,7 +801,7 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
   // order E·t ≈ 2e9 N/m, β′M at h = 1 µs about 1e12 times its masses.
   constexpr double kMaxEntry = 1e100;
   if (s_max > kMaxEntry) {
-    const Loader::Entry* e = entry_of(f_max);
+    const auto e = entry_of(f_max);
     char buf[96];
     std::snprintf(buf, sizeof buf, "its iteration-matrix entries reach %.3g ", s_max);
     throw Error(cs.file, e ? e->path : "", forces[f_max]->describe() + ": " + buf + when +
@@ -921,7 +816,7 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
       std::string path = "/joints";
       for (size_t k = 0; k < m.constraints().size(); ++k)
         if (i >= m.constraint_offset(static_cast<int>(k)) && i < m.constraint_offset(static_cast<int>(k)) + m.constraints()[k]->size())
-          if (auto it = joint_paths.find(m.constraints()[k]->name()); it != joint_paths.end()) path = it->second;
+          if (auto it = paths.find(m.constraints()[k]->name()); it != paths.end()) path = it->second;
       throw Error(cs.file, path, m.describe_unknown(m.nq() + static_cast<int>(i)) +
                                      ": the constraint, its velocity or its acceleration term is not finite at t = 0 "
                                      "(a position, velocity or driver law value beyond double precision)");
@@ -954,9 +849,9 @@ static void check_finite_start(const Case& cs, const std::vector<Loader::Entry>&
 // Initial velocities the case gives are kept; the others follow from the constraints
 // (integrators/initial_state.hpp). Given velocities that contradict the constraints are an input
 // error naming the first body concerned. Positions and velocities are projected here, so that
-// every run starts from the same consistent state.
-template <class Given>
-static void hold_given_velocities(Case& cs, std::vector<char> held, const std::vector<Given>& given) {
+// every run starts from the same consistent state. `paths`: JSON path of each body by name.
+static void hold_given_velocities(Case& cs, std::vector<char> held, const std::vector<GivenVelocity>& given,
+                                  const std::map<std::string, std::string>& paths) {
   const Model& m = *cs.model;
   if (given.empty() || m.nc() == 0 || !cs.simulation.project_initial) return;
   held.resize(m.nq(), 0);
@@ -970,7 +865,7 @@ static void hold_given_velocities(Case& cs, std::vector<char> held, const std::v
   std::string path = "/bodies";
   for (const auto& g : given)
     for (int j : rep.conflicting_held)
-      if (j >= g.first && j < g.end && path == "/bodies") path = g.path;
+      if (j >= g.first && j < g.end && path == "/bodies") path = paths.at(g.body) + "/" + g.field;
   throw Error(cs.file, path,
               st.message + " — give only the velocities that determine the motion (the others are computed), "
                            "or velocities that satisfy the joints and drivers at t = 0");
@@ -980,20 +875,18 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   Case cs;
   cs.file = file_label;
   cs.raw = j;
-  cs.model = std::make_unique<Model>();
   Loader L(cs, base_dir);
+  ModelBuilder& builder = L.builder;
   const JsonReader root(j, file_label);
   if (!root.is_object()) root.fail("expected a JSON object at the top level");
   cs.name = root.string("name", fs::path(file_label).stem().string());
-  if (root.has("gravity")) cs.model->params().gravity = root.vec2("gravity");
+  if (root.has("gravity")) builder.set_gravity(root.vec2("gravity"));
   const auto bodies = root.items("bodies", true);
   if (bodies.empty()) root.fail("bodies", "expected at least one body");
   for (const auto& b : bodies) {
     const std::string name = b.string("name");
-    L.unique_name(b, name);
-    if (name == "ground") b.fail("name", "'ground' is reserved");
+    L.entry(b, name, true);
     const std::string type = b.one_of("type", {"rigid", "flexible"});
-    L.begin_entry(b, name);
     if (type == "rigid") L.rigid_body(b, name);
     else L.flexible_body(b, name);
   }
@@ -1012,26 +905,21 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
     out->finish();
   }
   root.finish();
-  check_determined(cs, root);
-  cs.model->finalize();
+  try {  // refuses undetermined bodies, numbers the constraint rows
+    cs.model = builder.build();
+  } catch (const ModelError& e) {
+    root.fail("bodies", e.message());
+  }
   check_constraint_rank(cs);
   // constraint-force measures: rows are known now
   size_t pi = 0;
   for (auto& m : cs.measures) {
     if (m) continue;
     const auto& [nm, jn] = L.pending_forces[pi++];
-    const auto [b, e] = L.joint_elements.at(jn);
-    std::vector<int> rows;
-    for (size_t k = b; k < e; ++k)
-      for (int r = 0; r < cs.model->constraints()[k]->size(); ++r) rows.push_back(cs.model->constraint_offset(static_cast<int>(k)) + r);
-    m = std::make_unique<ConstraintForceMeasure>(nm, rows);
+    m = std::make_unique<ConstraintForceMeasure>(nm, builder.joint_rows(jn));
   }
-  for (const auto& [jn, range] : L.joint_elements) {
-    std::vector<int> rows;
-    for (size_t k = range.first; k < range.second; ++k)
-      for (int r = 0; r < cs.model->constraints()[k]->size(); ++r) rows.push_back(cs.model->constraint_offset(static_cast<int>(k)) + r);
-    cs.joint_rows[jn] = rows;
-  }
+  cs.joint_rows = builder.joint_rows();
+  for (const auto& [name, d] : builder.drivers()) cs.drivers[name] = d.law;
   // every response window must contain a time step of the run [0, t_end]
   for (size_t i = 0; i < cs.responses.size(); ++i) {
     const auto& r = cs.responses[i];
@@ -1043,14 +931,9 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
                       std::to_string(cs.simulation.t_end) + "] s with h = " + std::to_string(h));
   }
   if (cs.design) cs.design->apply(cs.design->initial(), cs.model->params());
-  cs.initial.t = 0;
-  cs.initial.q = cs.model->initial_positions();
-  cs.initial.v = L.init_v;
-  cs.initial.v.conservativeResize(cs.model->nq());
-  cs.initial.a.setZero(cs.model->nq());
-  cs.initial.lambda.setZero(cs.model->nc());
-  check_finite_start(cs, L.force_entries, L.joint_paths);
-  hold_given_velocities(cs, L.held_v, L.given_v);
+  cs.initial = builder.initial_state();
+  check_finite_start(cs, builder, L.paths);
+  hold_given_velocities(cs, builder.held_velocities(), builder.given_velocities(), L.paths);
   // every measure must be finite at the initial state (a point 1e300 m away made a distance, and
   // every response of it, Inf or NaN in a run reported complete)
   std::vector<double> vals;
