@@ -311,11 +311,12 @@ SensitivityResult compute_sensitivities_unchecked(Case& cs, const Vec& p, const 
                                                                : BackSolveOptions::Mode::kStepFactor;
     bs.max_refinement = o.refinement_steps;
     DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts, bs);
-    GeneralizedAlphaOptions go = cs.simulation;
-    go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
-    go.threads = o.threads;
-    ProgressObserver prog(o.progress, go.t_end);
-    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog});
+    StepObserverOptions served;
+    served.factor = o.matrix == SensitivityOptions::Matrix::kConverged ? StepObserverOptions::Factor::kConverged
+                                                                        : StepObserverOptions::Factor::kLastIteration;
+    served.threads = o.threads;
+    ProgressObserver prog(o.progress, cs.simulation.t_end);
+    res.primal = GeneralizedAlpha(cs.simulation, served).run(*cs.model, params, cs.initial, {&obs, &prog});
     add_primal(res.counts, res.primal);
     res.ok = res.primal.ok;
     res.message = res.primal.message;
