@@ -106,7 +106,7 @@ bool IdasGGL::Impl::adjoint_final_values(int k, double tb, const Vec& y, const V
 namespace idas {
 namespace {
 
-using sundials::map;
+using sun::map;
 
 int res_b_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector yB, N_Vector ypB, N_Vector rB, void* ud) {
   auto* b = static_cast<BackwardProblem*>(ud);
@@ -122,7 +122,7 @@ int jac_b_tramp(realtype t, realtype cjB, N_Vector y, N_Vector yp, N_Vector, N_V
   const SpMat A = b->im->jacobian(t, -cjB, N_VGetArrayPointer(y), N_VGetArrayPointer(yp));
   SpMat At = -SpMat(A.transpose());
   At.makeCompressed();
-  sundials::copy_to(At, J);
+  sun::copy_to(At, J);
   return 0;
 }
 
@@ -151,11 +151,11 @@ std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<
       BackwardProblem& B = *bp;
       sd.back.push_back(std::move(bp));
       B.im = &im, B.k = k, B.tb = tb;
-      B.yB = sundials::new_vector(N, sd.ctx);
-      B.ypB = sundials::new_vector(N, sd.ctx);
-      B.idB = sundials::new_vector(N, sd.ctx);
-      B.atolB = sundials::new_vector(N, sd.ctx);
-      B.qB = sundials::new_vector(nv, sd.ctx);
+      B.yB = sun::new_vector(N, sd.ctx);
+      B.ypB = sun::new_vector(N, sd.ctx);
+      B.idB = sun::new_vector(N, sd.ctx);
+      B.atolB = sun::new_vector(N, sd.ctx);
+      B.qB = sun::new_vector(nv, sd.ctx);
       map(B.yB.get()) = xi;
       map(B.ypB.get()) = xid;
       map(B.idB.get()) << Vec::Ones(2 * nq), Vec::Zero(2 * nc);
@@ -179,8 +179,7 @@ std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<
           IDASetMaxOrdB(mem, B.which, max_order) || IDASetMaxNumStepsB(mem, B.which, im.o.max_steps))
         return "IDAS backward problem set-up failed";
       B.A.reset(SUNSparseMatrix(N, N, nnz, CSC_MAT, sd.ctx.get()));
-      if (B.A) B.LS.reset(SUNLinSol_KLU(B.yB.get(), B.A.get(), sd.ctx.get()));
-      if (B.LS) SUNLinSol_KLUGetCommon(B.LS.get())->tol = im.o.klu_pivot_tolerance;
+      B.LS = sun::new_sparse_lu_solver(sd.ctx, im.o.klu_pivot_tolerance, false);
       if (!B.LS || IDASetLinearSolverB(mem, B.which, B.LS.get(), B.A.get()) ||
           IDASetJacFnB(mem, B.which, jac_b_tramp) || IDAQuadInitB(mem, B.which, quad_b_tramp, B.qB.get()))
         return "IDAS backward linear solver or quadrature set-up failed";

@@ -114,7 +114,7 @@ int IdasGGL::Impl::quad_sens_rhs(double t, const double* y, const double* yp, st
 
 namespace {
 
-using sundials::map;
+using sun::map;
 
 int res_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* ud) {
   return static_cast<IdasGGL::Impl*>(ud)->residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
@@ -124,8 +124,7 @@ int res_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* ud) {
 int jac_tramp(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
               N_Vector) {
   auto* im = static_cast<IdasGGL::Impl*>(ud);
-  sundials::copy_to(im->jacobian(t, cj, N_VGetArrayPointer(y), N_VGetArrayPointer(yp)), J);
-  if (im->fresh_klu) SUNLinSol_KLUReInit(im->fresh_klu, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
+  sun::copy_to(im->jacobian(t, cj, N_VGetArrayPointer(y), N_VGetArrayPointer(yp)), J);
   return 0;
 }
 
@@ -234,11 +233,11 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
   // ---- SUNDIALS objects
   idas::IdasHandles sd;
   if (!sd.ctx.create()) return fail("SUNContext_Create failed");
-  sd.y = sundials::new_vector(N, sd.ctx);
-  sd.yp = sundials::new_vector(N, sd.ctx);
-  sd.id = sundials::new_vector(N, sd.ctx);
-  sd.atol = sundials::new_vector(N, sd.ctx);
-  sd.dky = sundials::new_vector(N, sd.ctx);
+  sd.y = sun::new_vector(N, sd.ctx);
+  sd.yp = sun::new_vector(N, sd.ctx);
+  sd.id = sun::new_vector(N, sd.ctx);
+  sd.atol = sun::new_vector(N, sd.ctx);
+  sd.dky = sun::new_vector(N, sd.ctx);
   Eigen::Map<Vec> y = map(sd.y.get()), yp = map(sd.yp.get()), id = map(sd.id.get()), atol = map(sd.atol.get());
   y << s0.q, s0.v, s0.lambda, Vec::Zero(nc);
   yp << s0.v, s0.a, Vec::Zero(nc), Vec::Zero(nc);
@@ -286,22 +285,20 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
   if (!set_initial_step(s0.q, s0.a)) return fail("IDAS set-up failed (initial step)");
   const SpMat J0 = im.jacobian(s0.t, 1.0, y.data(), yp.data());
   sd.A.reset(SUNSparseMatrix(N, N, J0.nonZeros(), CSC_MAT, sd.ctx.get()));
-  if (sd.A) sd.LS.reset(SUNLinSol_KLU(sd.y.get(), sd.A.get(), sd.ctx.get()));
-  if (sd.LS) SUNLinSol_KLUGetCommon(sd.LS.get())->tol = im.o.klu_pivot_tolerance;
   // Adjoint runs: IDASolveB recomputes the forward steps between checkpoints and stores them in
   // a fixed array of adjoint_checkpoint_steps + 1 points (IDAAdataStore, IDAS 6.4), with no bound
-  // check: the recomputation must repeat the original steps bit for bit. SUNLinSol_KLU refactors
-  // with the pivot sequence of its last full factorization, which depends on the history, so a
+  // check: the recomputation must repeat the original steps bit for bit. A refactorization uses
+  // the pivot sequence of the last full factorization, which depends on the history, so a
   // recomputed interval could take more steps and crash (the full robot arm at rtol 1e-8 did).
-  // A fresh analysis and factorization at every Jacobian makes each solve history-free.
-  im.fresh_klu = adjoint ? sd.LS.get() : nullptr;
+  // A factorization with fresh pivoting at every Jacobian makes each solve history-free.
+  sd.LS = sun::new_sparse_lu_solver(sd.ctx, im.o.klu_pivot_tolerance, /*fresh_each_setup=*/adjoint);
   if (!sd.A || !sd.LS || IDASetLinearSolver(mem, sd.LS.get(), sd.A.get()) || IDASetJacFn(mem, jac_tramp))
     return fail("IDAS linear solver set-up failed");
   std::vector<double> pbar;
   if (sens) {
-    sd.yS = sundials::VectorArray(nv, sd.y.get());
-    sd.ypS = sundials::VectorArray(nv, sd.y.get());
-    sd.dkyS = sundials::VectorArray(nv, sd.y.get());
+    sd.yS = sun::VectorArray(nv, sd.y.get());
+    sd.ypS = sun::VectorArray(nv, sd.y.get());
+    sd.dkyS = sun::VectorArray(nv, sd.y.get());
     for (int i = 0; i < nv; ++i) {
       Eigen::Map<Vec> ys = map(sd.yS[i]), yps = map(sd.ypS[i]);
       ys.setZero();
@@ -319,11 +316,11 @@ IdasStats IdasGGL::run_mode(State s0, const Design& design, const Vec& pv, const
   }
   const int nQ = im.quad ? im.quad->size() : 0;
   if (nQ > 0) {
-    sd.yQ = sundials::new_vector(nQ, sd.ctx);
+    sd.yQ = sun::new_vector(nQ, sd.ctx);
     N_VConst(0.0, sd.yQ.get());
     if (IDAQuadInit(mem, quad_tramp, sd.yQ.get())) return fail("IDAS quadrature set-up failed");
     if (sens) {
-      sd.yQS = sundials::VectorArray(nv, sd.yQ.get());
+      sd.yQS = sun::VectorArray(nv, sd.yQ.get());
       for (int i = 0; i < nv; ++i) N_VConst(0.0, sd.yQS[i]);
       if (IDAQuadSensInit(mem, im.o.analytic_sensitivity_residual ? quad_sens_tramp : nullptr, sd.yQS.get()))
         return fail("IDAS quadrature sensitivity set-up failed");

@@ -6,7 +6,8 @@
 // with unknowns (q, v, λ, μ); λ and μ are flagged algebraic (IDASetId) and excluded from the
 // error test (IDASetSuppressAlg). s₁ = s₄ = κ h_out and s₃ = κ, κ the model's stiffness scale,
 // make all rows force-like. The Jacobian F_y + c_j F_ẏ is assembled from the model's blocks into
-// a CSC SUNMatrix (pattern fixed) and solved with SUNLinSol_KLU. Files: ggl_system.* (the DAE,
+// a CSC SUNMatrix (pattern fixed) and factorized by SparseLU behind a SUNLinearSolver with
+// SUNLinSol_KLU's policy (sundials_handles.hpp). Files: ggl_system.* (the DAE,
 // no SUNDIALS), sundials_handles.hpp (RAII), idas_ggl.cpp (forward driver), idas_adjoint.cpp
 // (adjoint driver), idas_ggl_impl.hpp (what the two drivers share). Consistent y, ẏ come from the
 // projection and the acceleration-level system; consistent sensitivity initial values from the

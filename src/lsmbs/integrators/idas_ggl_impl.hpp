@@ -32,7 +32,6 @@ struct IdasGGL::Impl {
   IdasQuadrature* quad = nullptr;
   Mat qs_dq, qs_dv, qs_da, qs_dl, qs_dg;
   double t_start = 0;
-  SUNLinearSolver fresh_klu = nullptr;  // re-analyzed at every Jacobian (adjoint runs, see run_mode)
 
   Impl(const Model& model, const ModelParams& params, IdasOptions opt)
       : m(model), nominal(params), o(opt), nq(model.nq()), nc(model.nc()), N(2 * model.nq() + 2 * model.nc()),
@@ -72,21 +71,21 @@ struct BackwardProblem {
   IdasGGL::Impl* im = nullptr;
   int k = 0, which = -1;
   double tb = 0;
-  sundials::Vector yB, ypB, idB, atolB, qB;
-  sundials::Matrix A;
-  sundials::LinearSolver LS;
+  sun::Vector yB, ypB, idB, atolB, qB;
+  sun::Matrix A;
+  sun::LinearSolver LS;
 };
 
 // The SUNDIALS objects of one run, freed in the reverse order of the members: the IDAS memory
 // first (with the backward problems' memories), the context last.
 struct IdasHandles {
-  sundials::Context ctx;
-  sundials::Vector y, yp, id, atol, dky, yQ;
-  sundials::VectorArray yS, ypS, dkyS, yQS;
-  sundials::Matrix A;
-  sundials::LinearSolver LS;
+  sun::Context ctx;
+  sun::Vector y, yp, id, atol, dky, yQ;
+  sun::VectorArray yS, ypS, dkyS, yQS;
+  sun::Matrix A;
+  sun::LinearSolver LS;
   std::vector<std::unique_ptr<BackwardProblem>> back;  // backward problems (adjoint runs)
-  sundials::IdaMemory mem;
+  sun::IdaMemory mem;
 };
 
 // Adjoint runs: Q and the forward state at a breakpoint (or the final time).

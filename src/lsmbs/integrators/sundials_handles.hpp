@@ -2,11 +2,12 @@
 // RAII owners of the SUNDIALS objects of an IDAS run (used by integrators/idas_*.cpp only): the
 // context, serial N_Vectors and arrays of them, the sparse SUNMatrix, the linear solver, and the
 // IDAS memory. Each frees its object with the matching SUNDIALS call; an object that failed to be
-// created is null and frees nothing.
+// created is null and frees nothing. The linear solver is the project's SparseLU behind the
+// SUNLinearSolver interface (new_sparse_lu_solver).
 #include <idas/idas.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
+#include <sundials/sundials_linearsolver.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <memory>
@@ -15,7 +16,7 @@
 
 #include "lsmbs/core/types.hpp"
 
-namespace lsmbs::sundials {
+namespace lsmbs::sun {
 
 /// SUNContext: create() before any other object, destroyed after all of them.
 class Context {
@@ -75,6 +76,17 @@ struct LinearSolverDeleter {
 };
 using LinearSolver = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, LinearSolverDeleter>;
 
+/// A direct, matrix-based SUNLinearSolver that factorizes the CSC SUNMatrix of IDAS with
+/// SparseLU, following SUNLinSol_KLU's policy step by step so that the runs are the same to the
+/// bit: COLAMD ordering and the given pivot tolerance; one symbolic analysis (the pattern is
+/// fixed; a changed pattern is analyzed again); a factorization with fresh pivoting after
+/// initialize (IDAS calls it at the start and after each IDAReInit), otherwise a refactorization
+/// with the last pivot sequence, redone with fresh pivoting when KLU's cheap rcond is below
+/// ε^(2/3) and its condest confirms a condition number above ε^(−2/3). A failed refactorization
+/// or estimate is recoverable (IDAS retries with a smaller step), a failed fresh factorization is
+/// not. `fresh_each_setup`: every setup factorizes with fresh pivoting (history-free solves).
+LinearSolver new_sparse_lu_solver(const Context& ctx, double pivot_tolerance, bool fresh_each_setup);
+
 /// Copies a compressed CSC matrix into a SUNDIALS sparse matrix (CSC_MAT), growing its storage
 /// when needed.
 inline void copy_to(const SpMat& A, SUNMatrix J) {
@@ -103,4 +115,4 @@ class IdaMemory {
   void* mem_ = nullptr;
 };
 
-}  // namespace lsmbs::sundials
+}  // namespace lsmbs::sun

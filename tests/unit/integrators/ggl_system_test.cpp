@@ -3,7 +3,7 @@
 // residual against central differences of its own residual F(t, y, ẏ; p), at a random point off
 // the constraint manifold (μ ≠ 0, Φ ≠ 0) with scales s₁, s₃, s₄ of different sizes, on the rigid
 // pendulum and on a small flexible model (a plate pinned to ground, a driven rigid crank with an
-// offset centre of mass pinned to it, a spring–damper, gravity).
+// offset centre of mass pinned to the plate off its reference point, a spring–damper, gravity).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -39,8 +39,8 @@ json flexible_case() {
      "law": {"type": "ramp", "from": 0.3, "speed": 20, "ramp_time": 0.1}}
   ],
   "forces": [
-    {"name": "spring", "type": "spring_damper", "a": {"body": "crank", "at": [0.05, 0]}, "b": {"body": "plate", "node": 1},
-     "stiffness": 300, "damping": 4, "free_length": 0.05}
+    {"name": "spring", "type": "spring_damper", "a": {"body": "crank", "at": [0.05, 0]},
+     "b": {"body": "plate", "node": 1}, "stiffness": 300, "damping": 4, "free_length": 0.05}
   ],
   "simulation": {"t_end": 0.1, "h": 1e-3, "check_constraints": false}
 })"_json;
