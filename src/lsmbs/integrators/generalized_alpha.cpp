@@ -633,7 +633,7 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
   if (!run.start(std::move(s0))) return run.finish();
   while (!run.done()) {
     const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, run.step_size());  // (11)
-    run.predict(c);                        // q̈_{n+1} = 0, λ_{n+1} = 0; a, q, q̇ by (8)–(10)
+    run.predict(c);                         // q̈_{n+1} = 0, λ_{n+1} = 0; a, q, q̇ by (8)–(10)
     const NewtonStatus st = run.newton(c);  // S_t [Δq; Δλ] = −[r; kΦ] (19) until converged
     if (st != NewtonStatus::kConverged) {
       if (run.halve_or_fail(st)) continue;  // redo the step (fresh factorization or h/2)
