@@ -157,11 +157,11 @@ struct Recorder : StepObserver {
 };
 
 IntegratorSummary run_with(Case& cs, int threads, Recorder& r, StepLatch* latch = nullptr) {
-  GeneralizedAlphaOptions o = cs.simulation;
-  o.threads = threads;
+  StepObserverOptions served;
+  served.threads = threads;
   std::vector<StepObserver*> obs = {&r};
   if (latch) obs.push_back(latch);
-  return GeneralizedAlpha(o).run(*cs.model, cs.model->params(), cs.initial, obs);
+  return GeneralizedAlpha(cs.simulation, served).run(*cs.model, cs.model->params(), cs.initial, obs);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <exception>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <sstream>
 #include <thread>
 #include <utility>
@@ -39,8 +40,8 @@ std::string GeneralizedAlphaOptions::validate() const {
   if (max_iter < 1) return "max_iter: expected at least 1";
   if (min_iter < 0 || min_iter > max_iter) return "min_iter: expected 0 <= min_iter <= max_iter";
   if (max_halvings < 0 || max_halvings > 30) return "max_halvings: expected 0..30";
-  if (threads < 1 || threads > 2) return "threads: expected 1 or 2";
-  if (k < 0 || zeta < 0) return "k, zeta: expected non-negative values (0 = automatic)";
+  if (!(k >= 0)) return "k: expected a non-negative value (0 = automatic)";
+  if (!(zeta >= 0)) return "zeta: expected a non-negative value (0 = automatic)";
   return {};
 }
 
@@ -49,9 +50,7 @@ nlohmann::json GeneralizedAlphaOptions::to_json() const {
           {"force_floor", force_floor}, {"max_iter", max_iter}, {"min_iter", min_iter},
           {"consistent_start", consistent_start}, {"project_initial", project_initial},
           {"newton", newton_name(newton)}, {"max_halvings", max_halvings},
-          {"ordering", SparseLU::ordering_name(ordering)},
-          {"sensitivity_matrix", refactor_converged ? "converged" : "last_iteration"}, {"threads", threads},
-          {"k", k}, {"zeta", zeta}};
+          {"ordering", SparseLU::ordering_name(ordering)}, {"k", k}, {"zeta", zeta}};
 }
 
 const char* GeneralizedAlphaOptions::newton_name(Newton n) {
@@ -97,14 +96,6 @@ int first_non_finite_column(const CscPattern& pat, const std::vector<double>& va
       if (!std::isfinite(vals[at])) return col;
   return -1;
 }
-
-struct Workspace {
-  State cur, prev;
-  Vec a_cur, a_prev;
-  Vec R, r_abs, dx;
-  Vec row_floor;  // per-row round-off floor [N] from the last assembled iteration matrix
-  std::vector<double> vals;
-};
 
 // Round-off floor of each residual row (positions only). A position known to ε·x_j (x_j =
 // max(|q_j|, L)) perturbs row i by about Σ_j |S_ij| ε x_j through the iteration matrix (β′M, K_t,
@@ -221,311 +212,440 @@ class ObserverWorker {
   std::thread thread_;  // last: started once everything above exists
 };
 
+
+// How the corrector of one step ended.
+enum class NewtonStatus {
+  kConverged,
+  kStopped,                ///< an observer asked to stop (stop_requested): the step is abandoned
+  kNonFiniteResidual,
+  kNonFiniteCorrection,
+  kNonFiniteMatrix,        ///< NaN or Inf in S_t: an overflow, not a singular motion
+  kSingular,               ///< S_t singular: the motion of an unknown is not determined
+  kNotConverged,           ///< max_iter iterations, residual test not met
+  kNotConvergedPositions,  ///< max_iter iterations, residual test met, position corrections not
+};
+
+// One run of GeneralizedAlpha: its named steps (the boxes of Algorithm 1), the workspace (sized
+// in start(), so that the steps allocate nothing), the factorizations, the step-size control and
+// the summary.
+class AlphaRun {
+ public:
+  AlphaRun(const GeneralizedAlphaOptions& opt, const StepObserverOptions& served, const Model& model,
+           const ModelParams& p, std::vector<StepObserver*> observers, State* final_state)
+      : opt_(opt), served_(served), model_(model), p_(p), observers_(std::move(observers)),
+        final_state_(final_state), nq_(model.nq()), nc_(model.nc()), L_(model.length_scale()) {}
+
+  bool start(State s0);
+  bool done() const { return grid_ >= n_steps_; }
+  double step_size() const { return h_; }
+  void predict(const AlphaCoefficients& c);
+  NewtonStatus newton(const AlphaCoefficients& c);
+  bool halve_or_fail(NewtonStatus st);
+  bool factor_for_observers(const AlphaCoefficients& c);
+  void accept(const AlphaCoefficients& c);
+  bool notify_observers(const AlphaCoefficients& c);
+  void next_step();
+  IntegratorSummary finish();
+
+ private:
+  bool fail(std::string message);
+  bool stop_requested() const;
+  void evaluate_residual();
+  double residual_measure() const;
+  bool factor_iteration_matrix(const Coefficients& coeffs, NewtonStatus& failure);
+  void solve_correction();
+  void apply_correction(const AlphaCoefficients& c);
+
+  const GeneralizedAlphaOptions& opt_;
+  const StepObserverOptions& served_;
+  const Model& model_;
+  const ModelParams& p_;
+  std::vector<StepObserver*> observers_, sync_observers_;
+  State* final_state_;
+  const int nq_, nc_;
+  const double L_;           // model length scale
+  double tol_phi_ = 0;       // tol_phi · L
+  double k_ = 1, zeta_ = 0;  // scaling and penalty of eq. (7)
+  const std::chrono::steady_clock::time_point t_start_ = std::chrono::steady_clock::now();
+  IntegratorSummary sum_;
+  bool started_ = false;
+
+  // Step-size control: steps of opt.h on the output grid, each grid interval halved up to
+  // max_halvings times.
+  double t0_ = 0, h_ = 0, t_grid_next_ = 0;
+  long n_steps_ = 0, grid_ = 0;
+  int depth_ = 0;         // halvings active for the current grid interval
+  bool on_grid_ = false;  // the accepted step ends on the grid
+
+  // The step from prev (t_n) to cur (t_{n+1}).
+  State cur_, prev_;
+  Vec a_cur_, a_prev_;  // acceleration-like a_{n+1}, a_n of eq. (8)
+  Vec R_, r_abs_, dx_;
+  Vec row_floor_;  // per-row round-off floor [N] from the last assembled iteration matrix
+  std::vector<double> vals_;
+
+  // The last Newton iteration (StepInfo, failure reports).
+  int iterations_ = 0;
+  double rn_ = 0, pn_ = 0;  // ‖r‖∞ [N], ‖Φ‖∞ [length]
+  int bad_column_ = -1;     // kNonFiniteMatrix: the first column with NaN or Inf
+
+  // Factorizations. Concurrent observers: a second numeric factorization of the same symbolic
+  // analysis, so that step n+1 is factorized into one while the worker back-solves with step n's
+  // in the other; step_lu_ is the one the current step writes. A factorization in it that a step
+  // may start from (modified_across_steps) has its h; a failed step that started from an old one
+  // is retried once with a fresh one.
+  SparseLU lu_, lu_alt_;
+  SparseLU* step_lu_ = &lu_;
+  bool have_factor_ = false, started_with_old_factor_ = false, retried_fresh_ = false;
+  double factor_h_ = 0;
+  std::optional<ObserverWorker> worker_;  // last: joined before the factorizations it reads go
+};
+
+bool AlphaRun::fail(std::string message) {
+  sum_.ok = false;
+  sum_.message = std::move(message);
+  return false;
+}
+
+bool AlphaRun::stop_requested() const {
+  return std::any_of(observers_.begin(), observers_.end(), [](const StepObserver* o) { return o->stop_requested(); });
+}
+
+// Consistent start: q0, q̇0 projected on the constraints, k and ζ of eq. (7), then q̈0 and λ0 from
+// the acceleration-level system (consistent_start = false: q̈0 = a0 = 0, λ0 = 0 as Algorithm 1),
+// a_0 = q̈_0, and the observers' on_start.
+bool AlphaRun::start(State s0) {
+  if (auto msg = opt_.validate(); !msg.empty()) return fail("invalid integrator option " + msg);
+  if (auto msg = served_.validate(); !msg.empty()) return fail("invalid observer option " + msg);
+  s0.v.conservativeResize(nq_);
+  if (s0.a.size() != nq_) s0.a.setZero(nq_);
+  if (s0.lambda.size() != nc_) s0.lambda.setZero(nc_);
+
+  lu_.set_ordering(opt_.ordering);
+  lu_.analyze(model_.pattern());
+  const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
+  if (opt_.project_initial)
+    if (auto st = project_initial_state(model_, p_, s0, lu_, 1e-13 * L_); !st.ok())
+      return fail("t = " + std::to_string(s0.t) + ": " + st.message);
+  const double stiffness_scale = GeneralizedAlpha::automatic_scaling(model_, p_, s0, c0);
+  sum_.k = k_ = opt_.k > 0 ? opt_.k : stiffness_scale;
+  sum_.zeta = zeta_ = opt_.zeta > 0 ? opt_.zeta : k_;
+  if (opt_.consistent_start) {
+    if (auto st = consistent_accelerations(model_, p_, k_, s0, lu_); !st.ok())
+      return fail("t = " + std::to_string(s0.t) + ": " + st.message);
+  } else {
+    s0.a.setZero(nq_);
+    s0.lambda.setZero(nc_);
+  }
+
+  cur_ = s0;
+  prev_ = s0;
+  a_cur_ = s0.a;  // a_0 = q̈_0
+  a_prev_ = a_cur_;
+  R_.resize(model_.n());
+  r_abs_.resize(nq_);
+  dx_.resize(model_.n());
+  row_floor_.setZero(nq_);
+  for (auto* o : observers_) o->on_start(s0, a_cur_, c0, k_, zeta_, opt_.consistent_start ? &lu_ : nullptr);
+  lu_.reset_pivoting();  // the first Newton iteration factorizes with fresh pivoting
+
+  std::vector<StepObserver*> concurrent;
+  for (auto* o : observers_) (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
+  if (!concurrent.empty()) {
+    lu_alt_.share_analysis(lu_);
+    worker_.emplace(std::move(concurrent));
+  }
+
+  tol_phi_ = opt_.tol_phi * L_;
+  t0_ = s0.t;
+  n_steps_ = std::lround(std::ceil((opt_.t_end - s0.t) / opt_.h - 1e-9));
+  h_ = opt_.h;
+  t_grid_next_ = s0.t + opt_.h;
+  started_ = true;
+  sum_.seconds.setup = seconds_since(t_start_);
+  return true;
+}
+
+// Predictor (Algorithm 1): q̈_{n+1} = 0, λ_{n+1} = 0; a_{n+1} from (8), q_{n+1} and q̇_{n+1} from
+// (9)–(10).
+void AlphaRun::predict(const AlphaCoefficients& c) {
+  State& x = cur_;
+  x.t = prev_.t + h_;
+  a_cur_ = (c.alpha_f * prev_.a - c.alpha_m * a_prev_) / (1 - c.alpha_m);
+  x.q = prev_.q + h_ * prev_.v + h_ * h_ * ((0.5 - c.beta) * a_prev_ + c.beta * a_cur_);
+  x.v = prev_.v + h_ * ((1 - c.gamma) * a_prev_ + c.gamma * a_cur_);
+  x.a.setZero();
+  x.lambda.setZero();
+}
+
+void AlphaRun::evaluate_residual() {
+  timed(sum_.seconds.residual, [&] { model_.residual(cur_, p_, k_, zeta_, R_, &r_abs_); });
+  ++sum_.residual_evaluations;
+}
+
+// The largest |r_i| / (tol_r s_i + floor_i + force_floor) over the position rows, s_i the sum of
+// the absolute force terms of row i (inertia, internal, applied, constraint forces).
+double AlphaRun::residual_measure() const {
+  double m = 0;
+  for (int i = 0; i < nq_; ++i) {
+    const double r = std::abs(R_[i]);
+    if (r == 0) continue;
+    const double tol = opt_.tol_r * r_abs_[i] + row_floor_[i] + opt_.force_floor;
+    m = std::max(m, tol > 0 ? r / tol : INFINITY);
+  }
+  return m;
+}
+
+// S_t (20) at the current iterate, its round-off floors, and its numeric factorization.
+bool AlphaRun::factor_iteration_matrix(const Coefficients& coeffs, NewtonStatus& failure) {
+  timed(sum_.seconds.matrix, [&] {
+    model_.iteration_matrix(cur_, p_, coeffs, k_, zeta_, vals_);
+    row_round_off_floor(model_.pattern(), vals_, cur_.q, L_, nq_, row_floor_);
+  });
+  sum_.force_floor = std::max(sum_.force_floor, nq_ ? row_floor_.maxCoeff() : 0.0);
+  ++sum_.matrix_evaluations;
+  have_factor_ = false;
+  if (const int bad = first_non_finite_column(model_.pattern(), vals_); bad >= 0) {
+    bad_column_ = bad;  // an overflow, not a singular motion: say so instead of blaming the factorization
+    failure = NewtonStatus::kNonFiniteMatrix;
+    return false;
+  }
+  const Status st = timed(sum_.seconds.factor, [&] { return step_lu_->factor(vals_); });
+  ++sum_.factorizations;
+  if (!st.ok()) {
+    failure = NewtonStatus::kSingular;
+    return false;
+  }
+  have_factor_ = true;
+  factor_h_ = h_;
+  return true;
+}
+
+// [Δq; Δλ] = −S_t⁻¹ [r; kΦ] (19) with the factorization at hand.
+void AlphaRun::solve_correction() {
+  dx_ = -R_;
+  timed(sum_.seconds.solve, [&] { step_lu_->solve(dx_); });
+}
+
+// Increments (12)–(15) with Δq̇ = γ′Δq, Δq̈ = β′Δq (17)–(18).
+void AlphaRun::apply_correction(const AlphaCoefficients& c) {
+  cur_.q += dx_.head(nq_);
+  cur_.v += c.gamma_p * dx_.head(nq_);
+  cur_.a += c.beta_p * dx_.head(nq_);
+  cur_.lambda += dx_.tail(nc_);
+}
+
+// Corrector: Newton on [r; kΦ] = 0 of eq. (7) from the predicted state. Converged when the
+// residual measure and ‖Φ‖∞ / tol_phi are both ≤ 1 after at least min_iter iterations and the
+// next correction is within tol_q·L (docs/methods.md, "Convergence test"). S_t is refactorized
+// at every iteration (full Newton) or while convergence is slow (modified Newton).
+NewtonStatus AlphaRun::newton(const AlphaCoefficients& c) {
+  using Newton = GeneralizedAlphaOptions::Newton;
+  if (opt_.newton != Newton::kModifiedAcrossSteps || factor_h_ != h_) have_factor_ = false;
+  started_with_old_factor_ = have_factor_;
+  const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
+  double prev_err = INFINITY, prev_inc = INFINITY;
+  rn_ = pn_ = 0;
+  for (iterations_ = 0;; ++iterations_) {
+    if (stop_requested()) return NewtonStatus::kStopped;
+    evaluate_residual();
+    if (!R_.allFinite()) return NewtonStatus::kNonFiniteResidual;
+    rn_ = nq_ ? R_.head(nq_).lpNorm<Eigen::Infinity>() : 0.0;
+    pn_ = nc_ ? R_.tail(nc_).lpNorm<Eigen::Infinity>() / k_ : 0.0;
+    const double err = std::max(residual_measure(), pn_ / tol_phi_);
+    const bool residual_ok = err <= 1 && iterations_ >= opt_.min_iter;
+    bool slow_chord = false;
+    if (residual_ok && have_factor_) {
+      // Increment test: the residual alone can be below tol_r·s_i while the positions are not
+      // converged (the rows carry the constraint forces, large next to the forces that move a
+      // light body along its free directions). The next Newton correction, back-solved with
+      // the factorization at hand (no new one), must be within tol_q·L on every position; it is
+      // then applied. A small correction that no longer halves is round-off: accepted too.
+      solve_correction();
+      const double inc = nq_ ? dx_.head(nq_).lpNorm<Eigen::Infinity>() / (opt_.tol_q * L_) : 0.0;
+      if (!std::isfinite(inc)) return NewtonStatus::kNonFiniteCorrection;
+      if (inc <= 1 || (inc > 0.5 * prev_inc && inc <= kRoundOffIncrement)) {
+        apply_correction(c);
+        return NewtonStatus::kConverged;
+      }
+      ++sum_.increment_rejections;
+      slow_chord = inc > 0.25 * prev_inc;
+      prev_inc = inc;
+      if (iterations_ >= opt_.max_iter) return NewtonStatus::kNotConvergedPositions;
+      if (!slow_chord) {  // a chord step with the factorization at hand
+        apply_correction(c);
+        ++sum_.newton_iterations;
+        prev_err = err;
+        continue;
+      }
+    } else if (iterations_ >= opt_.max_iter) {
+      return NewtonStatus::kNotConverged;
+    }
+    const bool refactor = opt_.newton == Newton::kFull || !have_factor_ || err > 0.25 * prev_err || slow_chord;
+    NewtonStatus failure{};
+    if (refactor && !factor_iteration_matrix(coeffs, failure)) return failure;
+    prev_err = err;
+    solve_correction();
+    apply_correction(c);
+    ++sum_.newton_iterations;
+  }
+}
+
+// A step whose corrector failed is redone: once with a fresh factorization when it started from
+// an old one (modified_across_steps), then with h/2, up to max_halvings times per grid interval.
+// A singular S_t is not retried. Otherwise the run ends at the last converged step, and the
+// summary says where and why (with the worst residual or constraint entry). True: redo the step.
+bool AlphaRun::halve_or_fail(NewtonStatus st) {
+  if (st == NewtonStatus::kStopped) {
+    sum_.aborted = true;
+    return fail("stopped during the step from t = " + std::to_string(prev_.t) + " s");
+  }
+  const bool singular = st == NewtonStatus::kSingular;
+  if (started_with_old_factor_ && !retried_fresh_ && !singular) {
+    retried_fresh_ = true;  // an old factorization may be what failed: redo the step once
+    have_factor_ = false;
+    ++sum_.fresh_factor_retries;
+    cur_ = prev_;
+    return true;
+  }
+  retried_fresh_ = false;
+  if (depth_ < opt_.max_halvings && !singular) {
+    ++depth_;
+    ++sum_.halvings;
+    sum_.halving_times.push_back(prev_.t);
+    h_ *= 0.5;
+    cur_ = prev_;
+    return true;
+  }
+  std::string why;
+  switch (st) {
+    case NewtonStatus::kNonFiniteResidual: why = "non-finite residual (NaN or Inf)"; break;
+    case NewtonStatus::kNonFiniteCorrection: why = "non-finite Newton correction"; break;
+    case NewtonStatus::kNonFiniteMatrix:
+      why = "non-finite iteration matrix (NaN or Inf) in the equations of " + model_.describe_unknown(bad_column_);
+      break;
+    case NewtonStatus::kSingular:
+      why = "singular iteration matrix: the motion of " + model_.describe_unknown(step_lu_->singular_column()) +
+            " is not determined";
+      break;
+    case NewtonStatus::kNotConvergedPositions:
+      why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations (position corrections)";
+      break;
+    default: why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations"; break;
+  }
+  int worst = 0;
+  double wv = -1;
+  for (int i = 0; i < model_.n(); ++i) {
+    const double v = std::abs(R_[i]) / (i < nq_ ? 1.0 : k_);
+    if (std::isfinite(v) ? v > wv : true) {
+      wv = v;
+      worst = i;
+    }
+  }
+  std::ostringstream os;
+  os << "t = " << cur_.t << " (step " << sum_.steps + 1 << ", h = " << h_ << "): " << why << "; ‖r‖∞ = " << rn_
+     << " N, ‖Φ‖∞ = " << pn_ << "; worst: " << model_.describe_unknown(worst);
+  return fail(os.str());
+}
+
+// StepObserverOptions::Factor::kConverged: S_t re-assembled and factorized at the converged state
+// for the observers (the exact Jacobian of the step) instead of the last iteration's.
+bool AlphaRun::factor_for_observers(const AlphaCoefficients& c) {
+  if (served_.factor != StepObserverOptions::Factor::kConverged || observers_.empty()) return true;
+  timed(sum_.seconds.matrix,
+        [&] { model_.iteration_matrix(cur_, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, k_, zeta_, vals_); });
+  ++sum_.matrix_evaluations;
+  ++sum_.factorizations;
+  if (!timed(sum_.seconds.factor, [&] { return step_lu_->factor(vals_); }).ok())
+    return fail("t = " + std::to_string(cur_.t) + ": singular iteration matrix at the converged state");
+  return true;
+}
+
+// Accepts the converged step: a_{n+1} += (1−α_f)/(1−α_m) q̈_{n+1} (Algorithm 1, last line, cf.
+// (8)); a step that ends on the output grid is put exactly on it (no round-off drift).
+void AlphaRun::accept(const AlphaCoefficients& c) {
+  retried_fresh_ = false;
+  a_cur_ += (1 - c.alpha_f) / (1 - c.alpha_m) * cur_.a;
+  ++sum_.steps;
+  on_grid_ = std::abs(cur_.t - t_grid_next_) <= 1e-9 * opt_.h;
+  if (on_grid_) cur_.t = t_grid_next_;
+}
+
+// Hands the step to the observers: the synchronous ones here, the concurrent ones to the worker
+// (which then owns this step's factorization; the next step writes the other one). False when an
+// observer asked to stop: the run then ends, reported as aborted.
+bool AlphaRun::notify_observers(const AlphaCoefficients& c) {
+  StepInfo info;
+  info.step = static_cast<int>(sum_.steps);
+  info.grid_point = on_grid_;
+  info.prev = &prev_;
+  info.prev_acc_like = &a_prev_;
+  info.state = &cur_;
+  info.acc_like = &a_cur_;
+  info.coef = c;
+  info.k = k_;
+  info.zeta = zeta_;
+  info.factor = step_lu_;
+  info.newton_iterations = iterations_;
+  bool stop = false;
+  for (auto* o : sync_observers_) stop |= !o->on_step(info);
+  if (worker_) {
+    stop |= !worker_->wait_idle();  // step n's observers are done with the other factorization
+    worker_->post(info);
+    step_lu_ = step_lu_ == &lu_ ? &lu_alt_ : &lu_;
+    have_factor_ = false;  // the worker solves with the last one; the other is two steps old
+  }
+  if (stop) sum_.aborted = true;
+  return !stop;
+}
+
+// n ← n + 1. The next step is the next grid step (h), or the rest of a halved grid interval.
+void AlphaRun::next_step() {
+  std::swap(prev_, cur_);
+  std::swap(a_prev_, a_cur_);
+  if (on_grid_) {
+    ++grid_;
+    t_grid_next_ = t0_ + (grid_ + 1) * opt_.h;
+    h_ = opt_.h;
+    depth_ = 0;
+  } else {
+    h_ = std::min(h_, t_grid_next_ - prev_.t);
+  }
+}
+
+// The summary, the last converged state, and the concurrent observers of the last step completed.
+IntegratorSummary AlphaRun::finish() {
+  if (started_) {
+    sum_.t_reached = prev_.t;
+    if (final_state_) *final_state_ = prev_;
+  }
+  if (worker_ && !worker_->wait_idle()) sum_.aborted = true;
+  sum_.wall_seconds = seconds_since(t_start_);
+  return std::move(sum_);
+}
+
 }  // namespace
 
+// Algorithm 1 (with the departures listed in the header).
 IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p, State s0,
                                         std::vector<StepObserver*> observers, State* final_state) {
-  const auto t_start = std::chrono::steady_clock::now();
-  IntegratorSummary sum;
-  std::optional<ObserverWorker> worker;
-  auto finish = [&](IntegratorSummary& s) -> IntegratorSummary& {
-    if (worker && !worker->wait_idle()) s.aborted = true;  // the last step's observers complete
-    s.wall_seconds = seconds_since(t_start);
-    return s;
-  };
-  if (auto msg = opt_.validate(); !msg.empty()) {
-    sum.ok = false;
-    sum.message = "invalid integrator option " + msg;
-    return finish(sum);
-  }
-  const int nq = model.nq(), nc = model.nc(), n = model.n();
-  s0.v.conservativeResize(nq);
-  if (s0.a.size() != nq) s0.a.setZero(nq);
-  if (s0.lambda.size() != nc) s0.lambda.setZero(nc);
-
-  SparseLU lu;
-  lu.set_ordering(opt_.ordering);
-  lu.analyze(model.pattern());
-  const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
-
-  if (opt_.project_initial) {
-    if (auto st = project_initial_state(model, p, s0, lu, 1e-13 * model.length_scale()); !st.ok()) {
-      sum.ok = false;
-      sum.message = "t = " + std::to_string(s0.t) + ": " + st.message;
-      return finish(sum);
-    }
-  }
-  const double stiffness_scale = automatic_scaling(model, p, s0, c0);
-  sum.k = opt_.k > 0 ? opt_.k : stiffness_scale;
-  sum.zeta = opt_.zeta > 0 ? opt_.zeta : sum.k;
-  const double k = sum.k, zeta = sum.zeta;
-
-  if (opt_.consistent_start) {
-    if (auto st = consistent_accelerations(model, p, k, s0, lu); !st.ok()) {
-      sum.ok = false;
-      sum.message = "t = " + std::to_string(s0.t) + ": " + st.message;
-      return finish(sum);
-    }
-  } else {
-    s0.a.setZero(nq);
-    s0.lambda.setZero(nc);
-  }
-
-  Workspace w;
-  w.cur = s0;
-  w.prev = s0;
-  w.a_cur = s0.a;  // a_0 = q̈_0
-  w.a_prev = w.a_cur;
-  w.R.resize(n);
-  w.r_abs.resize(nq);
-  w.dx.resize(n);
-  for (auto* o : observers) o->on_start(s0, w.a_cur, c0, k, zeta, opt_.consistent_start ? &lu : nullptr);
-  lu.reset_pivoting();  // the first Newton iteration factorizes with fresh pivoting
-
-  // Concurrent observers: a second numeric factorization of the same symbolic analysis, so that
-  // step n+1 is factorized into one while the worker back-solves with step n's in the other.
-  std::vector<StepObserver*> sync_observers, concurrent_observers;
-  for (auto* o : observers) (opt_.threads > 1 && o->concurrent() ? concurrent_observers : sync_observers).push_back(o);
-  SparseLU lu_alt;
-  SparseLU* step_lu = &lu;  // the factorization the current step writes
-  if (!concurrent_observers.empty()) {
-    lu_alt.share_analysis(lu);
-    worker.emplace(std::move(concurrent_observers));
-  }
-
-  const double tol_phi = opt_.tol_phi * model.length_scale();
-  const double L = model.length_scale();
-  w.row_floor.setZero(nq);
-  // Convergence measure: the largest |r_i| / (tol_r s_i + floor_i + force_floor) with s_i the sum of
-  // the absolute force terms of row i (inertia, internal, applied, constraint forces), and
-  // ‖Φ‖∞ / tol_phi. Both ≤ 1: converged (docs/methods.md, "Convergence test").
-  // Newton correction (17)–(18): Δq̇ = γ′Δq, Δq̈ = β′Δq
-  auto apply_correction = [&](State& x, const AlphaCoefficients& c) {
-    x.q += w.dx.head(nq);
-    x.v += c.gamma_p * w.dx.head(nq);
-    x.a += c.beta_p * w.dx.head(nq);
-    x.lambda += w.dx.tail(nc);
-  };
-  auto residual_measure = [&]() {
-    double m = 0;
-    for (int i = 0; i < nq; ++i) {
-      const double r = std::abs(w.R[i]);
-      if (r == 0) continue;
-      const double tol = opt_.tol_r * w.r_abs[i] + w.row_floor[i] + opt_.force_floor;
-      m = std::max(m, tol > 0 ? r / tol : INFINITY);
-    }
-    return m;
-  };
-  const long n_steps = std::lround(std::ceil((opt_.t_end - s0.t) / opt_.h - 1e-9));
-  long grid = 0;
-  double h_try = opt_.h;
-  int depth = 0;  // halvings active for the current grid interval
-  double t_grid_next = s0.t + opt_.h;
-  using Newton = GeneralizedAlphaOptions::Newton;
-  // Factorization in step_lu that a step may start from (modified_across_steps): its h, and
-  // whether a failed step should be retried with a fresh one.
-  bool have_factor = false, retried_fresh = false;
-  double factor_h = 0;
-
-  sum.seconds.setup = seconds_since(t_start);
-  while (grid < n_steps) {
-    const double t_n = w.prev.t;
-    const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, h_try);
-    State& x = w.cur;
-    // ---- predictor (Algorithm 1): q̈_{n+1} = 0, λ_{n+1} = 0, a_{n+1} from (8)
-    x.t = t_n + h_try;
-    w.a_cur = (c.alpha_f * w.prev.a - c.alpha_m * w.a_prev) / (1 - c.alpha_m);
-    x.q = w.prev.q + h_try * w.prev.v + h_try * h_try * ((0.5 - c.beta) * w.a_prev + c.beta * w.a_cur);
-    x.v = w.prev.v + h_try * ((1 - c.gamma) * w.a_prev + c.gamma * w.a_cur);
-    x.a.setZero();
-    x.lambda.setZero();
-    // ---- Newton
-    if (opt_.newton != Newton::kModifiedAcrossSteps || factor_h != h_try) have_factor = false;
-    const bool started_with_old_factor = have_factor;
-    bool converged = false;
-    std::string why;
-    int it = 0;
-    double rn = 0, pn = 0, prev_err = INFINITY, prev_inc = INFINITY;
-    const Coefficients coeffs{c.beta_p, c.gamma_p, 1.0};
-    for (;; ++it) {
-      if (std::any_of(observers.begin(), observers.end(), [](const StepObserver* o) { return o->stop_requested(); })) {
-        sum.ok = false;  // abandon the step in progress: the run ends at the last converged step
-        sum.aborted = true;
-        sum.message = "stopped during the step from t = " + std::to_string(t_n) + " s";
-        sum.t_reached = w.prev.t;
-        if (final_state) *final_state = w.prev;
-        return finish(sum);
-      }
-      timed(sum.seconds.residual, [&] { model.residual(x, p, k, zeta, w.R, &w.r_abs); });
-      ++sum.residual_evaluations;
-      if (!w.R.allFinite()) {
-        why = "non-finite residual (NaN or Inf)";
-        break;
-      }
-      rn = nq ? w.R.head(nq).lpNorm<Eigen::Infinity>() : 0.0;
-      pn = nc ? w.R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
-      // convergence measure: residual rows and constraints relative to their tolerances
-      const double err = std::max(residual_measure(), pn / tol_phi);
-      const bool residual_ok = err <= 1 && it >= opt_.min_iter;
-      bool slow_chord = false;
-      if (residual_ok && have_factor) {
-        // Increment test: the residual alone can be below tol_r·s_i while the positions are not
-        // converged (the rows carry the constraint forces, large next to the forces that move a
-        // light body along its free directions). The next Newton correction, back-solved with
-        // the factorization at hand (no new one), must be within tol_q·L on every position; it is
-        // then applied. A small correction that no longer halves is round-off: accepted too.
-        w.dx = -w.R;
-        timed(sum.seconds.solve, [&] { step_lu->solve(w.dx); });
-        const double inc = nq ? w.dx.head(nq).lpNorm<Eigen::Infinity>() / (opt_.tol_q * L) : 0.0;
-        if (!std::isfinite(inc)) {
-          why = "non-finite Newton correction";
-          break;
-        }
-        if (inc <= 1 || (inc > 0.5 * prev_inc && inc <= kRoundOffIncrement)) {
-          apply_correction(x, c);
-          converged = true;
-          break;
-        }
-        ++sum.increment_rejections;
-        slow_chord = inc > 0.25 * prev_inc;
-        prev_inc = inc;
-        if (it >= opt_.max_iter) {
-          why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations (position corrections)";
-          break;
-        }
-        if (!slow_chord) {  // a chord step with the factorization at hand
-          apply_correction(x, c);
-          ++sum.newton_iterations;
-          prev_err = err;
-          continue;
-        }
-      } else if (it >= opt_.max_iter) {
-        why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations";
-        break;
-      }
-      const bool refactor = opt_.newton == Newton::kFull || !have_factor || err > 0.25 * prev_err || slow_chord;
-      if (refactor) {
-        timed(sum.seconds.matrix, [&] {
-          model.iteration_matrix(x, p, coeffs, k, zeta, w.vals);
-          row_round_off_floor(model.pattern(), w.vals, x.q, L, nq, w.row_floor);
-        });
-        sum.force_floor = std::max(sum.force_floor, nq ? w.row_floor.maxCoeff() : 0.0);
-        ++sum.matrix_evaluations;
-        if (const int bad = first_non_finite_column(model.pattern(), w.vals); bad >= 0) {
-          // an overflow, not a singular motion: say so instead of blaming the factorization
-          why = "non-finite iteration matrix (NaN or Inf) in the equations of " + model.describe_unknown(bad);
-          have_factor = false;
-          break;
-        }
-        const Status st = timed(sum.seconds.factor, [&] { return step_lu->factor(w.vals); });
-        ++sum.factorizations;
-        if (!st.ok()) {
-          why = "singular iteration matrix: the motion of " + model.describe_unknown(step_lu->singular_column()) +
-                " is not determined";
-          have_factor = false;
-          break;
-        }
-        have_factor = true;
-        factor_h = h_try;
-      }
-      prev_err = err;
-      w.dx = -w.R;
-      timed(sum.seconds.solve, [&] { step_lu->solve(w.dx); });
-      apply_correction(x, c);
-      ++sum.newton_iterations;
-    }
-    if (!converged) {
-      if (started_with_old_factor && !retried_fresh && why.rfind("singular", 0) != 0) {
-        retried_fresh = true;  // an old factorization may be what failed: redo the step once
-        have_factor = false;
-        ++sum.fresh_factor_retries;
-        x = w.prev;
-        continue;
-      }
-      retried_fresh = false;
-      if (depth < opt_.max_halvings && why.rfind("singular", 0) != 0) {
-        ++depth;
-        ++sum.halvings;
-        sum.halving_times.push_back(t_n);
-        h_try *= 0.5;
-        x = w.prev;
-        continue;
-      }
-      // worst residual / constraint entry
-      int worst = 0;
-      double wv = -1;
-      for (int i = 0; i < n; ++i) {
-        const double v = std::abs(w.R[i]) / (i < nq ? 1.0 : k);
-        if (std::isfinite(v) ? v > wv : true) {
-          wv = v;
-          worst = i;
-        }
-      }
-      std::ostringstream os;
-      os << "t = " << x.t << " (step " << sum.steps + 1 << ", h = " << h_try << "): " << why
-         << "; ‖r‖∞ = " << rn << " N, ‖Φ‖∞ = " << pn << "; worst: " << model.describe_unknown(worst);
-      sum.ok = false;
-      sum.message = os.str();
-      sum.t_reached = w.prev.t;
-      if (final_state) *final_state = w.prev;
-      return finish(sum);
-    }
-    if (opt_.refactor_converged && !observers.empty()) {
-      timed(sum.seconds.matrix, [&] { model.iteration_matrix(x, p, coeffs, k, zeta, w.vals); });
-      ++sum.matrix_evaluations;
-      ++sum.factorizations;
-      if (!timed(sum.seconds.factor, [&] { return step_lu->factor(w.vals); }).ok()) {
-        sum.ok = false;
-        sum.message = "t = " + std::to_string(x.t) + ": singular iteration matrix at the converged state";
-        sum.t_reached = w.prev.t;
-        if (final_state) *final_state = w.prev;
-        return finish(sum);
-      }
-    }
-    retried_fresh = false;
-    // ---- accept: a_{n+1} += (1−α_f)/(1−α_m) q̈_{n+1}   (Algorithm 1, last line)
-    w.a_cur += (1 - c.alpha_f) / (1 - c.alpha_m) * x.a;
-    ++sum.steps;
-    const bool on_grid = std::abs(x.t - t_grid_next) <= 1e-9 * opt_.h;
-    if (on_grid) x.t = t_grid_next;  // remove round-off drift
-    StepInfo info;
-    info.step = static_cast<int>(sum.steps);
-    info.grid_point = on_grid;
-    info.prev = &w.prev;
-    info.prev_acc_like = &w.a_prev;
-    info.state = &x;
-    info.acc_like = &w.a_cur;
-    info.coef = c;
-    info.k = k;
-    info.zeta = zeta;
-    info.factor = step_lu;
-    info.newton_iterations = it;
-    bool stop = false;
-    for (auto* o : sync_observers) stop |= !o->on_step(info);
-    if (worker) {
-      stop |= !worker->wait_idle();  // step n's observers are done with the other factorization
-      worker->post(info);
-      step_lu = step_lu == &lu ? &lu_alt : &lu;
-      have_factor = false;  // the worker solves with the last one; the other is two steps old
-    }
-    std::swap(w.prev, w.cur);
-    std::swap(w.a_prev, w.a_cur);
-    if (stop) {
-      sum.aborted = true;
+  AlphaRun run(opt_, served_, model, p, std::move(observers), final_state);
+  if (!run.start(std::move(s0))) return run.finish();
+  while (!run.done()) {
+    const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, run.step_size());  // (11)
+    run.predict(c);                         // q̈_{n+1} = 0, λ_{n+1} = 0; a, q, q̇ by (8)–(10)
+    const NewtonStatus st = run.newton(c);  // S_t [Δq; Δλ] = −[r; kΦ] (19) until converged
+    if (st != NewtonStatus::kConverged) {
+      if (run.halve_or_fail(st)) continue;  // redo the step (fresh factorization or h/2)
       break;
     }
-    if (on_grid) {
-      ++grid;
-      t_grid_next = s0.t + (grid + 1) * opt_.h;
-      h_try = opt_.h;
-      depth = 0;
-    } else {
-      h_try = std::min(h_try, t_grid_next - w.prev.t);
-    }
+    if (!run.factor_for_observers(c)) break;
+    run.accept(c);  // a_{n+1} += (1−α_f)/(1−α_m) q̈_{n+1}
+    const bool go_on = run.notify_observers(c);
+    run.next_step();
+    if (!go_on) break;
   }
-  sum.t_reached = w.prev.t;
-  if (final_state) *final_state = w.prev;
-  return finish(sum);
+  return run.finish();
 }
 
 }  // namespace lsmbs

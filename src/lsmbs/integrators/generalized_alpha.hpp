@@ -18,9 +18,9 @@
 // Sparse KLU: one symbolic analysis per run, numeric (re)factorization per Newton iteration
 // (full Newton), or reuse while convergence is fast: within a step (modified Newton) or across
 // steps of equal h (modified_across_steps; primal runs of large models), both opt-in.
-// With threads = 2, concurrent observers (the direct sensitivities of Algorithm 2) run on a
-// worker thread one step behind, each step's factorization alternating between two numeric
-// factorizations of the one symbolic analysis.
+// With StepObserverOptions::threads = 2, concurrent observers (the direct sensitivities of
+// Algorithm 2) run on a worker thread one step behind, each step's factorization alternating
+// between two numeric factorizations of the one symbolic analysis.
 #include <string>
 #include <vector>
 
@@ -30,6 +30,8 @@
 
 namespace lsmbs {
 
+/// The options of the method: what a case file's "simulation" section sets. How the observers
+/// of a run are served is the caller's choice (StepObserverOptions, step_observer.hpp).
 struct GeneralizedAlphaOptions {
   double h = 1e-3;        ///< time step
   double t_end = 1.0;     ///< final time
@@ -54,20 +56,11 @@ struct GeneralizedAlphaOptions {
   /// "amd" or "nested_dissection").
   SparseLU::Ordering ordering = SparseLU::Ordering::kAmd;
   int max_halvings = 6;   ///< step-halving retries of one step (h / 2^k)
-  /// Factorization handed to step observers (Algorithm 2): the one of the step's last Newton
-  /// iteration (the paper's choice, no extra cost), or S_t re-assembled and factorized at the
-  /// converged state (exact Jacobian; one more factorization per step). Set by the
-  /// sensitivity methods (SensitivityOptions::matrix), not by case files.
-  bool refactor_converged = false;
-  /// 1: observers run on the calling thread. 2: observers that declare themselves concurrent
-  /// (StepObserver::concurrent) run on a second thread while the next step is computed. The
-  /// results are the same to round-off (the two factorizations pivot independently).
-  /// Set by the sensitivity methods (SensitivityOptions::threads), not by case files.
-  int threads = 1;
   double k = 0;           ///< constraint scaling of eq. (7); 0: automatic
   double zeta = 0;        ///< augmented-Lagrangian penalty of eq. (7); 0: automatic (= k)
 
-  /// Empty string when valid, otherwise a message naming the offending option.
+  /// Empty string when valid, otherwise "field: what is expected" (the case loader maps the
+  /// field to its JSON path).
   std::string validate() const;
   nlohmann::json to_json() const;
 };
@@ -79,8 +72,8 @@ struct IntegratorSummary {
   double t_reached = 0;
   long steps = 0, newton_iterations = 0, factorizations = 0, residual_evaluations = 0;
   long matrix_evaluations = 0, halvings = 0;
-  long fresh_factor_retries = 0;
-  long increment_rejections = 0;   ///< residual test passed, Newton correction still above tol_q  ///< steps redone with a fresh factorization (modified_across_steps)
+  long fresh_factor_retries = 0;   ///< steps redone with a fresh factorization (modified_across_steps)
+  long increment_rejections = 0;   ///< residual test passed, Newton correction still above tol_q
   /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
   /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations, back-solves.
   struct Seconds {
@@ -95,9 +88,13 @@ struct IntegratorSummary {
 
 class GeneralizedAlpha {
  public:
-  explicit GeneralizedAlpha(GeneralizedAlphaOptions o) : opt_(std::move(o)) {}
+  /// `served`: how the observers of run() are served (the factorization they see, threads).
+  explicit GeneralizedAlpha(GeneralizedAlphaOptions o, StepObserverOptions served = {})
+      : opt_(std::move(o)), served_(served) {}
   /// Integrates from s0 (t, q, q̇; a and λ are computed when consistent_start) to t_end.
-  /// `final_state` receives the last converged state.
+  /// `final_state` receives the last converged state. The run is Algorithm 1's loop over named
+  /// steps (the .cpp): start (consistent start), then per step predict (8)–(10), newton (19)–(20),
+  /// on failure halve_or_fail, then accept (a_{n+1}), notify_observers and next_step.
   IntegratorSummary run(const Model& model, const ModelParams& p, State s0,
                         std::vector<StepObserver*> observers, State* final_state = nullptr);
   /// Automatic k = ζ: mean of the non-zero |diagonal| entries of β'M + γ'C_t + K_t over the
@@ -107,6 +104,7 @@ class GeneralizedAlpha {
 
  private:
   GeneralizedAlphaOptions opt_;
+  StepObserverOptions served_;
 };
 
 }  // namespace lsmbs

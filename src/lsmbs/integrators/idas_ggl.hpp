@@ -1,11 +1,15 @@
 #pragma once
 // IdasGGL — independent reference integrator: SUNDIALS IDAS (variable-order BDF with error
-// control) on the Gear–Gupta–Leimkuhler stabilized index-2 form of the same Model:
+// control) on the Gear–Gupta–Leimkuhler stabilized index-2 form of the same Model (GglSystem,
+// ggl_system.hpp):
 //   F1 = s₁ (q̇ − v + Φ_qᵀ μ) = 0,  F2 = M v̇ − g + Φ_qᵀ λ = 0,  F3 = s₃ Φ = 0,  F4 = s₄ (Φ_q v + Φ_t) = 0
 // with unknowns (q, v, λ, μ); λ and μ are flagged algebraic (IDASetId) and excluded from the
 // error test (IDASetSuppressAlg). s₁ = s₄ = κ h_out and s₃ = κ, κ the model's stiffness scale,
 // make all rows force-like. The Jacobian F_y + c_j F_ẏ is assembled from the model's blocks into
-// a CSC SUNMatrix (pattern fixed) and solved with SUNLinSol_KLU. Consistent y, ẏ come from the
+// a CSC SUNMatrix (pattern fixed) and factorized by SparseLU behind a SUNLinearSolver with
+// SUNLinSol_KLU's policy (sundials_handles.hpp). Files: ggl_system.* (the DAE,
+// no SUNDIALS), sundials_handles.hpp (RAII), idas_ggl.cpp (forward driver), idas_adjoint.cpp
+// (adjoint driver), idas_ggl_impl.hpp (what the two drivers share). Consistent y, ẏ come from the
 // projection and the acceleration-level system; consistent sensitivity initial values from the
 // start system with the model's exact ∂r/∂p. Forward sensitivities (IDASensInit) use either
 // IDAS's own difference quotients on the design variables (default, independent of our
@@ -92,6 +96,8 @@ struct IdasOptions {
   /// the forward solution in the backward pass); memory ~ this × 2 state vectors.
   long adjoint_checkpoint_steps = 200;
   static IdasOptions reference();               ///< rtol = atol = 1e-9
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
   nlohmann::json to_json() const;
 };
 
@@ -140,7 +146,7 @@ class IdasGGL {
   /// the number of design variables; only the quadrature ξᵀ F_p (element-local) does.
   IdasStats run_adjoint(State s0, const Parameterization& design, const Vec& p, const Output& out);
 
-  struct Impl;  ///< defined in the .cpp (reached by the C callbacks only)
+  struct Impl;  ///< idas_ggl_impl.hpp (reached by the C callbacks only)
 
  private:
   enum class Mode { kPrimal, kForward, kAdjoint };

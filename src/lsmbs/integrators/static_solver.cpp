@@ -1,13 +1,27 @@
 #include "lsmbs/integrators/static_solver.hpp"
 
 #include <cmath>
+#include <string>
 
 #include "lsmbs/linalg/sparse_lu.hpp"
 
 namespace lsmbs {
 
+std::string StaticOptions::validate() const {
+  if (!std::isfinite(t)) return "t: expected a finite time";
+  if (!(tol_r > 0)) return "tol_r: expected a positive tolerance";
+  if (!(tol_phi > 0)) return "tol_phi: expected a positive tolerance";
+  if (max_iter < 0) return "max_iter: expected a non-negative count";
+  if (!(k >= 0)) return "k: expected a non-negative value (0 = automatic)";
+  return {};
+}
+
 StaticResult solve_static(const Model& model, const ModelParams& p, State& s, const StaticOptions& o) {
   StaticResult res;
+  if (auto msg = o.validate(); !msg.empty()) {
+    res.message = "invalid static option " + msg;
+    return res;
+  }
   const int nq = model.nq(), nc = model.nc();
   s.t = o.t;
   s.v.setZero(nq);

@@ -15,6 +15,9 @@ struct StaticOptions {
   double tol_phi = 1e-12;
   int max_iter = 50;
   double k = 0;          ///< 0: automatic (mean |diag K_t|)
+
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 struct StaticResult {
@@ -24,6 +27,7 @@ struct StaticResult {
   std::string message;
 };
 
+/// Invalid options: not ok, with a message naming the option.
 StaticResult solve_static(const Model& model, const ModelParams& p, State& s, const StaticOptions& o = {});
 
 }  // namespace lsmbs

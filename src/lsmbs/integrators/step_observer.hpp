@@ -42,7 +42,7 @@ class StepObserver {
   /// Return false to stop the integration (the run is then reported as aborted).
   virtual bool on_step(const StepInfo& info) = 0;
   /// True when on_step may run on a worker thread, one step behind the integrator, on a copy of
-  /// the step (GeneralizedAlphaOptions::threads = 2). The observer must then touch nothing the
+  /// the step (StepObserverOptions::threads = 2). The observer must then touch nothing the
   /// integrator or the other observers use; its `info.factor` is a second numeric factorization
   /// that the integrator leaves alone until on_step returns. A stop request then takes effect
   /// one step late.
@@ -51,6 +51,24 @@ class StepObserver {
   /// last converged step, reported as aborted). Lets an interrupt end a step that would otherwise
   /// spend minutes in Newton iterations and halvings.
   virtual bool stop_requested() const { return false; }
+};
+
+/// How an integrator serves its step observers. Chosen by the caller that installs the observers
+/// (the sensitivity methods: SensitivityOptions::matrix and ::threads), not by case files.
+struct StepObserverOptions {
+  /// StepInfo::factor: the factorization of the step's last Newton iteration (the paper's
+  /// Algorithm 2, no extra cost), or S_t (20) re-assembled and factorized at the converged state
+  /// (the exact Jacobian of the step; one more factorization per step, and none when the run has
+  /// no observer).
+  enum class Factor { kLastIteration, kConverged };
+  Factor factor = Factor::kLastIteration;
+  /// 1: observers run on the integrator's thread. 2: observers that declare themselves concurrent
+  /// (StepObserver::concurrent) run on a second thread while the next step is computed. The
+  /// results are the same to round-off (the two factorizations pivot independently).
+  int threads = 1;
+
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const { return threads < 1 || threads > 2 ? "threads: expected 1 or 2" : ""; }
 };
 
 /// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …"

@@ -101,7 +101,7 @@ void SparseLU::analyze(const CscPattern& pattern) {
     m.common.ordering = 3;
     m.common.user_order = nested_dissection_order;
   } else {
-    m.common.ordering = 0;
+    m.common.ordering = ordering_ == Ordering::kColamd ? 1 : 0;
     m.common.user_order = nullptr;
   }
   klu_symbolic* sym = klu_analyze(m.n, m.Ap(), m.Ai(), &m.common);
@@ -149,6 +149,30 @@ Status SparseLU::factor(std::span<const double> values) {
   }
   klu_rcond(m.symbolic.get(), m.numeric, &m.common);
   return Status::Ok();
+}
+
+void SparseLU::set_pivot_tolerance(double tol) { impl_->common.tol = tol; }
+
+bool SparseLU::refactor(std::span<const double> values) {
+  auto& m = *impl_;
+  if (!m.symbolic || !m.numeric) return false;
+  auto* vals = const_cast<double*>(values.data());  // KLU's API is not const-correct
+  if (!klu_refactor(m.Ap(), m.Ai(), vals, m.symbolic.get(), m.numeric, &m.common)) return false;
+  ++counters_.refactorizations;
+  return true;
+}
+
+std::optional<double> SparseLU::estimate_rcond() {
+  auto& m = *impl_;
+  if (!m.numeric || !klu_rcond(m.symbolic.get(), m.numeric, &m.common)) return std::nullopt;
+  return m.common.rcond;
+}
+
+std::optional<double> SparseLU::estimate_condition(std::span<const double> values) {
+  auto& m = *impl_;
+  auto* vals = const_cast<double*>(values.data());
+  if (!m.numeric || !klu_condest(m.Ap(), vals, m.symbolic.get(), m.numeric, &m.common)) return std::nullopt;
+  return m.common.condest;
 }
 
 void SparseLU::solve(std::span<double> b, int nrhs) const {

@@ -4,6 +4,7 @@
 // the pivot sequence when it stays well conditioned, a full klu_factor otherwise), and
 // solve() on a block of right-hand sides in one call (sensitivity back-solves).
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -21,12 +22,18 @@ class SparseLU {
   SparseLU& operator=(const SparseLU&) = delete;
 
   /// Fill-reducing ordering of the symbolic analysis (of each block of KLU's block triangular
-  /// form): KLU's default AMD, or nested dissection (METIS through CHOLMOD on the pattern of
-  /// A + Aᵀ, KLU's user-ordering hook) — asymptotically less fill on large 2-D meshes.
-  enum class Ordering { kAmd, kNestedDissection };
+  /// form): KLU's default AMD, nested dissection (METIS through CHOLMOD on the pattern of
+  /// A + Aᵀ, KLU's user-ordering hook) — asymptotically less fill on large 2-D meshes — or
+  /// COLAMD (SUNDIALS' SUNLinSol_KLU default, kept for the IDAS reference runs).
+  enum class Ordering { kAmd, kNestedDissection, kColamd };
   void set_ordering(Ordering o) { ordering_ = o; }
   Ordering ordering() const { return ordering_; }
-  static const char* ordering_name(Ordering o) { return o == Ordering::kAmd ? "amd" : "nested_dissection"; }
+  static const char* ordering_name(Ordering o) {
+    return o == Ordering::kAmd ? "amd" : o == Ordering::kNestedDissection ? "nested_dissection" : "colamd";
+  }
+  /// KLU's partial-pivoting threshold (Common.tol, default 0.001): a diagonal entry is kept as
+  /// pivot down to this fraction of its column's largest entry; 1 is plain partial pivoting.
+  void set_pivot_tolerance(double tol);
 
   /// Symbolic analysis (ordering); the pattern must outlive the factorization.
   void analyze(const CscPattern& pattern);
@@ -39,6 +46,14 @@ class SparseLU {
   /// Numeric factorization of values laid out on the analyzed pattern.
   /// On a singular matrix returns kSingular with the offending column in singular_column().
   Status factor(std::span<const double> values);
+  /// The steps of factor() on their own, for a caller with its own refactorization policy:
+  /// refactor() reuses the last pivot sequence (false when KLU fails or there is none);
+  /// estimate_rcond() is KLU's cheap reciprocal condition estimate of the factorization, and
+  /// estimate_condition() its 1-norm condition estimate (klu_condest) with the values factorized
+  /// (nullopt when KLU fails).
+  bool refactor(std::span<const double> values);
+  std::optional<double> estimate_rcond();
+  std::optional<double> estimate_condition(std::span<const double> values);
   /// Solves A X = B in place; B is column-major n × nrhs.
   void solve(std::span<double> b, int nrhs = 1) const;
   void solve(Vec& b) const { solve(std::span<double>(b.data(), b.size()), 1); }

@@ -318,12 +318,13 @@ SensitivityResult compute_sensitivities_unchecked(Study& cs, const Vec& p, const
                                                                : BackSolveOptions::Mode::kStepFactor;
     bs.max_refinement = o.refinement_steps;
     DirectSensitivityObserver obs(*cs.model, params, nv, *load, tracker, res.counts, bs);
-    GeneralizedAlphaOptions go = cs.simulation;
-    go.refactor_converged = o.matrix == SensitivityOptions::Matrix::kConverged;
-    go.threads = o.threads;
-    ProgressObserver prog(o.progress, go.t_end);
+    StepObserverOptions served;
+    served.factor = o.matrix == SensitivityOptions::Matrix::kConverged ? StepObserverOptions::Factor::kConverged
+                                                                        : StepObserverOptions::Factor::kLastIteration;
+    served.threads = o.threads;
+    ProgressObserver prog(o.progress, cs.simulation.t_end);
     InterruptObserver stop;
-    res.primal = GeneralizedAlpha(go).run(*cs.model, params, cs.initial, {&obs, &prog, &stop});
+    res.primal = GeneralizedAlpha(cs.simulation, served).run(*cs.model, params, cs.initial, {&obs, &prog, &stop});
     add_primal(res.counts, res.primal);
     res.ok = res.primal.ok && !res.primal.aborted;  // aborted: stopped by an observer (an interrupt)
     res.message = res.primal.aborted && res.primal.message.empty()
