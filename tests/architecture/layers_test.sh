@@ -25,7 +25,7 @@ for m in $modules; do
     echo "#include \"lsmbs/$other/$header\"" > "$tmp/t.cpp"
     allowed=0
     for b in ${below[$m]}; do [ "$b" = "$other" ] && allowed=1; done
-    out=$("$cxx" -std=c++20 -fsyntax-only -I "$layers/$m" -I "$generated" "${extra[@]}" "$tmp/t.cpp" 2>&1)
+    out=$("$cxx" -std=c++20 -E -o /dev/null -I "$layers/$m" -I "$generated" "${extra[@]}" "$tmp/t.cpp" 2>&1)
     rc=$?
     checked=$((checked + 1))
     if [ $allowed = 1 ] && [ $rc != 0 ]; then
