@@ -37,13 +37,7 @@ ParamBinding Design::variable(const std::string& name, double scale, double offs
 void Design::add_geometry(const FlexibleBody& body, std::vector<Feature> features, MappingOptions o) {
   for (const auto& b : bodies)
     if (b.body == &body) throw SetupError("design.geometry", "body '" + body.name + "' has two geometries");
-  LevelSetNode root;
-  root.op = LevelSetNode::Op::kAnd;
-  for (size_t i = 0; i < features.size(); ++i) {
-    LevelSetNode leaf;
-    leaf.feature = static_cast<int>(i);
-    root.children.push_back(leaf);
-  }
+  LevelSetNode root = LevelSetNode::all_of(static_cast<int>(features.size()));
   BodyDesign bd;
   bd.body = &body;
   bd.map = std::make_unique<DesignMap>(body.mesh, LevelSet(std::move(features), std::move(root), size()), o);

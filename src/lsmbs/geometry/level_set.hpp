@@ -20,6 +20,17 @@ struct LevelSetNode {
   int feature = -1;
   double ks = 0;  ///< 0: exact min / max; > 0: KS smoothing parameter [1/m]
   std::vector<LevelSetNode> children;
+  /// The paper's default region: material where every one of n features is positive (eq. 4).
+  static LevelSetNode all_of(int n) {
+    LevelSetNode root;
+    root.op = Op::kAnd;
+    for (int i = 0; i < n; ++i) {
+      LevelSetNode leaf;
+      leaf.feature = i;
+      root.children.push_back(leaf);
+    }
+    return root;
+  }
 };
 
 class LevelSet {

@@ -668,12 +668,7 @@ struct Loader {
       if (g.has("region")) {
         root = region(g.child("region"), by_name);
       } else {  // the paper's default: material where every hole feature is positive
-        root.op = LevelSetNode::Op::kAnd;
-        for (size_t i = 0; i < feats.size(); ++i) {
-          LevelSetNode leaf;
-          leaf.feature = static_cast<int>(i);
-          root.children.push_back(leaf);
-        }
+        root = LevelSetNode::all_of(static_cast<int>(feats.size()));
       }
       MappingOptions mo;
       mo.mu_min = g.number("mu_min", mo.mu_min);
