@@ -41,7 +41,8 @@ void BM_QuadForceAndTangent(benchmark::State& st) {
   const auto& b = *f.cs.model->flexible_bodies()[0];
   QuadElement::Vec8 x, r;
   QuadElement::Mat8 K;
-  for (int i = 0; i < 4; ++i) x.segment<2>(2 * i) = f.s.q.segment<2>(b.node_dof(b.mesh.quads[0][i]));
+  for (int i = 0; i < 4; ++i)
+    x.segment<2>(2 * i) = f.s.q.segment<2>(b.node_dof(b.mesh.quads[0][i]));
   for (auto _ : st) {
     b.elements[0].internal_force(x, 72e9, 0.3, 0.0025, r, &K);
     benchmark::DoNotOptimize(K.data());
@@ -61,7 +62,8 @@ BENCHMARK(BM_ResidualAssembly)->Unit(benchmark::kMicrosecond);
 void BM_IterationMatrixAssembly(benchmark::State& st) {
   auto& f = Fixture::get();
   for (auto _ : st) {
-    f.cs.model->iteration_matrix(f.s, f.cs.model->params(), {f.c.beta_p, f.c.gamma_p, 1}, f.k, f.k, f.vals);
+    f.cs.model->iteration_matrix(f.s, f.cs.model->params(), {f.c.beta_p, f.c.gamma_p, 1}, f.k, f.k,
+                                 f.vals);
     benchmark::DoNotOptimize(f.vals.data());
   }
 }
@@ -69,7 +71,8 @@ BENCHMARK(BM_IterationMatrixAssembly)->Unit(benchmark::kMicrosecond);
 
 void BM_KluRefactorAndSolve(benchmark::State& st) {
   auto& f = Fixture::get();
-  f.cs.model->iteration_matrix(f.s, f.cs.model->params(), {f.c.beta_p, f.c.gamma_p, 1}, f.k, f.k, f.vals);
+  f.cs.model->iteration_matrix(f.s, f.cs.model->params(), {f.c.beta_p, f.c.gamma_p, 1}, f.k, f.k,
+                               f.vals);
   SparseLU lu;
   lu.analyze(f.cs.model->pattern());
   lu.factor(f.vals);

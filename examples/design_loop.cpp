@@ -37,10 +37,12 @@ int main() {
 
   // 4. The outcome.
   const Evaluation& first = r.history.front();
-  std::printf("%s after %ld evaluations: mass %.6f -> %.6f kg, max violation %.2e\n", r.nlopt_status.c_str(),
-              r.evaluations, first.objective, r.final.objective, r.final.max_violation);
+  std::printf("%s after %ld evaluations: mass %.6f -> %.6f kg, max violation %.2e\n",
+              r.nlopt_status.c_str(), r.evaluations, first.objective, r.final.objective,
+              r.final.max_violation);
   for (int i = 0; i < study.design->size(); ++i)
-    std::printf("  %-4s %.5f -> %.5f\n", study.design->variables[i].name.c_str(), first.p[i], r.p[i]);
+    std::printf("  %-4s %.5f -> %.5f\n", study.design->variables[i].name.c_str(), first.p[i],
+                r.p[i]);
   const bool ok = r.failure.empty() && r.final.ok && r.final.max_violation <= spec.tol_constraint &&
                   r.final.objective < first.objective;
   std::printf("%s\n", ok ? "feasible and lighter than the initial design" : "NO IMPROVEMENT");

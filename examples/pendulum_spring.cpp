@@ -33,7 +33,8 @@ int main() {
   b.set_gravity({0, -9.81});
   b.rigid_body("bar", {.mass = 2.0, .inertia = 2.0 * L * L / 12, .com = {L / 2, 0}});
   b.revolute("hinge", Point::at("bar"));
-  b.spring_damper("spring", Point::at("bar", {L, 0}), Point::ground({L, 0.5}), {.stiffness = 200, .damping = 1});
+  b.spring_damper("spring", Point::at("bar", {L, 0}), Point::ground({L, 0.5}),
+                  {.stiffness = 200, .damping = 1});
 
   // 2. The study: the model, its initial state and the generalized-α options (1 s, h = 1 ms).
   GeneralizedAlphaOptions ga;
@@ -70,14 +71,16 @@ int main() {
   // 6. The check: central differences of two more simulations per variable. Both differentiate
   //    the same discrete solution, so they agree to the Newton tolerance and the O(δ²) error.
   bool ok = true;
-  std::printf("%-12s %-4s %16s %16s %10s\n", "response", "p_i", "direct-analytic", "central diff.", "rel. diff");
+  std::printf("%-12s %-4s %16s %16s %10s\n", "response", "p_i", "direct-analytic", "central diff.",
+              "rel. diff");
   for (int i = 0; i < p.size(); ++i) {
     const double delta = 1e-5 * std::abs(p[i]);
     Vec pp = p, pm = p;
     pp[i] += delta;
     pm[i] -= delta;
     SensitivityCounts counts;
-    const auto plus = simulate_responses(study, pp, counts), minus = simulate_responses(study, pm, counts);
+    const auto plus = simulate_responses(study, pp, counts),
+               minus = simulate_responses(study, pm, counts);
     for (size_t r = 0; r < res.responses.size(); ++r) {
       const double g = res.responses[r].gradient(0, i);
       const double fd = (plus[r].values[0] - minus[r].values[0]) / (2 * delta);

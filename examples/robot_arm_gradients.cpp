@@ -28,8 +28,8 @@ int main(int argc, char** argv) {
   // 1. The model, the responses and the 15 design variables (robot_arm_model.hpp).
   Study study = paper_mesh ? example::robot_arm(120, 10) : example::robot_arm(60, 5);
   const Vec p = study.design->initial();
-  std::printf("robot arm: %d unknowns, %d constraint equations, %d design variables\n", study.model->nq(),
-              study.model->nc(), study.design->size());
+  std::printf("robot arm: %d unknowns, %d constraint equations, %d design variables\n",
+              study.model->nq(), study.model->nc(), study.design->size());
 
   // 2. Responses and gradients: one simulation with the direct sensitivities.
   SensitivityOptions so;
@@ -42,8 +42,9 @@ int main(int argc, char** argv) {
   for (const auto& r : res.responses) {
     std::printf("%-22s %.9e\n", r.name.c_str(), r.values[0]);
     for (int i = 0; i < study.design->size(); i += 3)  // the first hole's ∂/∂c_x, ∂/∂a, ∂/∂b, …
-      std::printf("    d/d%-4s %+.6e  d/d%-4s %+.6e  d/d%-4s %+.6e\n", study.design->variables[i].name.c_str(),
-                  r.gradient(0, i), study.design->variables[i + 1].name.c_str(), r.gradient(0, i + 1),
+      std::printf("    d/d%-4s %+.6e  d/d%-4s %+.6e  d/d%-4s %+.6e\n",
+                  study.design->variables[i].name.c_str(), r.gradient(0, i),
+                  study.design->variables[i + 1].name.c_str(), r.gradient(0, i + 1),
                   study.design->variables[i + 2].name.c_str(), r.gradient(0, i + 2));
   }
 
@@ -54,8 +55,9 @@ int main(int argc, char** argv) {
     if (r.name != "max_tip_deviation") smooth.push_back(r);
   const GradientCheckResult check = check_gradients(study, p, smooth);
   for (const auto& e : check.entries)
-    std::printf("check %-22s central difference %+.9e, gradient %+.9e, relative disagreement %.2e\n",
-                e.response.c_str(), e.finite_difference, e.method, e.relative_error);
+    std::printf(
+        "check %-22s central difference %+.9e, gradient %+.9e, relative disagreement %.2e\n",
+        e.response.c_str(), e.finite_difference, e.method, e.relative_error);
   const bool ok = check.ok && check.worst < 1e-4;
   std::printf("%s\n", ok ? "gradients agree with central differences" : "GRADIENTS DISAGREE");
   return ok ? 0 : 1;

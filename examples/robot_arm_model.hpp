@@ -30,8 +30,9 @@ inline Study robot_arm(int nx, int ny) {
   const Vec2 u2(std::cos(a2), std::sin(a2));
   b.rigid_body("arm1", {.angle = th0});
   b.rigid_body("rod_root", {.position = elbow, .angle = a2});
-  b.flexible_body("plate", Mesh2D::rectangle(0.2, -0.025, 0.6, 0.05, nx, ny),
-                  {.E = 72e9, .nu = 0.3, .rho = 2700, .thickness = 0.0025, .origin = elbow, .angle = a2});
+  b.flexible_body(
+      "plate", Mesh2D::rectangle(0.2, -0.025, 0.6, 0.05, nx, ny),
+      {.E = 72e9, .nu = 0.3, .rho = 2700, .thickness = 0.0025, .origin = elbow, .angle = a2});
   b.rigid_body("rod_tip", {.position = elbow + 0.8 * u2, .angle = a2});
 
   // 2. Joints: the base and elbow hinges, the two driven angles, and the plate's ends glued to the
@@ -76,11 +77,12 @@ inline Study robot_arm(int nx, int ny) {
     d->add_variable("cx" + i, 0.14 + 0.12 * k, 0.25, 0.75);
     d->add_variable("a" + i, 0.01, 1e-4, 0.04);
     d->add_variable("b" + i, 0.01, 1e-4, 0.04);
-    holes.emplace_back("LS" + i, Feature::Type::kSuperEllipse,
-                       std::vector<ParamBinding>{d->variable("cx" + i), Design::constant(0), d->variable("a" + i),
-                                                 d->variable("b" + i), Design::constant(5), Design::constant(5),
-                                                 Design::constant(0)},
-                       /*hole=*/true);
+    holes.emplace_back(
+        "LS" + i, Feature::Type::kSuperEllipse,
+        std::vector<ParamBinding>{d->variable("cx" + i), Design::constant(0), d->variable("a" + i),
+                                  d->variable("b" + i), Design::constant(5), Design::constant(5),
+                                  Design::constant(0)},
+        /*hole=*/true);
   }
   d->add_geometry(b.flexible("plate"), std::move(holes));
   s.set_design(std::move(d));

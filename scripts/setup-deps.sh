@@ -8,6 +8,7 @@ packages=(
   libsundials-dev libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   gnuplot-nox
+  clang-format
 )
 
 missing=()

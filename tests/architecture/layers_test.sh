@@ -12,9 +12,10 @@ declare -A below=(
   [core]="" [linalg]="core" [fem]="core linalg" [geometry]="core linalg fem" [mbs]="core linalg fem"
   [design]="core linalg fem geometry mbs" [responses]="core linalg fem mbs" [integrators]="core linalg fem mbs"
   [sensitivity]="core linalg fem geometry mbs design responses integrators"
-  [optimization]="core linalg fem geometry mbs design responses integrators sensitivity"
-  [io]="core linalg fem geometry mbs design responses integrators sensitivity optimization")
-modules="core linalg fem geometry mbs design responses integrators sensitivity optimization io"
+  [records]="core linalg fem geometry mbs design responses integrators sensitivity"
+  [optimization]="core linalg fem geometry mbs design responses integrators sensitivity records"
+  [io]="core linalg fem geometry mbs design responses integrators sensitivity records optimization")
+modules="core linalg fem geometry mbs design responses integrators sensitivity records optimization io"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0 checked=0

@@ -11,6 +11,8 @@
 //   * as an ordinary executable `fuzz_replay` (LSMBS_FUZZ_REPLAY) that ctest runs over every
 //     file of tests/fuzz/corpus/: the inputs found so far stay checked on every build, and the
 //     seeds (seed_*.json, shipped cases) must load.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -19,11 +21,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <string>
-
-#include <unistd.h>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/case.hpp"
@@ -49,7 +48,9 @@ bool too_large(const nlohmann::json& j) {
   }
   if (j.contains("design") && j["design"].is_object()) {
     for (const auto& g : j["design"].value("geometry", nlohmann::json::array()))
-      if (g.is_object() && g.contains("subgrid") && g["subgrid"].is_number() && g["subgrid"].get<double>() > 32) return true;
+      if (g.is_object() && g.contains("subgrid") && g["subgrid"].is_number() &&
+          g["subgrid"].get<double>() > 32)
+        return true;
   }
   return false;
 }
@@ -60,9 +61,12 @@ int nesting_depth(const std::string& text) {
   bool in_string = false, escaped = false;
   for (char c : text) {
     if (in_string) {
-      if (escaped) escaped = false;
-      else if (c == '\\') escaped = true;
-      else if (c == '"') in_string = false;
+      if (escaped)
+        escaped = false;
+      else if (c == '\\')
+        escaped = true;
+      else if (c == '"')
+        in_string = false;
     } else if (c == '"') {
       in_string = true;
     } else if (c == '[' || c == '{') {
@@ -79,7 +83,8 @@ const fs::path& work_dir() {
   static const fs::path dir = [] {
     fs::path d = fs::temp_directory_path() / ("lsmbs_fuzz_" + std::to_string(::getpid()));
     fs::create_directories(d);
-    for (const auto& e : fs::directory_iterator(fs::path(LSMBS_SOURCE_DIR) / "data" / "slider_crank"))
+    for (const auto& e :
+         fs::directory_iterator(fs::path(LSMBS_SOURCE_DIR) / "data" / "slider_crank"))
       if (e.is_regular_file()) fs::create_symlink(e.path(), d / e.path().filename());
     return d;
   }();
@@ -107,7 +112,8 @@ Outcome load(const fs::path& file) {
     // position in the file) or "FILE: invalid JSON: …"
     const std::string msg = e.what(), head = file.string() + ": ";
     const std::string rest = msg.rfind(head, 0) == 0 ? msg.substr(head.size()) : "";
-    const bool named = rest.rfind("/", 0) == 0 || rest.rfind("byte ", 0) == 0 || rest.rfind("invalid JSON:", 0) == 0;
+    const bool named = rest.rfind("/", 0) == 0 || rest.rfind("byte ", 0) == 0 ||
+                       rest.rfind("invalid JSON:", 0) == 0;
     if (!named) std::fprintf(stderr, "the rejection names no JSON path: %s\n", msg.c_str());
     return named ? Outcome::kRejected : Outcome::kRejectedWithoutPath;
   }
@@ -142,8 +148,12 @@ int main(int argc, char** argv) {
     fs::copy_file(e.path(), copy, fs::copy_options::overwrite_existing);
     try {
       switch (load(copy)) {
-        case Outcome::kLoaded: ++loaded; break;
-        case Outcome::kSkipped: ++skipped; break;
+        case Outcome::kLoaded:
+          ++loaded;
+          break;
+        case Outcome::kSkipped:
+          ++skipped;
+          break;
         case Outcome::kRejectedWithoutPath:
           ++failures;
           std::fprintf(stderr, "FAIL: %s\n", name.c_str());
@@ -151,7 +161,8 @@ int main(int argc, char** argv) {
         case Outcome::kRejected:
           ++rejected;
           if (name.rfind("seed_", 0) == 0) {
-            std::fprintf(stderr, "FAIL: seed %s is rejected (a shipped case must load)\n", name.c_str());
+            std::fprintf(stderr, "FAIL: seed %s is rejected (a shipped case must load)\n",
+                         name.c_str());
             ++failures;
           }
           break;
@@ -163,8 +174,10 @@ int main(int argc, char** argv) {
     fs::remove(copy);
   }
   fs::remove_all(work_dir());
-  std::printf("replayed %d inputs: %d loaded, %d rejected with a JSON path, %d skipped (too large), %d failures\n", n,
-              loaded, rejected, skipped, failures);
+  std::printf(
+      "replayed %d inputs: %d loaded, %d rejected with a JSON path, %d skipped (too large), %d "
+      "failures\n",
+      n, loaded, rejected, skipped, failures);
   return n > 0 && failures == 0 ? 0 : 1;
 }
 #endif

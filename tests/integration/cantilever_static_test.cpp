@@ -28,9 +28,17 @@ double timoshenko() {
 // Tip deflection (centre node of the loaded edge) for an nx × ny mesh.
 double tip_deflection(int nx, int ny, const std::string& integration) {
   json j = {{"name", "cantilever"},
-            {"bodies", {{{"name", "beam"}, {"type", "flexible"},
-                         {"mesh", {{"type", "rectangle"}, {"origin", {0, -H / 2}}, {"size", {L, H}}, {"elements", {nx, ny}}}},
-                         {"material", {{"E", E}, {"nu", NU}, {"rho", 2700}}}, {"thickness", T}, {"integration", integration}}}},
+            {"bodies",
+             {{{"name", "beam"},
+               {"type", "flexible"},
+               {"mesh",
+                {{"type", "rectangle"},
+                 {"origin", {0, -H / 2}},
+                 {"size", {L, H}},
+                 {"elements", {nx, ny}}}},
+               {"material", {{"E", E}, {"nu", NU}, {"rho", 2700}}},
+               {"thickness", T},
+               {"integration", integration}}}},
             {"joints", {{{"type", "clamp"}, {"flexible", "beam"}, {"node_set", "left"}}}},
             {"simulation", {{"t_end", 1}, {"h", 1}}}};
   // Uniform shear on the free edge: consistent nodal loads P/ny (P/2ny at the corners).
@@ -38,7 +46,9 @@ double tip_deflection(int nx, int ny, const std::string& integration) {
   for (int k = 0; k <= ny; ++k) {
     const int node = k * (nx + 1) + nx;
     const double f = (k == 0 || k == ny ? 0.5 : 1.0) * P / ny;
-    forces.push_back({{"type", "point_force"}, {"point", {{"body", "beam"}, {"node", node}}}, {"force", {0, -f}}});
+    forces.push_back({{"type", "point_force"},
+                      {"point", {{"body", "beam"}, {"node", node}}},
+                      {"force", {0, -f}}});
   }
   j["forces"] = forces;
   Case cs = test::make_case(j);
@@ -54,7 +64,8 @@ double tip_deflection(int nx, int ny, const std::string& integration) {
 TEST(CantileverStatic, TipDeflectionOfTheRobotArmMeshIsWithinPointFourPercentOfTimoshenko) {
   const double ref = timoshenko();
   const double d = tip_deflection(120, 10, "selective-shear");
-  std::printf("Timoshenko %.6e m, selective-shear 120x10 %.6e m (%+.3f %%)\n", ref, d, 100 * (d / ref - 1));
+  std::printf("Timoshenko %.6e m, selective-shear 120x10 %.6e m (%+.3f %%)\n", ref, d,
+              100 * (d / ref - 1));
   // the mesh-converged limit is 0.15 % stiffer than beam theory and this mesh 0.12 % stiffer
   // than that limit (test below): 0.4 % bounds both with room for neither to double
   EXPECT_NEAR(d / ref, 1.0, 0.004);
@@ -68,7 +79,8 @@ TEST(CantileverStatic, MeshConvergenceIsSecondOrderTowardsBeamTheory) {
   for (const auto& m : meshes) {
     full.push_back(tip_deflection(m[0], m[1], "full") / ref - 1);
     sri.push_back(tip_deflection(m[0], m[1], "selective-shear") / ref - 1);
-    std::printf("| %d x %d | %+.3f %% | %+.3f %% |\n", m[0], m[1], 100 * full.back(), 100 * sri.back());
+    std::printf("| %d x %d | %+.3f %% | %+.3f %% |\n", m[0], m[1], 100 * full.back(),
+                100 * sri.back());
     // full integration locks (too stiff) on coarse meshes; the selective variant much less
     EXPECT_LT(full.back(), sri.back());
   }
@@ -86,8 +98,10 @@ TEST(CantileverStatic, MeshConvergenceIsSecondOrderTowardsBeamTheory) {
   }
   // Richardson extrapolation of the two finest meshes: both variants converge to one limit, within
   // 0.2 % of beam theory (the clamped root edge without Poisson contraction stiffens the plate)
-  const double lim_full = full[4] + (full[4] - full[3]) / 3, lim_sri = sri[4] + (sri[4] - sri[3]) / 3;
-  std::printf("extrapolated limits: full %+.4f %%, selective shear %+.4f %%\n", 100 * lim_full, 100 * lim_sri);
+  const double lim_full = full[4] + (full[4] - full[3]) / 3,
+               lim_sri = sri[4] + (sri[4] - sri[3]) / 3;
+  std::printf("extrapolated limits: full %+.4f %%, selective shear %+.4f %%\n", 100 * lim_full,
+              100 * lim_sri);
   EXPECT_NEAR(lim_full, lim_sri, 1e-4);
   EXPECT_LT(std::abs(lim_sri), 2e-3);
 }

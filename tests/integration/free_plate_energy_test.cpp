@@ -8,10 +8,9 @@
 // (the generalized-α scheme is not a variational integrator), to a relative drift below 1e-3.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cstdio>
 #include <random>
-
-#include <Eigen/Eigenvalues>
 
 #include "support/test_models.hpp"
 
@@ -59,7 +58,10 @@ struct EnergyRecorder : StepObserver {
     worst_P = std::max(worst_P, (P - P0).norm());
     worst_L = std::max(worst_L, std::abs(Lc + c.x() * P.y() - c.y() * P.x() - L0));
   }
-  void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double, const SparseLU*) override { measure(s); }
+  void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double,
+                const SparseLU*) override {
+    measure(s);
+  }
   bool on_step(const StepInfo& i) override {
     measure(*i.state);
     return true;
@@ -71,8 +73,8 @@ struct EnergyRecorder : StepObserver {
 //   q₁ = q₀ + h v₀ + h²(½ − β) a₀ + h²β a₁,  v₁ = v₀ + h(1 − γ) a₀ + hγ a₁,
 //   (1 − α_m) a₁ + α_m a₀ = (1 − α_f) q̈₁ + α_f q̈₀,  q̈ = −ω² q:  A x₁ = B x₀ for x = (q, v, a).
 double spectral_radius(double rho_inf, double wh) {
-  const double am = (2 * rho_inf - 1) / (rho_inf + 1), af = rho_inf / (rho_inf + 1), g = 0.5 - am + af,
-               b = 0.25 * (g + 0.5) * (g + 0.5), w2 = wh * wh;  // h = 1, ω = wh
+  const double am = (2 * rho_inf - 1) / (rho_inf + 1), af = rho_inf / (rho_inf + 1),
+               g = 0.5 - am + af, b = 0.25 * (g + 0.5) * (g + 0.5), w2 = wh * wh;  // h = 1, ω = wh
   Eigen::Matrix3d A, B;
   A << 1, 0, -b, 0, 1, -g, (1 - af) * w2, 0, 1 - am;
   B << 1, 1, 0.5 - b, 0, 1, 1 - g, -af * w2, 0, -am;
@@ -87,10 +89,18 @@ struct Run {
 
 Run run(double rho) {
   json j = {{"name", "free_plate"},
-            {"bodies", {{{"name", "plate"}, {"type", "flexible"},
-                         {"mesh", {{"type", "rectangle"}, {"origin", {-0.05, -0.01}}, {"size", {0.1, 0.02}}, {"elements", {10, 2}}}},
-                         {"material", {{"E", 1e6}, {"nu", 0.3}, {"rho", 1000}}}, {"thickness", 0.01},
-                         {"velocity", {0.1, -0.05}}, {"angular_velocity", 2.0}}}},
+            {"bodies",
+             {{{"name", "plate"},
+               {"type", "flexible"},
+               {"mesh",
+                {{"type", "rectangle"},
+                 {"origin", {-0.05, -0.01}},
+                 {"size", {0.1, 0.02}},
+                 {"elements", {10, 2}}}},
+               {"material", {{"E", 1e6}, {"nu", 0.3}, {"rho", 1000}}},
+               {"thickness", 0.01},
+               {"velocity", {0.1, -0.05}},
+               {"angular_velocity", 2.0}}}},
             {"simulation", {{"t_end", 1.0}, {"h", 1e-3}, {"rho_inf", rho}, {"tol_r", 1e-12}}}};
   Case cs = test::make_case(j);
   std::mt19937 g(7);
@@ -105,17 +115,20 @@ Run run(double rho) {
   rec.M = test::dense_mass_matrix(*cs.model, s0);
   // free-vibration modes of the undeformed (unstressed) plate: K φ = ω² M φ, three rigid modes
   // first; the initial elastic energy of mode i is ½ (φ_iᵀ M v₀)² (mass-normalized φ)
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Mat> es(test::dense_tangent_stiffness(*cs.model, s0), rec.M);
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Mat> es(
+      test::dense_tangent_stiffness(*cs.model, s0), rec.M);
   const Vec modal_rates = es.eigenvectors().transpose() * rec.M * cs.initial.v;
   double e0 = 0, e1 = 0;
   for (Eigen::Index i = 3; i < modal_rates.size(); ++i) {
     const double e = 0.5 * modal_rates[i] * modal_rates[i];
     e0 += e;
-    e1 += e * std::pow(spectral_radius(rho, std::sqrt(es.eigenvalues()[i]) * cs.simulation.h), 2 * 1000);
+    e1 += e * std::pow(spectral_radius(rho, std::sqrt(es.eigenvalues()[i]) * cs.simulation.h),
+                       2 * 1000);
   }
   EXPECT_LT(std::abs(es.eigenvalues()[2]), 1e-9 * es.eigenvalues()[3]) << "three rigid modes";
   out.predicted_kept = e1 / e0;
-  const auto sum = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&rec});
+  const auto sum =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&rec});
   EXPECT_TRUE(sum.ok) << sum.message;
   EXPECT_EQ(sum.steps, 1000);
   return out;
@@ -140,9 +153,11 @@ TEST(FreeFlexiblePlate, HighFrequencyContentDecaysAsTheAmplificationFactorsPredi
   const auto r1 = run(1.0), r8 = run(0.8);
   const double keep1 = r1.rec.elastic.back() / r1.rec.elastic.front(),
                keep8 = r8.rec.elastic.back() / r8.rec.elastic.front();
-  std::printf("elastic energy kept after 1000 steps: rho_inf = 1: %.4f (predicted %.4f), rho_inf = 0.8: %.4f "
-              "(predicted %.4f)\n",
-              keep1, r1.predicted_kept, keep8, r8.predicted_kept);
+  std::printf(
+      "elastic energy kept after 1000 steps: rho_inf = 1: %.4f (predicted %.4f), rho_inf = 0.8: "
+      "%.4f "
+      "(predicted %.4f)\n",
+      keep1, r1.predicted_kept, keep8, r8.predicted_kept);
   // The prediction is linear: it ignores the coupling of the modes by the rotation (2 rad/s
   // against a lowest elastic mode of ~400 rad/s) and the geometric non-linearity, which exchange
   // 0.3 % of the elastic energy with the rigid motion at ρ∞ = 1 (measured; 0.8 % of the kept
@@ -152,5 +167,6 @@ TEST(FreeFlexiblePlate, HighFrequencyContentDecaysAsTheAmplificationFactorsPredi
   EXPECT_NEAR(keep8 / r8.predicted_kept, 1.0, 0.05);
   EXPECT_LT(r8.predicted_kept, 0.5) << "the case must damp most of its elastic energy";
   EXPECT_LT(r8.rec.worst_P, 1e-12) << "numerical damping must not touch linear momentum";
-  EXPECT_LT(r8.rec.worst_L, 1e-3 * std::abs(r8.rec.L0)) << "nor (to the scheme's accuracy) angular momentum";
+  EXPECT_LT(r8.rec.worst_L, 1e-3 * std::abs(r8.rec.L0))
+      << "nor (to the scheme's accuracy) angular momentum";
 }

@@ -43,7 +43,8 @@ double worst_relative(const SensitivityResult& a, const SensitivityResult& ref) 
   return test::worst_relative(a, ref, test::Norm::kPerResponse);
 }
 
-SensitivityResult gradients(Case& cs, Method m, Matrix mx = SensitivityOptions{}.matrix, double delta = 1e-6) {
+SensitivityResult gradients(Case& cs, Method m, Matrix mx = SensitivityOptions{}.matrix,
+                            double delta = 1e-6) {
   return test::gradients(cs, m, mx, delta);
 }
 
@@ -72,8 +73,10 @@ TEST(GradientDefaults, SpringCrankAtDefaultToleranceMatchesCentralDifferences) {
   // Forward semi-analytical: exact up to its Δp truncation, which is first order — the error
   // falls tenfold with Δp (measured 6.1e-4, 6.1e-5, 6.1e-6 at δ = 1e-6, 1e-7, 1e-8: the
   // quadratic velocity terms of the rigid inertia under the perturbed rates of eq. 32).
-  const double e6 = worst_relative(gradients(cs, Method::kSemiAnalytical, Matrix::kRefined, 1e-6), ref);
-  const double e7 = worst_relative(gradients(cs, Method::kSemiAnalytical, Matrix::kRefined, 1e-7), ref);
+  const double e6 =
+      worst_relative(gradients(cs, Method::kSemiAnalytical, Matrix::kRefined, 1e-6), ref);
+  const double e7 =
+      worst_relative(gradients(cs, Method::kSemiAnalytical, Matrix::kRefined, 1e-7), ref);
   EXPECT_NEAR(e6 / e7, 10.0, 1.0) << e6 << " " << e7;
   // the two exact back-solve paths (refactorized at the converged state, the default; iterative
   // refinement with the step's factorization, or a fresh one) agree to round-off
@@ -103,7 +106,8 @@ TEST(GradientDefaults, ModifiedNewtonKeepsTheDefaultExactAndRefusesLast) {
     c["simulation"]["newton"] = nw;
     Case cs = test::make_case(c);
     EXPECT_LT(worst_relative(gradients(cs, Method::kDirectAnalytic), ref), 2e-7) << nw;
-    EXPECT_LT(worst_relative(gradients(cs, Method::kDirectAnalytic, Matrix::kRefined), ref), 2e-7) << nw;
+    EXPECT_LT(worst_relative(gradients(cs, Method::kDirectAnalytic, Matrix::kRefined), ref), 2e-7)
+        << nw;
     SensitivityOptions o;
     o.matrix = Matrix::kLastIteration;
     try {
@@ -142,7 +146,8 @@ TEST(NewtonConvergence, ClosedLoopFourBarConvergesAtOrderTwoWithDefaultOptions) 
   // A light four-bar (crank 4 g, 2e-7 kg m²; offset centres of mass) pushed by a 1.1 N force
   // against a 4530 N/m spring: constraint forces far above the forces that drive the motion,
   // as in the 7-body squeezer benchmark. Reference: h/512 with three iterations per step.
-  const json base = json::parse(R"J({"name": "fourbar_order", "bodies": [{"name": "crank", "type": "rigid", "position": [0, 0], "angle": 0.6, "mass": 0.004, "inertia": 2e-07, "com": [0.012, 0.003], "angular_velocity": 0}, {"name": "coupler", "type": "rigid", "position": [0.02476006844729035, 0.01693927420185106], "angle": 0.4861210089130312, "mass": 0.07, "inertia": 1.2e-05, "com": [0.04, 0.005]}, {"name": "rocker", "type": "rigid", "position": [0.07, 0.0], "angle": 1.1319778676434364, "mass": 0.007, "inertia": 5.7e-07, "com": [0.03, -0.004]}], "joints": [{"name": "o2", "type": "revolute", "a": {"body": "crank", "at": [0, 0]}, "b": "ground"}, {"name": "pa", "type": "revolute", "a": {"body": "crank", "at": [0.03, 0]}, "b": {"body": "coupler", "at": [0, 0]}}, {"name": "pb", "type": "revolute", "a": {"body": "coupler", "at": [0.08, 0]}, "b": {"body": "rocker", "at": [0.06, 0]}}, {"name": "o4", "type": "revolute", "a": {"body": "rocker", "at": [0, 0]}, "b": "ground"}], "forces": [{"name": "spring", "type": "spring_damper", "a": {"body": "coupler", "at": [0.04, 0]}, "b": {"ground": [0.02, 0.09]}, "stiffness": 4530, "damping": 0, "free_length": 0.05}, {"name": "push", "type": "point_force", "point": {"body": "crank", "at": [0.03, 0]}, "force": [0, 1.1]}], "gravity": [0, 0], "simulation": {"t_end": 0.03, "h": 0.001}, "output": {"measures": [{"name": "rocker", "type": "angle", "body": "rocker"}, {"name": "crank", "type": "angle", "body": "crank"}], "responses": [{"name": "final_rocker", "measure": "rocker", "aggregate": "final"}, {"name": "final_crank", "measure": "crank", "aggregate": "final"}]}})J");
+  const json base = json::parse(
+      R"J({"name": "fourbar_order", "bodies": [{"name": "crank", "type": "rigid", "position": [0, 0], "angle": 0.6, "mass": 0.004, "inertia": 2e-07, "com": [0.012, 0.003], "angular_velocity": 0}, {"name": "coupler", "type": "rigid", "position": [0.02476006844729035, 0.01693927420185106], "angle": 0.4861210089130312, "mass": 0.07, "inertia": 1.2e-05, "com": [0.04, 0.005]}, {"name": "rocker", "type": "rigid", "position": [0.07, 0.0], "angle": 1.1319778676434364, "mass": 0.007, "inertia": 5.7e-07, "com": [0.03, -0.004]}], "joints": [{"name": "o2", "type": "revolute", "a": {"body": "crank", "at": [0, 0]}, "b": "ground"}, {"name": "pa", "type": "revolute", "a": {"body": "crank", "at": [0.03, 0]}, "b": {"body": "coupler", "at": [0, 0]}}, {"name": "pb", "type": "revolute", "a": {"body": "coupler", "at": [0.08, 0]}, "b": {"body": "rocker", "at": [0.06, 0]}}, {"name": "o4", "type": "revolute", "a": {"body": "rocker", "at": [0, 0]}, "b": "ground"}], "forces": [{"name": "spring", "type": "spring_damper", "a": {"body": "coupler", "at": [0.04, 0]}, "b": {"ground": [0.02, 0.09]}, "stiffness": 4530, "damping": 0, "free_length": 0.05}, {"name": "push", "type": "point_force", "point": {"body": "crank", "at": [0.03, 0]}, "force": [0, 1.1]}], "gravity": [0, 0], "simulation": {"t_end": 0.03, "h": 0.001}, "output": {"measures": [{"name": "rocker", "type": "angle", "body": "rocker"}, {"name": "crank", "type": "angle", "body": "crank"}], "responses": [{"name": "final_rocker", "measure": "rocker", "aggregate": "final"}, {"name": "final_crank", "measure": "crank", "aggregate": "final"}]}})J");
   auto at = [&](double h, bool tight) {
     json c = base;
     c["simulation"]["h"] = h;
@@ -155,7 +160,8 @@ TEST(NewtonConvergence, ClosedLoopFourBarConvergesAtOrderTwoWithDefaultOptions) 
   const double ref = at(1e-3 / 512, true);
   std::vector<double> err;
   for (int i = 0; i < 6; ++i) err.push_back(std::abs(at(1e-3 / std::pow(2.0, i), false) - ref));
-  test::expect_order(err, 2.0, 0.05, "four-bar, final crank angle, h = 1e-3 / 2^i, default options");
+  test::expect_order(err, 2.0, 0.05,
+                     "four-bar, final crank angle, h = 1e-3 / 2^i, default options");
 }
 
 TEST(GradientCheck, PassesOnTheDefaultGradientAndCatchesAWrongOne) {
@@ -168,7 +174,8 @@ TEST(GradientCheck, PassesOnTheDefaultGradientAndCatchesAWrongOne) {
   EXPECT_EQ(ok.simulations, 2);
   EXPECT_EQ(ok.entries.size(), g.responses.size());
   EXPECT_NEAR(ok.direction.norm(), 1.0, 1e-15);
-  std::printf("gradient check on the default gradient: worst %.2e (%s)\n", ok.worst, ok.worst_response.c_str());
+  std::printf("gradient check on the default gradient: worst %.2e (%s)\n", ok.worst,
+              ok.worst_response.c_str());
   EXPECT_LT(ok.worst, 1e-5);
   EXPECT_EQ(ok.verdict(o), "pass");
   // the same seed gives the same direction; the parameters are left at p
@@ -177,7 +184,8 @@ TEST(GradientCheck, PassesOnTheDefaultGradientAndCatchesAWrongOne) {
   Case cs2 = test::make_case(spring_crank_json(6.25e-5));
   const auto last = gradients(cs2, Method::kDirectAnalytic, Matrix::kLastIteration);
   const auto bad = check_gradients(cs2, cs2.design->initial(), last.responses, o);
-  std::printf("gradient check on --matrix last: worst %.2e (%s)\n", bad.worst, bad.worst_response.c_str());
+  std::printf("gradient check on --matrix last: worst %.2e (%s)\n", bad.worst,
+              bad.worst_response.c_str());
   EXPECT_GT(bad.worst, 1e-4);
   // a gradient 5 % off in every entry fails
   auto wrong = g.responses;

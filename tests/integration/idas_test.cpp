@@ -22,14 +22,16 @@ using json = nlohmann::json;
 namespace {
 
 json spring_crank() {
-  return json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json"));
+  return json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
+                                   "/data/slider_crank_rigid/slider_crank_spring.json"));
 }
 
 // Small flexible model: the robot arm with holes on a 12 × 2 mesh, 0.1 s. (IDAS's error test is
 // on positions only for flexible models; with velocities in it, the lightly excited stiff plate
 // modes kept its BDF steps near 1e-6 s: ~1.3e5 steps.)
 json flexible_arm() {
-  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm/robot_arm_holes.json"));
+  json c = json::parse(
+      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm/robot_arm_holes.json"));
   c["bodies"][2]["mesh"]["elements"] = {12, 2};
   c["simulation"]["t_end"] = 0.1;
   c["output"]["vtu_stride"] = 0;
@@ -65,12 +67,15 @@ double final_value(json c, double h, const std::string& column, bool idas, doubl
   return r.column(column).back();
 }
 
-void expect_second_order(const json& c, const std::string& column, double h0, const char* what, double rtol) {
+void expect_second_order(const json& c, const std::string& column, double h0, const char* what,
+                         double rtol) {
   const double ref = final_value(c, h0, column, true, rtol);
   double d[3];
-  for (int i = 0; i < 3; ++i) d[i] = std::abs(final_value(c, h0 / (1 << i), column, false, rtol) - ref);
+  for (int i = 0; i < 3; ++i)
+    d[i] = std::abs(final_value(c, h0 / (1 << i), column, false, rtol) - ref);
   const double r1 = d[0] / d[1], r2 = d[1] / d[2];
-  std::printf("%s: |GA - IDAS| = %.3e, %.3e, %.3e; ratios %.2f %.2f\n", what, d[0], d[1], d[2], r1, r2);
+  std::printf("%s: |GA - IDAS| = %.3e, %.3e, %.3e; ratios %.2f %.2f\n", what, d[0], d[1], d[2], r1,
+              r2);
   EXPECT_GT(r1, 3.5);
   EXPECT_LT(r1, 4.5);
   EXPECT_GT(r2, 3.5);
@@ -106,7 +111,8 @@ SimulationResult idas_run_at(Case& cs, const Vec& p, int i, double dp, const Ida
 }  // namespace
 
 TEST(Idas, GeneralizedAlphaConvergesToIdasAtSecondOrderOnARigidMechanism) {
-  expect_second_order(spring_crank(), "crank_angle", 2e-3, "rigid slider-crank, final crank angle", 1e-10);
+  expect_second_order(spring_crank(), "crank_angle", 2e-3, "rigid slider-crank, final crank angle",
+                      1e-10);
 }
 
 TEST(Idas, GeneralizedAlphaConvergesToIdasAtSecondOrderOnAFlexibleModel) {
@@ -167,8 +173,9 @@ TEST(Idas, ForwardSensitivitiesOnLevelSetVariablesOfAFlexibleModelAgreeWithFinit
   for (int i : {0, 1, 2}) {  // cx1, a1, b1
     const auto plus = idas_run_at(cs, p, i, h, fd_io), minus = idas_run_at(cs, p, i, -h, fd_io);
     ASSERT_TRUE(plus.integrator.ok && minus.integrator.ok);
-    const double fd[2] = {(plus.responses.at("final_dev") - minus.responses.at("final_dev")) / (2 * h),
-                          (plus.quadratures[0].value - minus.quadratures[0].value) / (2 * h)};
+    const double fd[2] = {
+        (plus.responses.at("final_dev") - minus.responses.at("final_dev")) / (2 * h),
+        (plus.quadratures[0].value - minus.quadratures[0].value) / (2 * h)};
     const double an[2] = {s.responses[0].gradient(0, i), s.quadratures[0].gradient[i]};
     for (int k = 0; k < 2; ++k) {
       const double e = std::abs(an[k] - fd[k]) / std::abs(fd[k]);
@@ -203,8 +210,8 @@ TEST(Idas, GeneralizedAlphaGradientsConvergeToIdasGradientsAtSecondOrder) {
     d[k] = std::max(std::abs(sg.responses[0].gradient(0, 0) - ref[0]) / std::abs(ref[0]),
                     std::abs(sg.responses[0].gradient(0, 1) - ref[1]) / std::abs(ref[1]));
   }
-  std::printf("d final_crank_angle / dp: |GA - IDAS| relative %.3e %.3e %.3e; ratios %.2f %.2f\n", d[0], d[1], d[2],
-              d[0] / d[1], d[1] / d[2]);
+  std::printf("d final_crank_angle / dp: |GA - IDAS| relative %.3e %.3e %.3e; ratios %.2f %.2f\n",
+              d[0], d[1], d[2], d[0] / d[1], d[1] / d[2]);
   EXPECT_GT(d[0] / d[1], 3.5);
   EXPECT_LT(d[0] / d[1], 4.5);
   EXPECT_GT(d[1] / d[2], 3.5);
@@ -216,12 +223,21 @@ TEST(Idas, GeneralizedAlphaGradientsConvergeToIdasGradientsAtSecondOrder) {
 // x = r cos θ + sqrt(l² − r² sin² θ); ∫ x dt over a window that starts and ends between grid
 // times (IDAS must stop there) is integrated by composite Simpson with 20,000 intervals.
 TEST(Idas, QuadratureOfTheDrivenPistonMatchesTheClosedForm) {
-  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_rigid.json"));
+  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
+                                     "/data/slider_crank_rigid/slider_crank_rigid.json"));
   const double a = 0.0153, b = 0.0391;
-  c["output"]["responses"] = json::array(
-      {json{{"name", "int_x"}, {"measure", "piston.x"}, {"aggregate", "integral"}, {"window", {{"t0", a}, {"t1", b}}}},
-       json{{"name", "mean_x"}, {"measure", "piston.x"}, {"aggregate", "average"}, {"window", {{"t0", a}, {"t1", b}}}},
-       json{{"name", "rms_x"}, {"measure", "piston.x"}, {"aggregate", "rms"}, {"window", {{"t0", a}, {"t1", b}}}}});
+  c["output"]["responses"] = json::array({json{{"name", "int_x"},
+                                               {"measure", "piston.x"},
+                                               {"aggregate", "integral"},
+                                               {"window", {{"t0", a}, {"t1", b}}}},
+                                          json{{"name", "mean_x"},
+                                               {"measure", "piston.x"},
+                                               {"aggregate", "average"},
+                                               {"window", {{"t0", a}, {"t1", b}}}},
+                                          json{{"name", "rms_x"},
+                                               {"measure", "piston.x"},
+                                               {"aggregate", "rms"},
+                                               {"window", {{"t0", a}, {"t1", b}}}}});
   Case cs = test::make_case(c);
   const auto r = run_idas(cs);
   ASSERT_TRUE(r.integrator.ok) << r.integrator.message;
@@ -241,8 +257,8 @@ TEST(Idas, QuadratureOfTheDrivenPistonMatchesTheClosedForm) {
   const double expect[3] = {s1, s1 / (b - a), std::sqrt(s2 / (b - a))};
   for (int k = 0; k < 3; ++k) {
     const auto& q = r.quadratures[k];
-    std::printf("%s: IDAS quadrature %.12e, closed form %.12e (%.1e), window [%g, %g]\n", q.name.c_str(), q.value,
-                expect[k], std::abs(q.value / expect[k] - 1), q.t0, q.t1);
+    std::printf("%s: IDAS quadrature %.12e, closed form %.12e (%.1e), window [%g, %g]\n",
+                q.name.c_str(), q.value, expect[k], std::abs(q.value / expect[k] - 1), q.t0, q.t1);
     EXPECT_NEAR(q.value / expect[k], 1.0, 1e-8) << q.name;
     EXPECT_DOUBLE_EQ(q.t0, a);
     EXPECT_DOUBLE_EQ(q.t1, b);
@@ -263,12 +279,14 @@ TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
   double worst = 0;
   for (int i = 0; i < 2; ++i) {
     const double h = kFdStep * std::abs(p[i]);
-    const auto plus = idas_run_at(cs, p, i, h, o.idas).quadratures, minus = idas_run_at(cs, p, i, -h, o.idas).quadratures;
+    const auto plus = idas_run_at(cs, p, i, h, o.idas).quadratures,
+               minus = idas_run_at(cs, p, i, -h, o.idas).quadratures;
     for (size_t k = 0; k < 2; ++k) {
-      const double fd = (plus[k].value - minus[k].value) / (2 * h), an = s.quadratures[k].gradient[i];
+      const double fd = (plus[k].value - minus[k].value) / (2 * h),
+                   an = s.quadratures[k].gradient[i];
       const double e = std::abs(an - fd) / std::abs(fd);
-      std::printf("d %s / d p%d (quadrature): IDAS %.8e, FD of IDAS %.8e (%.1e)\n", s.quadratures[k].name.c_str(), i,
-                  an, fd, e);
+      std::printf("d %s / d p%d (quadrature): IDAS %.8e, FD of IDAS %.8e (%.1e)\n",
+                  s.quadratures[k].name.c_str(), i, an, fd, e);
       worst = std::max(worst, e);
     }
   }
@@ -286,10 +304,13 @@ TEST(Idas, QuadratureSensitivitiesMatchFiniteDifferencesAndGeneralizedAlpha) {
     d[k] = 0;
     for (const auto& rs : sg.responses)
       if (rs.name == "energy_integral")
-        for (int i = 0; i < 2; ++i) d[k] = std::max(d[k], std::abs(rs.gradient(0, i) - ref[i]) / std::abs(ref[i]));
+        for (int i = 0; i < 2; ++i)
+          d[k] = std::max(d[k], std::abs(rs.gradient(0, i) - ref[i]) / std::abs(ref[i]));
   }
-  std::printf("d energy_integral / dp: |GA trapezoid - IDAS quadrature| relative %.3e %.3e %.3e; ratios %.2f %.2f\n",
-              d[0], d[1], d[2], d[0] / d[1], d[1] / d[2]);
+  std::printf(
+      "d energy_integral / dp: |GA trapezoid - IDAS quadrature| relative %.3e %.3e %.3e; ratios "
+      "%.2f %.2f\n",
+      d[0], d[1], d[2], d[0] / d[1], d[1] / d[2]);
   EXPECT_GT(d[0] / d[1], 3.5);
   EXPECT_LT(d[0] / d[1], 4.5);
   EXPECT_GT(d[1] / d[2], 3.5);
@@ -323,9 +344,12 @@ TEST(Idas, ReferencePresetIntegratesTheFlexibleConnectingRod) {
   const auto& eg = rg.column("elongation");
   ASSERT_EQ(ei.size(), eg.size());
   double dev = 0, peak = 0;
-  for (size_t k = 0; k < ei.size(); ++k) dev = std::max(dev, std::abs(ei[k] - eg[k])), peak = std::max(peak, std::abs(ei[k]));
-  std::printf("coarse rod, 10 ms: IDAS %ld steps, %ld Jacobians; max |elongation GA - IDAS| = %.3e of the peak %.3e m\n",
-              ri.idas.steps, ri.idas.jacobian_evaluations, dev / peak, peak);
+  for (size_t k = 0; k < ei.size(); ++k)
+    dev = std::max(dev, std::abs(ei[k] - eg[k])), peak = std::max(peak, std::abs(ei[k]));
+  std::printf(
+      "coarse rod, 10 ms: IDAS %ld steps, %ld Jacobians; max |elongation GA - IDAS| = %.3e of the "
+      "peak %.3e m\n",
+      ri.idas.steps, ri.idas.jacobian_evaluations, dev / peak, peak);
   EXPECT_GT(peak, 1e-6);
   EXPECT_LT(dev / peak, 5e-2);
 }
@@ -335,11 +359,14 @@ TEST(Idas, RefusesOutOfRangeOrderAndPivotTolerance) {
   Case cs = test::make_case(spring_crank());
   for (int k = 0; k < 2; ++k) {
     IdasOptions io;
-    if (k == 0) io.max_order = 6;
-    else io.klu_pivot_tolerance = 0;
+    if (k == 0)
+      io.max_order = 6;
+    else
+      io.klu_pivot_tolerance = 0;
     const auto r = run_idas(cs, io);
     EXPECT_FALSE(r.integrator.ok);
-    EXPECT_NE(r.integrator.message.find(k == 0 ? "max_order" : "klu_pivot_tolerance"), std::string::npos)
+    EXPECT_NE(r.integrator.message.find(k == 0 ? "max_order" : "klu_pivot_tolerance"),
+              std::string::npos)
         << r.integrator.message;
   }
 }
@@ -367,16 +394,20 @@ double adjoint_against_forward(Case& cs, const IdasOptions& io, long expect_back
     // same quantity; the runs differ in their steps (the adjoint's forward pass has no stop times
     // and no sensitivity error test): measured 2.5e-7 at rtol 1e-10 on the flexible arm
     EXPECT_NEAR(a.value, f.value, 1e-6 * std::abs(f.value)) << f.name;
-    const double e = (a.gradient - f.gradient).lpNorm<Eigen::Infinity>() / f.gradient.lpNorm<Eigen::Infinity>();
-    std::printf("d %s / dp (%ld variables): adjoint vs forward %.2e (|grad| %.3e)\n", f.name.c_str(),
-                static_cast<long>(f.gradient.size()), e, f.gradient.lpNorm<Eigen::Infinity>());
+    const double e =
+        (a.gradient - f.gradient).lpNorm<Eigen::Infinity>() / f.gradient.lpNorm<Eigen::Infinity>();
+    std::printf("d %s / dp (%ld variables): adjoint vs forward %.2e (|grad| %.3e)\n",
+                f.name.c_str(), static_cast<long>(f.gradient.size()), e,
+                f.gradient.lpNorm<Eigen::Infinity>());
     worst = std::max(worst, e);
   }
   for (const auto& r : adj.responses)  // the grid aggregates are not differentiated by the adjoint
     EXPECT_TRUE(r.gradient.hasNaN()) << r.name;
-  std::printf("forward: %ld steps, %.2f s; adjoint: %ld forward + %ld backward steps in %ld problems, %.2f s\n",
-              fwd.idas.steps, fwd.idas.wall_seconds, adj.idas.steps, adj.idas.adjoint_steps, adj.idas.adjoint_problems,
-              adj.idas.wall_seconds);
+  std::printf(
+      "forward: %ld steps, %.2f s; adjoint: %ld forward + %ld backward steps in %ld problems, %.2f "
+      "s\n",
+      fwd.idas.steps, fwd.idas.wall_seconds, adj.idas.steps, adj.idas.adjoint_steps,
+      adj.idas.adjoint_problems, adj.idas.wall_seconds);
   return worst;
 }
 
@@ -392,8 +423,14 @@ TEST(IdasAdjoint, GradientsOfTimeIntegralsAgreeWithForwardSensitivitiesOnTheSpri
   c["output"]["responses"] = json::array(
       {json{{"name", "mean_x"}, {"measure", "piston.x"}, {"aggregate", "average"}},
        json{{"name", "energy_integral"}, {"measure", "energy"}, {"aggregate", "integral"}},
-       json{{"name", "mean_x_window"}, {"measure", "piston.x"}, {"aggregate", "average"}, {"window", {{"t0", 0.1}, {"t1", 0.2}}}},
-       json{{"name", "rms_x"}, {"measure", "piston.x"}, {"aggregate", "rms"}, {"window", {{"t0", 0.05}, {"t1", 0.25}}}}});
+       json{{"name", "mean_x_window"},
+            {"measure", "piston.x"},
+            {"aggregate", "average"},
+            {"window", {{"t0", 0.1}, {"t1", 0.2}}}},
+       json{{"name", "rms_x"},
+            {"measure", "piston.x"},
+            {"aggregate", "rms"},
+            {"window", {{"t0", 0.05}, {"t1", 0.25}}}}});
   Case cs = test::make_case(c);
   // both at rtol 1e-10; the runs differ in their steps (see adjoint_against_forward): measured
   // 4.1e-8, bound 1e-7
@@ -406,7 +443,10 @@ TEST(IdasAdjoint, GradientsOfTimeIntegralsAgreeWithForwardSensitivitiesOnTheSpri
 TEST(IdasAdjoint, GradientsAgreeWithForwardSensitivitiesOnAFlexibleArm) {
   json c = flexible_arm();
   c["output"]["responses"] = json::array(
-      {json{{"name", "avg_dev"}, {"measure", "tip_deviation"}, {"aggregate", "average"}, {"window", {{"t0", 0.02}, {"t1", 0.09}}}},
+      {json{{"name", "avg_dev"},
+            {"measure", "tip_deviation"},
+            {"aggregate", "average"},
+            {"window", {{"t0", 0.02}, {"t1", 0.09}}}},
        json{{"name", "int_dev"}, {"measure", "tip_deviation"}, {"aggregate", "integral"}}});
   Case cs = test::make_case(c);
   IdasOptions io = IdasOptions::reference();
@@ -428,7 +468,8 @@ TEST(IdasAdjoint, RefusesResponsesItCannotDifferentiate) {
   json c = spring_crank();
   SensitivityOptions o;
   o.method = SensitivityOptions::Method::kIdasAdjoint;
-  c["output"]["responses"] = json::array({json{{"name", "final_x"}, {"measure", "piston.x"}, {"aggregate", "final"}}});
+  c["output"]["responses"] =
+      json::array({json{{"name", "final_x"}, {"measure", "piston.x"}, {"aggregate", "final"}}});
   {
     Case cs = test::make_case(c);
     try {
@@ -439,8 +480,8 @@ TEST(IdasAdjoint, RefusesResponsesItCannotDifferentiate) {
       EXPECT_EQ(locate("c.json", e).json_path(), "/output/responses");
     }
   }
-  c["output"]["responses"] =
-      json::array({json{{"name", "mean_side_force"}, {"measure", "cylinder_force.0"}, {"aggregate", "average"}}});
+  c["output"]["responses"] = json::array({json{
+      {"name", "mean_side_force"}, {"measure", "cylinder_force.0"}, {"aggregate", "average"}}});
   Case cs = test::make_case(c);
   const auto r = compute_sensitivities(cs, cs.design->initial(), o);
   EXPECT_FALSE(r.ok);

@@ -21,7 +21,8 @@ namespace {
 // The pendulum of support/pendulum.hpp with the bob's position as a measure.
 json pendulum(double h) {
   json j = test::Pendulum{}.json(h, 1.0);
-  j["output"] = {{"measures", {{{"name", "bob"}, {"type", "position"}, {"point", {{"body", "bob"}}}}}}};
+  j["output"] = {
+      {"measures", {{{"name", "bob"}, {"type", "position"}, {"point", {{"body", "bob"}}}}}}};
   return j;
 }
 
@@ -51,9 +52,11 @@ TEST(NewtonOptions, ModifiedNewtonAcrossStepsReachesTheFullNewtonSolutionWithFew
   const auto a = run_simulation(full), b = run_simulation(across);
   ASSERT_TRUE(a.integrator.ok && b.integrator.ok) << b.integrator.message;
   EXPECT_LT((a.final_state.q - b.final_state.q).norm(), 1e-9);
-  std::printf("pendulum, 100 steps: %ld factorizations / %ld Newton iterations across steps, %ld / %ld full\n",
-              b.integrator.factorizations, b.integrator.newton_iterations, a.integrator.factorizations,
-              a.integrator.newton_iterations);
+  std::printf(
+      "pendulum, 100 steps: %ld factorizations / %ld Newton iterations across steps, %ld / %ld "
+      "full\n",
+      b.integrator.factorizations, b.integrator.newton_iterations, a.integrator.factorizations,
+      a.integrator.newton_iterations);
   // the point of the option: at most half of full Newton's factorizations
   EXPECT_LT(b.integrator.factorizations, a.integrator.factorizations / 2);
   // with the halving test's too-small max_iter, steps that fail with an old factorization are
@@ -103,8 +106,10 @@ TEST(NewtonOptions, ZeroStartOfAlgorithm1ReducesTheOrderToOneConsistentStartKeep
       (consistent ? ec : ez)[i] = (r.final_state.q.head<2>() - ref).norm();
     }
   const double order_zero = std::log2(ez[1] / ez[2]), order_consistent = std::log2(ec[1] / ec[2]);
-  std::printf("zero start: errors %.3e %.3e %.3e (order %.2f); consistent start: %.3e %.3e %.3e (order %.2f)\n", ez[0],
-              ez[1], ez[2], order_zero, ec[0], ec[1], ec[2], order_consistent);
+  std::printf(
+      "zero start: errors %.3e %.3e %.3e (order %.2f); consistent start: %.3e %.3e %.3e (order "
+      "%.2f)\n",
+      ez[0], ez[1], ez[2], order_zero, ec[0], ec[1], ec[2], order_consistent);
   EXPECT_NEAR(order_zero, 1.0, 0.2);
   EXPECT_NEAR(order_consistent, 2.0, 0.2);
   EXPECT_GT(ez[2], ec[2]);
@@ -142,7 +147,8 @@ struct Recorder : StepObserver {
   std::vector<bool> grid;
   std::vector<Vec> q, solutions;
   bool on_step(const StepInfo& i) override {
-    if (i.step == throw_at) throw std::runtime_error("observer failure at step " + std::to_string(i.step));
+    if (i.step == throw_at)
+      throw std::runtime_error("observer failure at step " + std::to_string(i.step));
     if (latch && i.step < last_step) latch->wait_for(i.step + 1);
     times.push_back(i.state->t);
     steps.push_back(i.step);
@@ -161,7 +167,8 @@ IntegratorSummary run_with(Case& cs, int threads, Recorder& r, StepLatch* latch 
   served.threads = threads;
   std::vector<StepObserver*> obs = {&r};
   if (latch) obs.push_back(latch);
-  return GeneralizedAlpha(cs.simulation, served).run(*cs.model, cs.model->params(), cs.initial, obs);
+  return GeneralizedAlpha(cs.simulation, served)
+      .run(*cs.model, cs.model->params(), cs.initial, obs);
 }
 
 }  // namespace
@@ -187,7 +194,8 @@ TEST(NewtonOptions, ConcurrentObserversSeeEveryStepWithItsOwnFactorizationInclud
     EXPECT_EQ(worker.grid[k], serial.grid[k]);
     EXPECT_DOUBLE_EQ(worker.times[k], serial.times[k]);
     worst = std::max(worst, (worker.q[k] - serial.q[k]).norm());
-    worst = std::max(worst, (worker.solutions[k] - serial.solutions[k]).norm() / serial.solutions[k].norm());
+    worst = std::max(
+        worst, (worker.solutions[k] - serial.solutions[k]).norm() / serial.solutions[k].norm());
   }
   EXPECT_LT(worst, 1e-12);
 }

@@ -23,7 +23,8 @@ namespace {
 
 // 30 × 3 mesh, h = 0.01 s: a design evaluation (simulation + 15 gradients) takes ~0.1 s.
 json tiny_robot_arm() {
-  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm/robot_arm_holes.json"));
+  json c = json::parse(
+      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/robot_arm/robot_arm_holes.json"));
   c["bodies"][2]["mesh"]["elements"] = {30, 3};
   c["simulation"]["h"] = 0.01;
   c["output"]["vtu_stride"] = 0;
@@ -32,12 +33,13 @@ json tiny_robot_arm() {
 }
 
 // Loads the case (file names resolved against base_dir) and optimizes it.
-OptimizeResult run(const json& j, const std::string& out, bool resume, long stop_after, DesignProblem** keep = nullptr,
-                   const std::string& base_dir = LSMBS_SOURCE_DIR) {
+OptimizeResult run(const json& j, const std::string& out, bool resume, long stop_after,
+                   DesignProblem** keep = nullptr, const std::string& base_dir = LSMBS_SOURCE_DIR) {
   static std::vector<std::unique_ptr<Case>> cases;  // keep alive for `keep`
   static std::vector<std::unique_ptr<DesignProblem>> probs;
   cases.push_back(std::make_unique<Case>(load_case_json(j, "<test>", base_dir)));
-  probs.push_back(std::make_unique<DesignProblem>(*cases.back(), parse_optimization(*cases.back())));
+  probs.push_back(
+      std::make_unique<DesignProblem>(*cases.back(), parse_optimization(*cases.back())));
   OptimizeOptions o;
   o.out_dir = out;
   o.resume = resume;
@@ -49,18 +51,22 @@ OptimizeResult run(const json& j, const std::string& out, bool resume, long stop
 
 }  // namespace
 
-TEST(Optimization, CoarseRobotArmEndsFeasibleAndLighterOnTheDeviationBoundAndResumesToTheSameDesign) {
+TEST(Optimization,
+     CoarseRobotArmEndsFeasibleAndLighterOnTheDeviationBoundAndResumesToTheSameDesign) {
   const std::string dir = testing::TempDir() + "lsmbs_opt";
   std::filesystem::remove_all(dir);
   DesignProblem* prob = nullptr;
   const auto full = run(tiny_robot_arm(), dir + "/full", false, -1, &prob);
   const double m0 = full.history.front().objective, m1 = full.final.objective;
   const auto kkt = kkt_report(*prob, full.final);
-  std::printf("mass %.4f g -> %.4f g (%.1f %%), %ld evaluations, %s; max violation %+.2e; KKT: %d active, lambda %.3f, "
-              "stationarity %.3f, bound-sign %.3f\n",
-              1e3 * m0, 1e3 * m1, 100 * (1 - m1 / m0), full.evaluations, full.nlopt_status.c_str(), full.final.max_violation,
-              kkt.active_constraints, kkt.multipliers.empty() ? 0.0 : kkt.multipliers[0], kkt.stationarity,
-              kkt.bound_sign_violation);
+  std::printf(
+      "mass %.4f g -> %.4f g (%.1f %%), %ld evaluations, %s; max violation %+.2e; KKT: %d active, "
+      "lambda %.3f, "
+      "stationarity %.3f, bound-sign %.3f\n",
+      1e3 * m0, 1e3 * m1, 100 * (1 - m1 / m0), full.evaluations, full.nlopt_status.c_str(),
+      full.final.max_violation, kkt.active_constraints,
+      kkt.multipliers.empty() ? 0.0 : kkt.multipliers[0], kkt.stationarity,
+      kkt.bound_sign_violation);
   EXPECT_TRUE(full.converged) << full.nlopt_status;
   EXPECT_LE(full.final.max_violation, 2.5e-3) << "feasible within the paper's 0.25 %";
   EXPECT_GE(full.final.max_violation, -1e-2) << "the deviation constraint is active";
@@ -81,11 +87,14 @@ TEST(Optimization, CoarseRobotArmEndsFeasibleAndLighterOnTheDeviationBoundAndRes
   EXPECT_TRUE(part.interrupted);
   EXPECT_EQ(part.simulations, 20);
   const auto resumed = run(tiny_robot_arm(), dir + "/resumed", true, -1);
-  EXPECT_EQ(resumed.simulations, full.evaluations - 20) << "earlier evaluations come from the checkpoint";
+  EXPECT_EQ(resumed.simulations, full.evaluations - 20)
+      << "earlier evaluations come from the checkpoint";
   ASSERT_EQ(resumed.p.size(), full.p.size());
-  for (Eigen::Index i = 0; i < full.p.size(); ++i) EXPECT_EQ(resumed.p[i], full.p[i]) << "variable " << i;
+  for (Eigen::Index i = 0; i < full.p.size(); ++i)
+    EXPECT_EQ(resumed.p[i], full.p[i]) << "variable " << i;
   EXPECT_EQ(resumed.final.objective, full.final.objective);
-  // the resumed run's history is the uninterrupted run's (replayed points included, numbered from 1)
+  // the resumed run's history is the uninterrupted run's (replayed points included, numbered from
+  // 1)
   ASSERT_EQ(resumed.history.size(), full.history.size());
   for (size_t k = 0; k < full.history.size(); ++k) {
     EXPECT_EQ(resumed.history[k].p, full.history[k].p) << "evaluation " << k + 1;
@@ -105,7 +114,8 @@ TEST(Optimization, ResumeRefusesACheckpointOfAnotherCase) {
     run(other, dir, true, -1);
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("optimization options changed"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("optimization options changed"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -119,7 +129,8 @@ TEST(Optimization, RefusesTheAdjointSensitivityMethod) {
     parse_optimization(cs);
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/optimization/sensitivity/method"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/optimization/sensitivity/method"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("idas-adjoint"), std::string::npos) << e.what();
   }
 }
@@ -128,7 +139,8 @@ namespace {
 
 // One-hole connecting rod of §5.2 on the 3 mm mesh, with Svanberg's classic MMA.
 json coarse_rod() {
-  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank/slider_crank_1hole_coarse.json"));
+  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
+                                     "/data/slider_crank/slider_crank_1hole_coarse.json"));
   c["output"]["vtu_stride"] = 0;
   c["optimization"]["optimizer"] = "mma-svanberg";
   return c;
@@ -136,7 +148,8 @@ json coarse_rod() {
 
 const std::string kRodDir = std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank";
 
-OptimizeResult run_rod(const json& j, const std::string& out, bool resume, long stop_after, DesignProblem** keep) {
+OptimizeResult run_rod(const json& j, const std::string& out, bool resume, long stop_after,
+                       DesignProblem** keep) {
   return run(j, out, resume, stop_after, keep, kRodDir);
 }
 
@@ -150,15 +163,18 @@ TEST(Optimization, CoarseOneHoleRodReachesTheElongationBoundFoundByBisection) {
   const auto kkt = kkt_report(*prob, full.final);
   double worst = -1e300;
   for (double g : full.final.constraints) worst = std::max(worst, g);
-  std::printf("rod: mass %.3f g -> %.3f g (%.2f %%), p = %.5f, max elongation %.4f um, %ld simulations, %s; KKT: %d active, "
-              "stationarity %.2e\n",
-              1e3 * full.history.front().objective, 1e3 * full.final.objective,
-              100 * (1 - full.final.objective / full.history.front().objective), full.p[0], 1e6 * worst, full.evaluations,
-              full.nlopt_status.c_str(), kkt.active_constraints, kkt.stationarity);
+  std::printf(
+      "rod: mass %.3f g -> %.3f g (%.2f %%), p = %.5f, max elongation %.4f um, %ld simulations, "
+      "%s; KKT: %d active, "
+      "stationarity %.2e\n",
+      1e3 * full.history.front().objective, 1e3 * full.final.objective,
+      100 * (1 - full.final.objective / full.history.front().objective), full.p[0], 1e6 * worst,
+      full.evaluations, full.nlopt_status.c_str(), kkt.active_constraints, kkt.stationarity);
   EXPECT_TRUE(full.converged) << full.nlopt_status;
   // the paper's classic MMA took 7 iterations (one simulation each); the reconstructed rod and
   // pressure (calibrated to the paper's initial values only) may take up to twice as many
-  EXPECT_LE(full.evaluations, 14) << "the classic MMA leaves the tiny start hole in a few iterations (paper: 7)";
+  EXPECT_LE(full.evaluations, 14)
+      << "the classic MMA leaves the tiny start hole in a few iterations (paper: 7)";
   EXPECT_NEAR(1e6 * worst, 16.0, 16.0 * 2.5e-3) << "the elongation bound is active";
   ASSERT_GE(kkt.active_constraints, 1);
   EXPECT_LT(kkt.stationarity, 1e-3);
@@ -190,7 +206,8 @@ TEST(Optimization, CoarseOneHoleRodReachesTheElongationBoundFoundByBisection) {
   EXPECT_EQ(resumed.p[0], full.p[0]);
   EXPECT_EQ(resumed.final.objective, full.final.objective);
   ASSERT_EQ(resumed.history.size(), full.history.size());
-  for (size_t k = 0; k < full.history.size(); ++k) EXPECT_EQ(resumed.history[k].p, full.history[k].p);
+  for (size_t k = 0; k < full.history.size(); ++k)
+    EXPECT_EQ(resumed.history[k].p, full.history[k].p);
   // resuming a finished run replays it without a simulation and ends on the same design
   const auto again = run_rod(coarse_rod(), dir + "/resumed", true, -1, nullptr);
   EXPECT_EQ(again.simulations, 0);

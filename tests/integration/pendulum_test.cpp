@@ -3,13 +3,14 @@
 // minimal-coordinate ODE (J + m l²) θ̈ = −m g l cos θ integrated by RK4 with a tiny step —
 // the constraints hold to tolerance at every step, and the solution does not depend on the
 // augmented-Lagrangian penalty ζ (eq. 7).
+#include "support/pendulum.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
 #include "support/convergence.hpp"
-#include "support/pendulum.hpp"
 #include "support/test_models.hpp"
 
 using namespace lsmbs;
@@ -41,14 +42,16 @@ Vec final_q(double h, double* worst_phi = nullptr, double zeta_factor = 0) {
   if (zeta_factor > 0) {
     // ζ relative to the automatic k
     const auto c = AlphaCoefficients::make(0.8, h);
-    const double k = GeneralizedAlpha::automatic_scaling(*cs.model, cs.model->params(), cs.initial, c);
+    const double k =
+        GeneralizedAlpha::automatic_scaling(*cs.model, cs.model->params(), cs.initial, c);
     cs.simulation.k = k;
     cs.simulation.zeta = zeta_factor * k;
   }
   ConstraintWatch w;
   w.m = cs.model.get();
   State fin;
-  const auto s = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w}, &fin);
+  const auto s =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w}, &fin);
   EXPECT_TRUE(s.ok) << s.message;
   if (worst_phi) *worst_phi = w.worst;
   return fin.q;

@@ -44,11 +44,15 @@ Law trapezoid(double from, double to, double a, double v, double start) {
   return [=](double t) {
     Theta r;
     r.th = from + dir * a / 2 *
-                      (ramp(t - t0) * ramp(t - t0) - ramp(t - t1) * ramp(t - t1) - ramp(t - t2) * ramp(t - t2) +
-                       ramp(t - t3) * ramp(t - t3));
+                      (ramp(t - t0) * ramp(t - t0) - ramp(t - t1) * ramp(t - t1) -
+                       ramp(t - t2) * ramp(t - t2) + ramp(t - t3) * ramp(t - t3));
     r.thd = dir * a * (ramp(t - t0) - ramp(t - t1) - ramp(t - t2) + ramp(t - t3));
     r.thdd = dir * a * (step(t - t0) - step(t - t1) - step(t - t2) + step(t - t3));
-    r.phase = t <= t0 ? "before" : t < t1 ? "accelerate" : t < t2 ? "constant" : t < t3 ? "decelerate" : "after";
+    r.phase = t <= t0  ? "before"
+              : t < t1 ? "accelerate"
+              : t < t2 ? "constant"
+              : t < t3 ? "decelerate"
+                       : "after";
     return r;
   };
 }
@@ -57,7 +61,9 @@ Law trapezoid(double from, double to, double a, double v, double start) {
 Law ramp_law(double from, double w, double tr, double start) {
   return [=](double t) {
     Theta r;
-    r.th = from + w / (2 * tr) * (ramp(t - start) * ramp(t - start) - ramp(t - start - tr) * ramp(t - start - tr));
+    r.th = from +
+           w / (2 * tr) *
+               (ramp(t - start) * ramp(t - start) - ramp(t - start - tr) * ramp(t - start - tr));
     r.thd = w / tr * (ramp(t - start) - ramp(t - start - tr));
     r.thdd = w / tr * (step(t - start) - step(t - start - tr));
     r.phase = t <= start ? "before" : t < start + tr ? "ramp" : "constant";
@@ -103,17 +109,19 @@ Law natural_spline(std::vector<double> x, std::vector<double> y) {
     size_t i = 0;
     while (t > x[i + 1]) ++i;
     const double u = x[i + 1] - t, w = t - x[i];
-    r.th = m[i] * u * u * u / (6 * h[i]) + m[i + 1] * w * w * w / (6 * h[i]) + (y[i] / h[i] - m[i] * h[i] / 6) * u +
-           (y[i + 1] / h[i] - m[i + 1] * h[i] / 6) * w;
-    r.thd = -m[i] * u * u / (2 * h[i]) + m[i + 1] * w * w / (2 * h[i]) - y[i] / h[i] + m[i] * h[i] / 6 +
-            y[i + 1] / h[i] - m[i + 1] * h[i] / 6;
+    r.th = m[i] * u * u * u / (6 * h[i]) + m[i + 1] * w * w * w / (6 * h[i]) +
+           (y[i] / h[i] - m[i] * h[i] / 6) * u + (y[i + 1] / h[i] - m[i + 1] * h[i] / 6) * w;
+    r.thd = -m[i] * u * u / (2 * h[i]) + m[i + 1] * w * w / (2 * h[i]) - y[i] / h[i] +
+            m[i] * h[i] / 6 + y[i + 1] / h[i] - m[i + 1] * h[i] / 6;
     r.thdd = (m[i] * u + m[i + 1] * w) / h[i];
     r.phase = "segment " + std::to_string(i);
     return r;
   };
 }
 
-double piston_x(double th) { return R * std::cos(th) + std::sqrt(L * L - R * R * std::sin(th) * std::sin(th)); }
+double piston_x(double th) {
+  return R * std::cos(th) + std::sqrt(L * L - R * R * std::sin(th) * std::sin(th));
+}
 double piston_v(double th, double thd) {
   const double s = std::sqrt(L * L - R * R * std::sin(th) * std::sin(th));
   return -R * thd * std::sin(th) * (1 + R * std::cos(th) / s);
@@ -128,7 +136,8 @@ struct Errors {
 // initial configuration), run to t_end at step h; errors against `theta`. Velocities are compared
 // from t_vel on.
 Errors run(const json& law, const Law& theta, double t_end, double h, double t_vel = 1e300) {
-  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_rigid.json"));
+  json c = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
+                                     "/data/slider_crank_rigid/slider_crank_rigid.json"));
   for (auto& j : c["joints"])
     if (j["name"] == "crank_drive") j["law"] = law;
   c["simulation"].update({{"t_end", t_end}, {"h", h}, {"tol_r", 1e-12}, {"tol_phi", 1e-14}});
@@ -154,7 +163,8 @@ Errors run(const json& law, const Law& theta, double t_end, double h, double t_v
   obs.crank = cs.model->find_rigid("crank")->dof0 + 2;
   obs.piston = cs.model->find_rigid("piston")->dof0;
   obs.t_vel = t_vel;
-  const auto sum = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs});
+  const auto sum =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&obs});
   EXPECT_TRUE(sum.ok) << sum.message;
   return obs.e;
 }
@@ -173,34 +183,70 @@ TEST(RigidSliderCrank, CrankAngleAndPistonPositionFollowEveryPhaseOfEveryDriverL
   };
   const std::vector<double> tx = {0, 0.004, 0.008, 0.011, 0.016}, ty = {0, 0.3, 1.4, 1.2, 2.5};
   const Case_ cases[] = {
-      {"ramp (§5)", {{"type", "ramp"}, {"from", 0}, {"speed", kOmega}, {"ramp_time", 0.01}},
-       ramp_law(0, kOmega, 0.01, 0), 0.02, {"ramp", "constant"}},
-      {"ramp, delayed start", {{"type", "ramp"}, {"from", 0}, {"speed", 200}, {"ramp_time", 0.005}, {"start", 0.003}},
-       ramp_law(0, 200, 0.005, 0.003), 0.012, {"before", "ramp", "constant"}},
-      {"trapezoid", {{"type", "trapezoid"}, {"from", 0}, {"to", 3}, {"acceleration", 4e4}, {"speed", 200}, {"start", 0.002}},
-       trapezoid(0, 3, 4e4, 200, 0.002), 0.026, {"before", "accelerate", "constant", "decelerate", "after"}},
-      {"trapezoid, backwards", {{"type", "trapezoid"}, {"from", 0}, {"to", -2}, {"acceleration", 4e4}, {"speed", 150}},
-       trapezoid(0, -2, 4e4, 150, 0), 0.02, {"accelerate", "constant", "decelerate", "after"}},
-      {"trapezoid, triangular", {{"type", "trapezoid"}, {"from", 0}, {"to", 0.5}, {"acceleration", 4e4}, {"speed", 200}},
-       trapezoid(0, 0.5, 4e4, 200, 0), 0.01, {"accelerate", "decelerate", "after"}},
-      {"constant", {{"type", "constant"}, {"value", 0}}, [](double) { return Theta{0, 0, 0, "constant"}; }, 0.005,
+      {"ramp (§5)",
+       {{"type", "ramp"}, {"from", 0}, {"speed", kOmega}, {"ramp_time", 0.01}},
+       ramp_law(0, kOmega, 0.01, 0),
+       0.02,
+       {"ramp", "constant"}},
+      {"ramp, delayed start",
+       {{"type", "ramp"}, {"from", 0}, {"speed", 200}, {"ramp_time", 0.005}, {"start", 0.003}},
+       ramp_law(0, 200, 0.005, 0.003),
+       0.012,
+       {"before", "ramp", "constant"}},
+      {"trapezoid",
+       {{"type", "trapezoid"},
+        {"from", 0},
+        {"to", 3},
+        {"acceleration", 4e4},
+        {"speed", 200},
+        {"start", 0.002}},
+       trapezoid(0, 3, 4e4, 200, 0.002),
+       0.026,
+       {"before", "accelerate", "constant", "decelerate", "after"}},
+      {"trapezoid, backwards",
+       {{"type", "trapezoid"}, {"from", 0}, {"to", -2}, {"acceleration", 4e4}, {"speed", 150}},
+       trapezoid(0, -2, 4e4, 150, 0),
+       0.02,
+       {"accelerate", "constant", "decelerate", "after"}},
+      {"trapezoid, triangular",
+       {{"type", "trapezoid"}, {"from", 0}, {"to", 0.5}, {"acceleration", 4e4}, {"speed", 200}},
+       trapezoid(0, 0.5, 4e4, 200, 0),
+       0.01,
+       {"accelerate", "decelerate", "after"}},
+      {"constant",
+       {{"type", "constant"}, {"value", 0}},
+       [](double) {
+         return Theta{0, 0, 0, "constant"};
+       },
+       0.005,
        {"constant"}},
-      {"linear table", {{"type", "table"}, {"interpolation", "linear"}, {"points", {{0, 0}, {0.004, 0.3}, {0.008, 1.4}, {0.011, 1.2}, {0.016, 2.5}}}},
-       linear_table(tx, ty), 0.02, {"segment 0", "segment 1", "segment 2", "segment 3", "after"}},
-      {"cubic table", {{"type", "table"}, {"points", {{0, 0}, {0.004, 0.3}, {0.008, 1.4}, {0.011, 1.2}, {0.016, 2.5}}}},
-       natural_spline(tx, ty), 0.02, {"segment 0", "segment 1", "segment 2", "segment 3", "after"}},
+      {"linear table",
+       {{"type", "table"},
+        {"interpolation", "linear"},
+        {"points", {{0, 0}, {0.004, 0.3}, {0.008, 1.4}, {0.011, 1.2}, {0.016, 2.5}}}},
+       linear_table(tx, ty),
+       0.02,
+       {"segment 0", "segment 1", "segment 2", "segment 3", "after"}},
+      {"cubic table",
+       {{"type", "table"},
+        {"points", {{0, 0}, {0.004, 0.3}, {0.008, 1.4}, {0.011, 1.2}, {0.016, 2.5}}}},
+       natural_spline(tx, ty),
+       0.02,
+       {"segment 0", "segment 1", "segment 2", "segment 3", "after"}},
   };
   for (const auto& c : cases) {
     const Errors e = run(c.law, c.theta, c.t_end, 2.5e-4);
-    std::printf("%-22s: max |θ − θ(t)| %.1e rad, max relative piston position error %.1e; steps per phase:", c.what,
-                e.angle, e.pos);
+    std::printf(
+        "%-22s: max |θ − θ(t)| %.1e rad, max relative piston position error %.1e; steps per phase:",
+        c.what, e.angle, e.pos);
     for (const auto& [p, n] : e.steps_in_phase) std::printf(" %s %d", p.c_str(), n);
     std::printf("\n");
     // Newton tolerance: |Φ| ≤ tol_phi = 1e-14 × the 0.18 m length scale on every constraint, an
     // angle error of ~5e-14 rad through the crank radius (measured ≤ 2.2e-15)
     EXPECT_LT(e.angle, 1e-13) << c.what;
     EXPECT_LT(e.pos, 1e-13) << c.what;
-    for (const auto& p : c.phases) EXPECT_GE(e.steps_in_phase.count(p) ? e.steps_in_phase.at(p) : 0, 3) << c.what << ": " << p;
+    for (const auto& p : c.phases)
+      EXPECT_GE(e.steps_in_phase.count(p) ? e.steps_in_phase.at(p) : 0, 3) << c.what << ": " << p;
     EXPECT_EQ(e.steps_in_phase.size(), c.phases.size()) << c.what;
   }
 }

@@ -24,8 +24,8 @@ using json = nlohmann::json;
 
 namespace {
 
-constexpr double kMass = 2.0, kJc = 0.05, kCx = 0.3, kTorque = 0.8, kScale = 1.25, kTheta0 = 0.3, kOmega0 = 0.5,
-                 kTEnd = 1.0;
+constexpr double kMass = 2.0, kJc = 0.05, kCx = 0.3, kTorque = 0.8, kScale = 1.25, kTheta0 = 0.3,
+                 kOmega0 = 0.5, kTEnd = 1.0;
 
 json torque_rotor(double h) {
   json j = json::parse(R"({
@@ -73,10 +73,13 @@ TEST(TorqueRotor, ConstantTorqueGivesTheParabolicAngle) {
   AngleWatch w;
   w.theta = [&](double t) { return kTheta0 + kOmega0 * t + T * t * t / (2 * J); };
   w.omega = [&](double t) { return kOmega0 + T * t / J; };
-  const auto r = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w});
+  const auto r =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w});
   ASSERT_TRUE(r.ok) << r.message;
-  std::printf("constant torque, J = %.3f: |θ − θ_exact| ≤ %.2e rad, |ω − ω_exact| ≤ %.2e rad/s over %g s (θ(t_end) = %.4f)\n",
-              J, w.worst_theta, w.worst_omega, kTEnd, w.theta(kTEnd));
+  std::printf(
+      "constant torque, J = %.3f: |θ − θ_exact| ≤ %.2e rad, |ω − ω_exact| ≤ %.2e rad/s over %g s "
+      "(θ(t_end) = %.4f)\n",
+      J, w.worst_theta, w.worst_omega, kTEnd, w.theta(kTEnd));
   // constant angular acceleration: generalized-α integrates quadratic motion exactly
   EXPECT_LT(w.worst_theta, 1e-10);
   EXPECT_LT(w.worst_omega, 1e-9);
@@ -96,12 +99,15 @@ TEST(TorqueRotor, DirectSensitivitiesMatchTheDerivativesOfTheClosedForm) {
   const Eigen::RowVector3d dtheta(a * t * t, b * t * t, b * kCx * kCx * t * t),
       domega(2 * a * t, 2 * b * t, 2 * b * kCx * kCx * t);
   ASSERT_EQ(res.responses.size(), 2u);
-  const Eigen::RowVectorXd g0 = res.responses[0].gradient.row(0), g1 = res.responses[1].gradient.row(0);
+  const Eigen::RowVectorXd g0 = res.responses[0].gradient.row(0),
+                           g1 = res.responses[1].gradient.row(0);
   const double e0 = (g0 - dtheta).cwiseAbs().maxCoeff() / dtheta.cwiseAbs().maxCoeff();
   const double e1 = (g1 - domega).cwiseAbs().maxCoeff() / domega.cwiseAbs().maxCoeff();
-  std::printf("torque rotor: dθ(t_end)/d(scale, J_c, m) = (%.6f, %.6f, %.6f), closed form (%.6f, %.6f, %.6f): "
-              "relative error %.2e; dω: %.2e\n",
-              g0[0], g0[1], g0[2], dtheta[0], dtheta[1], dtheta[2], e0, e1);
+  std::printf(
+      "torque rotor: dθ(t_end)/d(scale, J_c, m) = (%.6f, %.6f, %.6f), closed form (%.6f, %.6f, "
+      "%.6f): "
+      "relative error %.2e; dω: %.2e\n",
+      g0[0], g0[1], g0[2], dtheta[0], dtheta[1], dtheta[2], e0, e1);
   EXPECT_LT(e0, 1e-9);
   EXPECT_LT(e1, 1e-9);
 }
@@ -140,7 +146,8 @@ json spring_rotor(double h, double t_end) {
 // J θ̈ + c θ̇ + k (θ − θf) = 0, θ(0) = θs, θ̇(0) = 0.
 double damped(double t) {
   const double sigma = kC / (2 * kJ), wd = std::sqrt(kK / kJ - sigma * sigma);
-  return kFree + (kStart - kFree) * std::exp(-sigma * t) * (std::cos(wd * t) + sigma / wd * std::sin(wd * t));
+  return kFree + (kStart - kFree) * std::exp(-sigma * t) *
+                     (std::cos(wd * t) + sigma / wd * std::sin(wd * t));
 }
 
 }  // namespace
@@ -153,12 +160,15 @@ TEST(RotationalSpring, RotorOscillatesAtSqrtKOverJWithSecondOrderConvergence) {
     Case cs = test::make_case(spring_rotor(hs[i], t_end));
     AngleWatch w;
     w.theta = damped;
-    const auto r = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w});
+    const auto r =
+        GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w});
     ASSERT_TRUE(r.ok) << r.message;
     err[i] = w.worst_theta;
   }
-  std::printf("rotational spring, ω = %.4f rad/s, amplitude %.2f rad, 3 periods:\n", std::sqrt(kK / kJ), kStart - kFree);
-  test::expect_order({err[0], err[1], err[2]}, 2.0, 0.15, "max |θ − θ_exact| for h = T/50, T/100, T/200");
+  std::printf("rotational spring, ω = %.4f rad/s, amplitude %.2f rad, 3 periods:\n",
+              std::sqrt(kK / kJ), kStart - kFree);
+  test::expect_order({err[0], err[1], err[2]}, 2.0, 0.15,
+                     "max |θ − θ_exact| for h = T/50, T/100, T/200");
   EXPECT_LT(err[2], 2e-3 * (kStart - kFree));
 }
 
@@ -191,11 +201,14 @@ TEST(RotationalSpring, TwoRotorsCoupledBodyToBody) {
     }
   } watch;
   watch.w = w, watch.J1 = J1, watch.J2 = J2;
-  const auto r = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&watch});
+  const auto r =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&watch});
   ASSERT_TRUE(r.ok) << r.message;
-  std::printf("coupled rotors (ω = %.4f rad/s, 2 periods, h = T/200): |Δθ − 0.4 cos ωt| ≤ %.2e, |J1ω1 + J2ω2| ≤ %.2e, "
-              "|J1θ1 + J2θ2| ≤ %.2e\n",
-              w, watch.worst_rel, watch.worst_momentum, watch.worst_balance);
+  std::printf(
+      "coupled rotors (ω = %.4f rad/s, 2 periods, h = T/200): |Δθ − 0.4 cos ωt| ≤ %.2e, |J1ω1 + "
+      "J2ω2| ≤ %.2e, "
+      "|J1θ1 + J2θ2| ≤ %.2e\n",
+      w, watch.worst_rel, watch.worst_momentum, watch.worst_balance);
   EXPECT_LT(watch.worst_rel, 2e-3 * 0.4);
   EXPECT_LT(watch.worst_momentum, 1e-10);
   EXPECT_LT(watch.worst_balance, 1e-10);
@@ -216,8 +229,9 @@ TEST(RotationalSpring, DirectSensitivitiesMatchCentralFiniteDifferences) {
     const Mat& A = direct.responses[r].gradient;
     const Mat& B = fd.responses[r].gradient;
     const double e = (A - B).cwiseAbs().maxCoeff() / B.cwiseAbs().maxCoeff();
-    std::printf("rotational spring: %s gradient (k, c, θ0) direct (%.6e, %.6e, %.6e) vs fd-central: %.2e\n",
-                fd.responses[r].name.c_str(), A(0, 0), A(0, 1), A(0, 2), e);
+    std::printf(
+        "rotational spring: %s gradient (k, c, θ0) direct (%.6e, %.6e, %.6e) vs fd-central: %.2e\n",
+        fd.responses[r].name.c_str(), A(0, 0), A(0, 1), A(0, 2), e);
     worst = std::max(worst, e);
   }
   EXPECT_LT(worst, 1e-6);

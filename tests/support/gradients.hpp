@@ -5,53 +5,26 @@
 #include <fstream>
 #include <string>
 
+#include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "support/test_models.hpp"
 
 namespace lsmbs::test {
 
-/// How a gradient error is normalized.
-enum class Norm {
-  /// per response value (each step of a per-step response on its own): ‖g − g_ref‖∞ over the
-  /// variables / ‖g_ref‖∞ of that value
-  kPerValue,
-  /// per response: max over values and variables of |g − g_ref| / max |g_ref| of the response
-  /// (steps whose gradient is small by cancellation carry no relative accuracy in any method)
-  kPerResponse,
-};
+using Norm = GradientNorm;
 
-/// Largest gradient error over all responses; `where` receives the response (and value index).
-inline double worst_relative(const SensitivityResult& a, const SensitivityResult& ref, Norm norm = Norm::kPerValue,
-                             std::string* where = nullptr) {
-  double worst = 0;
+/// Largest gradient error over all responses (compare_gradients, expecting the same shapes);
+/// `where` receives the response (and value index).
+inline double worst_relative(const SensitivityResult& a, const SensitivityResult& ref,
+                             Norm norm = Norm::kPerValue, std::string* where = nullptr) {
   EXPECT_EQ(a.responses.size(), ref.responses.size());
   for (size_t r = 0; r < ref.responses.size() && r < a.responses.size(); ++r) {
-    const Mat& A = a.responses[r].gradient;
-    const Mat& B = ref.responses[r].gradient;
-    EXPECT_EQ(A.rows(), B.rows());
-    EXPECT_EQ(A.cols(), B.cols());
-    if (A.rows() != B.rows() || A.cols() != B.cols()) continue;
-    if (norm == Norm::kPerResponse) {
-      const double n = B.cwiseAbs().maxCoeff();
-      if (n == 0) continue;
-      const double e = (A - B).cwiseAbs().maxCoeff() / n;
-      if (e > worst) {
-        worst = e;
-        if (where) *where = ref.responses[r].name;
-      }
-      continue;
-    }
-    for (Eigen::Index i = 0; i < B.rows(); ++i) {
-      const double n = B.row(i).cwiseAbs().maxCoeff();
-      if (n == 0) continue;
-      const double e = (A.row(i) - B.row(i)).cwiseAbs().maxCoeff() / n;
-      if (e > worst) {
-        worst = e;
-        if (where) *where = ref.responses[r].name + "[" + std::to_string(i) + "]";
-      }
-    }
+    EXPECT_EQ(a.responses[r].gradient.rows(), ref.responses[r].gradient.rows());
+    EXPECT_EQ(a.responses[r].gradient.cols(), ref.responses[r].gradient.cols());
   }
-  return worst;
+  const GradientDifference d = compare_gradients(a.responses, ref.responses, norm);
+  if (where) *where = d.where;
+  return d.worst;
 }
 
 /// Sensitivities of the case at its initial design (expects success).
@@ -71,8 +44,8 @@ inline SensitivityResult gradients(Case& cs, SensitivityOptions::Method method,
 /// The shipped rigid slider-crank with a spring–damper whose stiffness k and damping c are the
 /// design variables.
 inline nlohmann::json spring_crank_json() {
-  return nlohmann::json::parse(
-      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json"));
+  return nlohmann::json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
+                                             "/data/slider_crank_rigid/slider_crank_spring.json"));
 }
 
 }  // namespace lsmbs::test

@@ -3,7 +3,6 @@
 // l from a revolute joint to ground, released horizontally at rest under gravity g, and its
 // independent reference: the minimal-coordinate ODE (J + m l²) θ̈ = −m g l cos θ by RK4.
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "lsmbs/core/types.hpp"
@@ -15,11 +14,17 @@ struct Pendulum {
 
   /// Case document: bob at (l, 0), pin at the origin, run to t_end with step h.
   nlohmann::json json(double h, double t_end = 1.0) const {
-    return {{"name", "pendulum"},
-            {"gravity", {0, -g}},
-            {"bodies", {{{"name", "bob"}, {"type", "rigid"}, {"position", {l, 0}}, {"mass", m}, {"inertia", J}}}},
-            {"joints", {{{"name", "pin"}, {"type", "revolute"}, {"a", {{"body", "bob"}, {"at", {-l, 0}}}}, {"b", "ground"}}}},
-            {"simulation", {{"t_end", t_end}, {"h", h}}}};
+    return {
+        {"name", "pendulum"},
+        {"gravity", {0, -g}},
+        {"bodies",
+         {{{"name", "bob"}, {"type", "rigid"}, {"position", {l, 0}}, {"mass", m}, {"inertia", J}}}},
+        {"joints",
+         {{{"name", "pin"},
+           {"type", "revolute"},
+           {"a", {{"body", "bob"}, {"at", {-l, 0}}}},
+           {"b", "ground"}}}},
+        {"simulation", {{"t_end", t_end}, {"h", h}}}};
   }
 
   /// θ(t) from classical RK4 on the minimal ODE with n steps (global error O(n⁻⁴): with

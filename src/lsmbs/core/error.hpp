@@ -60,7 +60,8 @@ class ModelError : public Error {
   const std::string& message() const { return message_; }  ///< what is wrong, without the names
 
  private:
-  static std::string format(const std::string& entity, const std::string& field, const std::string& message) {
+  static std::string format(const std::string& entity, const std::string& field,
+                            const std::string& message) {
     std::string out = entity;
     if (!field.empty()) out += (out.empty() ? "" : ", ") + field;
     return out.empty() ? message : out + ": " + message;

@@ -23,7 +23,9 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   if (ec) throw Error(path, "", "cannot rename temporary output file: " + ec.message());
 }
 
-void write_json_atomic(const std::string& path, const nlohmann::json& j) { write_file_atomic(path, j.dump(2) + "\n"); }
+void write_json_atomic(const std::string& path, const nlohmann::json& j) {
+  write_file_atomic(path, j.dump(2) + "\n");
+}
 
 void check_json_depth(const std::string& text, const std::string& file, int max_depth) {
   int depth = 0;
@@ -31,9 +33,12 @@ void check_json_depth(const std::string& text, const std::string& file, int max_
   for (size_t i = 0; i < text.size(); ++i) {
     const char ch = text[i];
     if (in_string) {
-      if (escaped) escaped = false;
-      else if (ch == '\\') escaped = true;
-      else if (ch == '"') in_string = false;
+      if (escaped)
+        escaped = false;
+      else if (ch == '\\')
+        escaped = true;
+      else if (ch == '"')
+        in_string = false;
     } else if (ch == '"') {
       in_string = true;
     } else if (ch == '[' || ch == '{') {

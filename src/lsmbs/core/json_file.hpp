@@ -2,9 +2,8 @@
 // Files every layer writes or reads safely: atomic writes (a temporary file in the same folder,
 // then rename, so an interrupted run never leaves a half-written file that looks complete) and a
 // nesting-depth check before JSON parsing.
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace lsmbs {
 

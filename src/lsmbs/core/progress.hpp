@@ -1,47 +1,22 @@
 #pragma once
-// ProgressLine — one self-overwriting status line on stderr for long commands on a terminal
-// (issue 9: time, step and Newton iterations of a simulation; iteration, objective and
-// constraint of an optimization). Disabled, it costs one branch; enabled, it redraws at most
-// ten times a second so that printing never shows up in the step cost.
-#include <chrono>
-#include <cstdarg>
-#include <cstdio>
+// Progress of a long run, reported to whoever drives it (the command line draws a status line,
+// Python calls a function). The library only fills a Progress and calls the callback; how often
+// and where it is shown is the caller's choice.
+#include <functional>
+#include <string>
 
 namespace lsmbs {
 
-class ProgressLine {
- public:
-  explicit ProgressLine(bool enabled = false) : enabled_(enabled) {}
-  bool enabled() const { return enabled_; }
-  void enable(bool on) { enabled_ = on; }
-
-  /// Redraws the line (printf format) unless the last redraw was less than 0.1 s ago; `force`
-  /// redraws regardless (e.g. at the end of a phase).
-  __attribute__((format(printf, 3, 4))) void update(bool force, const char* fmt, ...) {
-    if (!enabled_) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (!force && drawn_ && now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
-    drawn_ = true;
-    std::va_list ap;
-    va_start(ap, fmt);
-    std::fputs("\r\033[K", stderr);  // carriage return, erase to the end of the line
-    std::vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    std::fflush(stderr);
-  }
-  /// Erases the line so that ordinary output can follow.
-  void clear() {
-    if (!enabled_ || !drawn_) return;
-    std::fputs("\r\033[K", stderr);
-    std::fflush(stderr);
-    drawn_ = false;
-  }
-
- private:
-  bool enabled_ = false;
-  bool drawn_ = false;
-  std::chrono::steady_clock::time_point last_{};
+struct Progress {
+  std::string label;  ///< e.g. "simulation 3/11" when a method runs several simulations; "IDAS"
+  double t = 0;       ///< time reached [s]
+  double t_end = 0;   ///< final time of the run [s]
+  long step = 0;      ///< steps taken (0 for IDAS output times)
+  int newton_iterations = 0;  ///< Newton iterations of the last step (generalized-α)
+  double fraction() const { return t_end > 0 ? t / t_end : 0.0; }
 };
+
+/// Called at every step of a time integration (empty: no progress reporting).
+using ProgressCallback = std::function<void(const Progress&)>;
 
 }  // namespace lsmbs

@@ -20,9 +20,11 @@ inline constexpr int kMaxLocalDofs = 12;
 inline constexpr int kMaxLocalEqs = 3;
 
 using LocalVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxLocalDofs, 1>;
-using LocalMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLocalDofs, kMaxLocalDofs>;
+using LocalMat =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLocalDofs, kMaxLocalDofs>;
 using LocalEqVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxLocalEqs, 1>;
-using LocalJac = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLocalEqs, kMaxLocalDofs>;
+using LocalJac =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLocalEqs, kMaxLocalDofs>;
 
 /// Rotation matrix R(θ) and its derivative R'(θ) = dR/dθ.
 inline Mat2 rotation(double theta) {

@@ -21,9 +21,12 @@ Vec Design::upper() const {
 }
 
 int Design::add_variable(const std::string& name, double initial, double lower, double upper) {
-  if (variable_index(name) >= 0) throw SetupError("design.variables", "duplicate design variable '" + name + "'");
+  if (variable_index(name) >= 0)
+    throw SetupError("design.variables", "duplicate design variable '" + name + "'");
   if (!(upper > lower) || !(initial >= lower && initial <= upper))
-    throw SetupError("design.variables", "variable '" + name + "': expected lower < upper and lower <= initial <= upper");
+    throw SetupError(
+        "design.variables",
+        "variable '" + name + "': expected lower < upper and lower <= initial <= upper");
   variables.push_back({name, initial, lower, upper});
   return size() - 1;
 }
@@ -34,20 +37,25 @@ ParamBinding Design::variable(const std::string& name, double scale, double offs
   return ParamBinding{offset, scale, k};
 }
 
-void Design::add_geometry(const FlexibleBody& body, std::vector<Feature> features, MappingOptions o) {
+void Design::add_geometry(const FlexibleBody& body, std::vector<Feature> features,
+                          MappingOptions o) {
   for (const auto& b : bodies)
-    if (b.body == &body) throw SetupError("design.geometry", "body '" + body.name + "' has two geometries");
+    if (b.body == &body)
+      throw SetupError("design.geometry", "body '" + body.name + "' has two geometries");
   LevelSetNode root = LevelSetNode::all_of(static_cast<int>(features.size()));
   BodyDesign bd;
   bd.body = &body;
-  bd.map = std::make_unique<DesignMap>(body.mesh, LevelSet(std::move(features), std::move(root), size()), o);
+  bd.map = std::make_unique<DesignMap>(body.mesh,
+                                       LevelSet(std::move(features), std::move(root), size()), o);
   bodies.push_back(std::move(bd));
 }
 
 void Design::bind(int parameter, const std::string& variable, double scale, double offset) {
   const int k = variable_index(variable);
   if (k < 0) throw SetupError("design.parameters", "unknown design variable '" + variable + "'");
-  if (parameter < 0) throw SetupError("design.parameters", "unknown model parameter (index " + std::to_string(parameter) + ")");
+  if (parameter < 0)
+    throw SetupError("design.parameters",
+                     "unknown model parameter (index " + std::to_string(parameter) + ")");
   bindings.push_back({parameter, k, offset, scale});
 }
 
@@ -61,7 +69,8 @@ void Design::apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu) c
   if (dmu) dmu->resize(bodies.size());
   for (size_t b = 0; b < bodies.size(); ++b)
     bodies[b].map->map(p, params.fields[bodies[b].body->field], dmu ? &(*dmu)[b] : nullptr);
-  for (const auto& bd : bindings) params.scalars[bd.parameter] = bd.offset + bd.scale * p[bd.variable];
+  for (const auto& bd : bindings)
+    params.scalars[bd.parameter] = bd.offset + bd.scale * p[bd.variable];
 }
 
 std::vector<ParamDirection> Design::apply_with_directions(const Vec& p, ModelParams& params) const {
@@ -71,12 +80,14 @@ std::vector<ParamDirection> Design::apply_with_directions(const Vec& p, ModelPar
   for (size_t b = 0; b < bodies.size(); ++b)
     for (int k = 0; k < dmu[b].outerSize(); ++k)
       for (SpMat::InnerIterator it(dmu[b], k); it; ++it)
-        dirs[it.col()].fields.push_back({bodies[b].body->field, static_cast<int>(it.row()), it.value()});
+        dirs[it.col()].fields.push_back(
+            {bodies[b].body->field, static_cast<int>(it.row()), it.value()});
   for (const auto& bd : bindings) dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
   return dirs;
 }
 
-double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params, Vec& grad) {
+double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
+                             Vec& grad) {
   const double rt = params.scalars[b.body->rho_param] * params.scalars[b.body->thickness_param];
   const auto& A = b.map->element_areas();
   grad.setZero(dmu.cols());

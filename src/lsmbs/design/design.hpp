@@ -62,9 +62,11 @@ class Design final : public Parameterization {
   void apply(const Vec& p, ModelParams& params) const override { apply(p, params, nullptr); }
   /// apply() with ∂μ/∂p, returned as one parameter direction ∂(ModelParams)/∂p_i per variable
   /// (the mapping runs once).
-  std::vector<ParamDirection> apply_with_directions(const Vec& p, ModelParams& params) const override;
+  std::vector<ParamDirection> apply_with_directions(const Vec& p,
+                                                    ModelParams& params) const override;
   /// Mass of a designed body and its gradient m(p), ∂m/∂p = ρ t Σ_e A_e ∂μ_e/∂p.
-  static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params, Vec& grad);
+  static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
+                              Vec& grad);
 };
 
 }  // namespace lsmbs

@@ -21,7 +21,8 @@ Mesh2D Mesh2D::rectangle(double x0, double y0, double lx, double ly, int nx, int
     for (int i = 0; i <= nx; ++i) m.nodes.emplace_back(x0 + lx * i / nx, y0 + ly * j / ny);
   auto id = [nx](int i, int j) { return j * (nx + 1) + i; };
   for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) m.quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+    for (int i = 0; i < nx; ++i)
+      m.quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
   for (int j = 0; j <= ny; ++j) {
     m.node_sets["left"].push_back(id(0, j));
     m.node_sets["right"].push_back(id(nx, j));
@@ -83,7 +84,8 @@ std::vector<int> Mesh2D::nodes_on_circle(const Vec2& c, double rad, double tol) 
 std::vector<int> Mesh2D::nodes_in_box(const Vec2& lo, const Vec2& hi) const {
   std::vector<int> r;
   for (int i = 0; i < num_nodes(); ++i)
-    if ((nodes[i].array() >= lo.array()).all() && (nodes[i].array() <= hi.array()).all()) r.push_back(i);
+    if ((nodes[i].array() >= lo.array()).all() && (nodes[i].array() <= hi.array()).all())
+      r.push_back(i);
   return r;
 }
 int Mesh2D::nearest_node(const Vec2& p) const {
@@ -125,14 +127,15 @@ struct Reader {
 }  // namespace
 
 Mesh2D Mesh2D::read_gmsh(const std::string& path) {
-  if (const auto why = unreadable_file_reason(path); !why.empty()) throw Error(path, "", "mesh file: " + why);
+  if (const auto why = unreadable_file_reason(path); !why.empty())
+    throw Error(path, "", "mesh file: " + why);
   std::ifstream f(path);
   if (!f) throw Error(path, "", "cannot open mesh file");
   Reader rd{f, path};
   Mesh2D m;
   std::map<int, std::string> phys_names[4];
   std::map<int, std::vector<int>> entity_phys[4];  // entity tag -> physical tags, per dim
-  std::map<long, int> node_index;                 // gmsh tag -> our index
+  std::map<long, int> node_index;                  // gmsh tag -> our index
   std::map<std::string, std::set<int>> sets;
   bool have_format = false;
   std::string s;
@@ -143,7 +146,8 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
       double version;
       int file_type, dsize;
       rd.parse(rd.next_line(), version, file_type, dsize);
-      if (version < 4.0 || version >= 5.0) rd.fail("expected Gmsh format 4.x, got " + std::to_string(version));
+      if (version < 4.0 || version >= 5.0)
+        rd.fail("expected Gmsh format 4.x, got " + std::to_string(version));
       if (file_type != 0) rd.fail("expected an ASCII .msh file (binary given)");
       have_format = true;
     } else if (s == "$PhysicalNames") {
@@ -187,7 +191,8 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
       long nblocks, nnodes, minTag, maxTag;
       rd.parse(rd.next_line(), nblocks, nnodes, minTag, maxTag);
       if (nblocks < 0 || nnodes < 0) rd.fail("negative block or node count");
-      m.nodes.reserve(static_cast<size_t>(std::min(nnodes, 10000000L)));  // a count is a claim, not yet data
+      m.nodes.reserve(
+          static_cast<size_t>(std::min(nnodes, 10000000L)));  // a count is a claim, not yet data
       for (long b = 0; b < nblocks; ++b) {
         int edim, etag, parametric;
         long nb;
@@ -212,19 +217,30 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
         rd.parse(rd.next_line(), edim, etag, etype, nb);
         int nn = 0;
         switch (etype) {
-          case 15: nn = 1; break;  // point
-          case 1: nn = 2; break;   // 2-node line
-          case 3: nn = 4; break;   // 4-node quad
+          case 15:
+            nn = 1;
+            break;  // point
+          case 1:
+            nn = 2;
+            break;  // 2-node line
+          case 3:
+            nn = 4;
+            break;  // 4-node quad
           case 2:
-            rd.fail("triangles are not supported (lsmbs uses 4-node quadrilaterals: recombine the mesh in Gmsh)");
+            rd.fail(
+                "triangles are not supported (lsmbs uses 4-node quadrilaterals: recombine the mesh "
+                "in Gmsh)");
           default:
-            rd.fail("unsupported element type " + std::to_string(etype) + " (expected points, 2-node lines, 4-node quads)");
+            rd.fail("unsupported element type " + std::to_string(etype) +
+                    " (expected points, 2-node lines, 4-node quads)");
         }
         std::vector<std::string> groups;
         if (edim >= 0 && edim < 4 && entity_phys[edim].count(etag))
           for (int p : entity_phys[edim][etag]) {
-            if (phys_names[edim].count(p)) groups.push_back(phys_names[edim][p]);
-            else groups.push_back("physical_" + std::to_string(p));
+            if (phys_names[edim].count(p))
+              groups.push_back(phys_names[edim][p]);
+            else
+              groups.push_back("physical_" + std::to_string(p));
           }
         for (long i = 0; i < nb; ++i) {
           std::istringstream is(rd.next_line());
@@ -236,7 +252,8 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
             is >> nt;
             if (!is) rd.fail("malformed element");
             auto it = node_index.find(nt);
-            if (it == node_index.end()) rd.fail("element refers to unknown node " + std::to_string(nt));
+            if (it == node_index.end())
+              rd.fail("element refers to unknown node " + std::to_string(nt));
             q[k] = it->second;
             if (etype != 3)
               for (const auto& g : groups) sets[g].insert(it->second);

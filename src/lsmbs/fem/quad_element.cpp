@@ -103,7 +103,8 @@ void add_point(const Eigen::Matrix<double, 4, 2>& G, double tw, const Vec8& x,
 }
 
 template <class Vec8>
-double point_energy(const Eigen::Matrix<double, 4, 2>& G, double tw, const Vec8& x, const Eigen::Matrix3d& D) {
+double point_energy(const Eigen::Matrix<double, 4, 2>& G, double tw, const Vec8& x,
+                    const Eigen::Matrix3d& D) {
   Mat2 F = Mat2::Zero();
   for (int i = 0; i < 4; ++i) F += Vec2(x[2 * i], x[2 * i + 1]) * G.row(i);
   const Mat2 C = F.transpose() * F;
@@ -113,7 +114,8 @@ double point_energy(const Eigen::Matrix<double, 4, 2>& G, double tw, const Vec8&
 
 }  // namespace
 
-void QuadElement::internal_force(const Vec8& x, double E, double nu, double t, Vec8& f, Mat8* K) const {
+void QuadElement::internal_force(const Vec8& x, double E, double nu, double t, Vec8& f,
+                                 Mat8* K) const {
   f.setZero();
   if (K) K->setZero();
   const bool sri = integration_ == QuadIntegration::kSelectiveShear;
@@ -122,12 +124,15 @@ void QuadElement::internal_force(const Vec8& x, double E, double nu, double t, V
   if (sri) add_point(centre_.G, t * centre_.w, x, plane_stress(E, nu, false, true), f, K);
 }
 
-void QuadElement::internal_force_nu_derivative(const Vec8& x, double E, double nu, double t, Vec8& df) const {
+void QuadElement::internal_force_nu_derivative(const Vec8& x, double E, double nu, double t,
+                                               Vec8& df) const {
   df.setZero();
   const bool sri = integration_ == QuadIntegration::kSelectiveShear;
   const Eigen::Matrix3d D = plane_stress_dnu(E, nu, true, !sri);
   for (const auto& p : gauss_) add_point<Vec8, Mat8>(p.G, t * p.w, x, D, df, nullptr);
-  if (sri) add_point<Vec8, Mat8>(centre_.G, t * centre_.w, x, plane_stress_dnu(E, nu, false, true), df, nullptr);
+  if (sri)
+    add_point<Vec8, Mat8>(centre_.G, t * centre_.w, x, plane_stress_dnu(E, nu, false, true), df,
+                          nullptr);
 }
 
 double QuadElement::strain_energy(const Vec8& x, double E, double nu, double t) const {

@@ -38,7 +38,8 @@ class QuadElement {
   void internal_force(const Vec8& x, double E, double nu, double thickness, Vec8& f, Mat8* K) const;
   /// ∂f_int/∂ν: f_int = t Σ w Bᵀ D(E, ν) E_GL is linear in D, so this is the same sum with
   /// ∂D/∂ν (exact; f_int is linear in E and t, which need no separate function).
-  void internal_force_nu_derivative(const Vec8& x, double E, double nu, double thickness, Vec8& df) const;
+  void internal_force_nu_derivative(const Vec8& x, double E, double nu, double thickness,
+                                    Vec8& df) const;
   double strain_energy(const Vec8& x, double E, double nu, double thickness) const;
   /// ∫ N_I N_J dA (multiply by ρ t for the consistent mass of one direction).
   const Mat4& unit_mass() const { return unit_mass_; }

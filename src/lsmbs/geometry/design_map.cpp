@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lsmbs/core/error.hpp"
+
 namespace lsmbs {
 
 // The logistic's tail beyond this many bands is below e^-30 ≈ 1e-13: elements farther from every
@@ -13,8 +15,16 @@ constexpr double kTailBands = 30;
 // is not reliable (at 30 bands it flipped signs on the robot arm's plate edges).
 constexpr double kRefineBands = 12;
 
+std::string MappingOptions::validate() const {
+  if (!(mu_min > 0 && mu_min < 1)) return "mu_min: expected a minimum volume fraction in (0, 1)";
+  if (subgrid < 1 || subgrid > 1024) return "subgrid: expected 1..1024 sub-cells per element edge";
+  if (!(band > 0) || !std::isfinite(band)) return "band: expected a positive width (in sub-cells)";
+  return {};
+}
+
 DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
     : mesh_(&mesh), ls_(std::move(level_set)), opt_(opt) {
+  if (auto msg = opt_.validate(); !msg.empty()) throw Error("mapping option " + msg);
   const int ne = mesh.num_elements();
   area_.resize(ne);
   radius_.resize(ne);
@@ -61,7 +71,8 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
     }
     ++cut;
     // sub-grid integration over the parent square, midpoint rule per sub-cell
-    const Vec2 X0 = mesh_->nodes[q[0]], X1 = mesh_->nodes[q[1]], X2 = mesh_->nodes[q[2]], X3 = mesh_->nodes[q[3]];
+    const Vec2 X0 = mesh_->nodes[q[0]], X1 = mesh_->nodes[q[1]], X2 = mesh_->nodes[q[2]],
+               X3 = mesh_->nodes[q[3]];
     double H = 0, W = 0;
     std::fill(acc.begin(), acc.end(), 0.0);
     for (int j = 0; j < n; ++j)

@@ -23,6 +23,9 @@ struct MappingOptions {
   double mu_min = 1e-3;
   int subgrid = 8;    ///< sub-cells per element edge in cut elements
   double band = 0.5;  ///< ε in units of the sub-cell size (median element size / subgrid)
+
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 class DesignMap {

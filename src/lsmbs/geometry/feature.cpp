@@ -99,7 +99,8 @@ namespace {
 // and e0 ≥ e1 > 0 (Eberly, "Distance from a point to an ellipse, an ellipsoid, or a
 // hyperellipsoid", 2013: bisection on the root of the monotone secular function, robust for
 // every point, inside or outside, slender or not).
-void ellipse_closest_first_quadrant(double e0, double e1, double y0, double y1, double& x0, double& x1) {
+void ellipse_closest_first_quadrant(double e0, double e1, double y0, double y1, double& x0,
+                                    double& x1) {
   if (y1 > 0) {
     if (y0 > 0) {
       const double z0 = y0 / e0, z1 = y1 / e1, g = z0 * z0 + z1 * z1 - 1;
@@ -113,9 +114,12 @@ void ellipse_closest_first_quadrant(double e0, double e1, double y0, double y1, 
         sb = 0.5 * (s0 + s1);
         if (sb == s0 || sb == s1) break;
         const double q0 = n0 / (sb + r0), q1 = z1 / (sb + 1), gg = q0 * q0 + q1 * q1 - 1;
-        if (gg > 0) s0 = sb;
-        else if (gg < 0) s1 = sb;
-        else break;
+        if (gg > 0)
+          s0 = sb;
+        else if (gg < 0)
+          s1 = sb;
+        else
+          break;
       }
       x0 = r0 * y0 / (sb + r0);
       x1 = y1 / (sb + 1);
@@ -197,7 +201,7 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
     } else {
       using std::abs;
       const T z = (T(refine_within) - abs(D0)) / T(refine_within - r1);  // 1 → 0
-      const T w = z * z * z * (z * (T(6.0) * z - T(15.0)) + T(10.0));       // C² (quintic) smoothstep
+      const T w = z * z * z * (z * (T(6.0) * z - T(15.0)) + T(10.0));    // C² (quintic) smoothstep
       D = w * Dr + (T(1.0) - w) * D0;
     }
   }

@@ -2,8 +2,8 @@
 // Level-set features (§2.2) with φ > 0 in material and φ < 0 in void. In the paper's form
 // a feature describes a hole: φ > 0 outside it.
 //   ellipse (eq. 41):        φ = √((u/a)² + (v/b)²) − d          params cx, cy, a, b, d, angle
-//   super-ellipse (eq. 43):  φ = |u/a|^ξ + |v/b|^η − 1           params cx, cy, a, b, xi, eta, angle
-//   circle:                  φ = √(u² + v²) − r                   params cx, cy, r
+//   super-ellipse (eq. 43):  φ = |u/a|^ξ + |v/b|^η − 1           params cx, cy, a, b, xi, eta,
+//   angle circle:                  φ = √(u² + v²) − r                   params cx, cy, r
 // with (u, v) = R(−angle)(x − c). A feature with hole = false is a solid inclusion (−φ).
 // Each parameter is a constant or an affine function of one design variable,
 // value = offset + scale · p_k, so linked and symmetric features are direct (Table 2).

@@ -11,7 +11,8 @@ LevelSet::LevelSet(std::vector<Feature> features, LevelSetNode root, int nv)
   for (const auto& f : features_) {
     std::vector<int> vars;
     for (const auto& b : f.params())
-      if (b.variable >= 0 && std::find(vars.begin(), vars.end(), b.variable) == vars.end()) vars.push_back(b.variable);
+      if (b.variable >= 0 && std::find(vars.begin(), vars.end(), b.variable) == vars.end())
+        vars.push_back(b.variable);
     feat_vars_.push_back(vars);
   }
 }
@@ -27,7 +28,8 @@ double LevelSet::evaluate(const Vec2& x, const Values& v, double* grad) const {
   return eval_node(root_, x, v, grad);
 }
 
-double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, double* grad) const {
+double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v,
+                           double* grad) const {
   switch (n.op) {
     case LevelSetNode::Op::kFeature: {
       const Feature& f = features_[n.feature];
@@ -54,7 +56,8 @@ double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v
       const size_t m = n.children.size();
       std::vector<double> d(m);
       std::vector<std::vector<double>> g(grad ? m : 0, std::vector<double>(nv_));
-      for (size_t i = 0; i < m; ++i) d[i] = sign * eval_node(n.children[i], x, v, grad ? g[i].data() : nullptr);
+      for (size_t i = 0; i < m; ++i)
+        d[i] = sign * eval_node(n.children[i], x, v, grad ? g[i].data() : nullptr);
       const size_t imin = static_cast<size_t>(std::min_element(d.begin(), d.end()) - d.begin());
       double out = d[imin];
       if (n.ks > 0) {

@@ -4,11 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <exception>
 #include <mutex>
 #include <optional>
-#include <string>
 #include <sstream>
+#include <string>
 #include <thread>
 #include <utility>
 
@@ -45,29 +46,10 @@ std::string GeneralizedAlphaOptions::validate() const {
   return {};
 }
 
-nlohmann::json GeneralizedAlphaOptions::to_json() const {
-  return {{"h", h}, {"t_end", t_end}, {"rho_inf", rho_inf}, {"tol_r", tol_r}, {"tol_phi", tol_phi}, {"tol_q", tol_q},
-          {"force_floor", force_floor}, {"max_iter", max_iter}, {"min_iter", min_iter},
-          {"consistent_start", consistent_start}, {"project_initial", project_initial},
-          {"newton", newton_name(newton)}, {"max_halvings", max_halvings},
-          {"ordering", SparseLU::ordering_name(ordering)}, {"k", k}, {"zeta", zeta}};
-}
-
 const char* GeneralizedAlphaOptions::newton_name(Newton n) {
-  return n == Newton::kFull ? "full" : n == Newton::kModified ? "modified" : "modified_across_steps";
-}
-
-nlohmann::json IntegratorSummary::to_json() const {
-  return {{"ok", ok}, {"aborted", aborted}, {"message", message}, {"t_reached", t_reached},
-          {"steps", steps}, {"newton_iterations", newton_iterations}, {"factorizations", factorizations},
-          {"residual_evaluations", residual_evaluations}, {"matrix_evaluations", matrix_evaluations},
-          {"halvings", halvings}, {"halving_times", halving_times},
-          {"fresh_factor_retries", fresh_factor_retries}, {"increment_rejections", increment_rejections},
-          {"seconds", {{"setup", seconds.setup}, {"residual", seconds.residual}, {"matrix", seconds.matrix},
-                       {"factor", seconds.factor}, {"solve", seconds.solve}}},
-          {"k", k}, {"zeta", zeta},
-          {"residual_floor_N", force_floor},
-          {"wall_seconds", wall_seconds}};
+  return n == Newton::kFull       ? "full"
+         : n == Newton::kModified ? "modified"
+                                  : "modified_across_steps";
 }
 
 double GeneralizedAlpha::automatic_scaling(const Model& model, const ModelParams& p, const State& s,
@@ -105,8 +87,8 @@ int first_non_finite_column(const CscPattern& pat, const std::vector<double>& va
 // Newton corrections up to this multiple of tol_q·L that stop halving are round-off (accepted).
 constexpr double kRoundOffIncrement = 100;
 
-void row_round_off_floor(const CscPattern& pat, const std::vector<double>& vals, const Vec& q, double L, int nq,
-                         Vec& floor) {
+void row_round_off_floor(const CscPattern& pat, const std::vector<double>& vals, const Vec& q,
+                         double L, int nq, Vec& floor) {
   constexpr double kFactor = 16 * 2.2204460492503131e-16;
   floor.setZero(nq);
   for (int j = 0; j < nq; ++j) {
@@ -212,11 +194,10 @@ class ObserverWorker {
   std::thread thread_;  // last: started once everything above exists
 };
 
-
 // How the corrector of one step ended.
 enum class NewtonStatus {
   kConverged,
-  kStopped,                ///< an observer asked to stop (stop_requested): the step is abandoned
+  kStopped,  ///< an observer asked to stop (stop_requested): the step is abandoned
   kNonFiniteResidual,
   kNonFiniteCorrection,
   kNonFiniteMatrix,        ///< NaN or Inf in S_t: an overflow, not a singular motion
@@ -230,10 +211,18 @@ enum class NewtonStatus {
 // the summary.
 class AlphaRun {
  public:
-  AlphaRun(const GeneralizedAlphaOptions& opt, const StepObserverOptions& served, const Model& model,
-           const ModelParams& p, std::vector<StepObserver*> observers, State* final_state)
-      : opt_(opt), served_(served), model_(model), p_(p), observers_(std::move(observers)),
-        final_state_(final_state), nq_(model.nq()), nc_(model.nc()), L_(model.length_scale()) {}
+  AlphaRun(const GeneralizedAlphaOptions& opt, const StepObserverOptions& served,
+           const Model& model, const ModelParams& p, std::vector<StepObserver*> observers,
+           State* final_state)
+      : opt_(opt),
+        served_(served),
+        model_(model),
+        p_(p),
+        observers_(std::move(observers)),
+        final_state_(final_state),
+        nq_(model.nq()),
+        nc_(model.nc()),
+        L_(model.length_scale()) {}
 
   bool start(State s0);
   bool done() const { return grid_ >= n_steps_; }
@@ -308,7 +297,8 @@ bool AlphaRun::fail(std::string message) {
 }
 
 bool AlphaRun::stop_requested() const {
-  return std::any_of(observers_.begin(), observers_.end(), [](const StepObserver* o) { return o->stop_requested(); });
+  return std::any_of(observers_.begin(), observers_.end(),
+                     [](const StepObserver* o) { return o->stop_requested(); });
 }
 
 // Consistent start: q0, q̇0 projected on the constraints, k and ζ of eq. (7), then q̈0 and λ0 from
@@ -346,11 +336,13 @@ bool AlphaRun::start(State s0) {
   r_abs_.resize(nq_);
   dx_.resize(model_.n());
   row_floor_.setZero(nq_);
-  for (auto* o : observers_) o->on_start(s0, a_cur_, c0, k_, zeta_, opt_.consistent_start ? &lu_ : nullptr);
+  for (auto* o : observers_)
+    o->on_start(s0, a_cur_, c0, k_, zeta_, opt_.consistent_start ? &lu_ : nullptr);
   lu_.reset_pivoting();  // the first Newton iteration factorizes with fresh pivoting
 
   std::vector<StepObserver*> concurrent;
-  for (auto* o : observers_) (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
+  for (auto* o : observers_)
+    (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
   if (!concurrent.empty()) {
     lu_alt_.share_analysis(lu_);
     worker_.emplace(std::move(concurrent));
@@ -406,7 +398,8 @@ bool AlphaRun::factor_iteration_matrix(const Coefficients& coeffs, NewtonStatus&
   ++sum_.matrix_evaluations;
   have_factor_ = false;
   if (const int bad = first_non_finite_column(model_.pattern(), vals_); bad >= 0) {
-    bad_column_ = bad;  // an overflow, not a singular motion: say so instead of blaming the factorization
+    bad_column_ =
+        bad;  // an overflow, not a singular motion: say so instead of blaming the factorization
     failure = NewtonStatus::kNonFiniteMatrix;
     return false;
   }
@@ -481,7 +474,8 @@ NewtonStatus AlphaRun::newton(const AlphaCoefficients& c) {
     } else if (iterations_ >= opt_.max_iter) {
       return NewtonStatus::kNotConverged;
     }
-    const bool refactor = opt_.newton == Newton::kFull || !have_factor_ || err > 0.25 * prev_err || slow_chord;
+    const bool refactor =
+        opt_.newton == Newton::kFull || !have_factor_ || err > 0.25 * prev_err || slow_chord;
     NewtonStatus failure{};
     if (refactor && !factor_iteration_matrix(coeffs, failure)) return failure;
     prev_err = err;
@@ -519,19 +513,27 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
   }
   std::string why;
   switch (st) {
-    case NewtonStatus::kNonFiniteResidual: why = "non-finite residual (NaN or Inf)"; break;
-    case NewtonStatus::kNonFiniteCorrection: why = "non-finite Newton correction"; break;
+    case NewtonStatus::kNonFiniteResidual:
+      why = "non-finite residual (NaN or Inf)";
+      break;
+    case NewtonStatus::kNonFiniteCorrection:
+      why = "non-finite Newton correction";
+      break;
     case NewtonStatus::kNonFiniteMatrix:
-      why = "non-finite iteration matrix (NaN or Inf) in the equations of " + model_.describe_unknown(bad_column_);
+      why = "non-finite iteration matrix (NaN or Inf) in the equations of " +
+            model_.describe_unknown(bad_column_);
       break;
     case NewtonStatus::kSingular:
-      why = "singular iteration matrix: the motion of " + model_.describe_unknown(step_lu_->singular_column()) +
-            " is not determined";
+      why = "singular iteration matrix: the motion of " +
+            model_.describe_unknown(step_lu_->singular_column()) + " is not determined";
       break;
     case NewtonStatus::kNotConvergedPositions:
-      why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations (position corrections)";
+      why = "Newton did not converge in " + std::to_string(opt_.max_iter) +
+            " iterations (position corrections)";
       break;
-    default: why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations"; break;
+    default:
+      why = "Newton did not converge in " + std::to_string(opt_.max_iter) + " iterations";
+      break;
   }
   int worst = 0;
   double wv = -1;
@@ -543,8 +545,8 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
     }
   }
   std::ostringstream os;
-  os << "t = " << cur_.t << " (step " << sum_.steps + 1 << ", h = " << h_ << "): " << why << "; ‖r‖∞ = " << rn_
-     << " N, ‖Φ‖∞ = " << pn_ << "; worst: " << model_.describe_unknown(worst);
+  os << "t = " << cur_.t << " (step " << sum_.steps + 1 << ", h = " << h_ << "): " << why
+     << "; ‖r‖∞ = " << rn_ << " N, ‖Φ‖∞ = " << pn_ << "; worst: " << model_.describe_unknown(worst);
   return fail(os.str());
 }
 
@@ -552,12 +554,14 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
 // for the observers (the exact Jacobian of the step) instead of the last iteration's.
 bool AlphaRun::factor_for_observers(const AlphaCoefficients& c) {
   if (served_.factor != StepObserverOptions::Factor::kConverged || observers_.empty()) return true;
-  timed(sum_.seconds.matrix,
-        [&] { model_.iteration_matrix(cur_, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, k_, zeta_, vals_); });
+  timed(sum_.seconds.matrix, [&] {
+    model_.iteration_matrix(cur_, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, k_, zeta_, vals_);
+  });
   ++sum_.matrix_evaluations;
   ++sum_.factorizations;
   if (!timed(sum_.seconds.factor, [&] { return step_lu_->factor(vals_); }).ok())
-    return fail("t = " + std::to_string(cur_.t) + ": singular iteration matrix at the converged state");
+    return fail("t = " + std::to_string(cur_.t) +
+                ": singular iteration matrix at the converged state");
   return true;
 }
 
@@ -646,6 +650,22 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     if (!go_on) break;
   }
   return run.finish();
+}
+
+RunStatus IntegratorSummary::status() const {
+  if (aborted) return RunStatus::kInterrupted;
+  return ok ? RunStatus::kComplete : RunStatus::kFailed;
+}
+
+std::string IntegratorSummary::report() const {
+  char b[320];
+  std::snprintf(b, sizeof b,
+                "generalized-alpha: %s at t = %.9g s: %ld steps, %ld Newton iterations, %ld "
+                "factorizations, %ld "
+                "residual evaluations, %ld step halvings, %.3f s",
+                run_status_name(status()), t_reached, steps, newton_iterations, factorizations,
+                residual_evaluations, halvings, wall_seconds);
+  return message.empty() ? std::string(b) : std::string(b) + "\n  " + message;
 }
 
 }  // namespace lsmbs

@@ -24,8 +24,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "lsmbs/core/status.hpp"
 #include "lsmbs/integrators/step_observer.hpp"
 
 namespace lsmbs {
@@ -33,16 +32,16 @@ namespace lsmbs {
 /// The options of the method: what a case file's "simulation" section sets. How the observers
 /// of a run are served is the caller's choice (StepObserverOptions, step_observer.hpp).
 struct GeneralizedAlphaOptions {
-  double h = 1e-3;        ///< time step
-  double t_end = 1.0;     ///< final time
-  double rho_inf = 0.8;   ///< spectral radius at infinite frequency, eq. (11)
-  double tol_r = 1e-9;    ///< |r_i| ≤ tol_r · s_i + (round-off floor of row i) for every row i,
-                          ///< s_i the sum of the absolute force terms of row i
-  double tol_phi = 1e-12; ///< ‖Φ‖∞ ≤ tol_phi · (model length scale)
-  double tol_q = 1e-12;   ///< last Newton correction ‖Δq‖∞ ≤ tol_q · (model length scale)
-  double force_floor = 0; ///< absolute residual tolerance [N] added to every row (0: none)
+  double h = 1e-3;         ///< time step
+  double t_end = 1.0;      ///< final time
+  double rho_inf = 0.8;    ///< spectral radius at infinite frequency, eq. (11)
+  double tol_r = 1e-9;     ///< |r_i| ≤ tol_r · s_i + (round-off floor of row i) for every row i,
+                           ///< s_i the sum of the absolute force terms of row i
+  double tol_phi = 1e-12;  ///< ‖Φ‖∞ ≤ tol_phi · (model length scale)
+  double tol_q = 1e-12;  ///< last Newton correction ‖Δq‖∞ ≤ tol_q · (model length scale)
+  double force_floor = 0;  ///< absolute residual tolerance [N] added to every row (0: none)
   int max_iter = 25;
-  int min_iter = 1;       ///< ≥ 1: every step factorizes S_t at least once (Algorithm 2 needs it)
+  int min_iter = 1;  ///< ≥ 1: every step factorizes S_t at least once (Algorithm 2 needs it)
   bool consistent_start = true;  ///< false: q̈0 = a0 = 0, λ0 = 0 as Algorithm 1
   bool project_initial = true;   ///< project q0, q̇0 onto the constraint manifold
   /// kFull: factorize S_t at every iteration. kModified: reuse the step's first factorization
@@ -55,27 +54,28 @@ struct GeneralizedAlphaOptions {
   /// Fill-reducing ordering of the KLU analysis (SparseLU::Ordering; case key "ordering":
   /// "amd" or "nested_dissection").
   SparseLU::Ordering ordering = SparseLU::Ordering::kAmd;
-  int max_halvings = 6;   ///< step-halving retries of one step (h / 2^k)
-  double k = 0;           ///< constraint scaling of eq. (7); 0: automatic
-  double zeta = 0;        ///< augmented-Lagrangian penalty of eq. (7); 0: automatic (= k)
+  int max_halvings = 6;  ///< step-halving retries of one step (h / 2^k)
+  double k = 0;          ///< constraint scaling of eq. (7); 0: automatic
+  double zeta = 0;       ///< augmented-Lagrangian penalty of eq. (7); 0: automatic (= k)
 
   /// Empty string when valid, otherwise "field: what is expected" (the case loader maps the
   /// field to its JSON path).
   std::string validate() const;
-  nlohmann::json to_json() const;
 };
 
 struct IntegratorSummary {
   bool ok = true;
-  bool aborted = false;            ///< an observer asked to stop
-  std::string message;             ///< failure description (time, norms, worst unknown)
+  bool aborted = false;  ///< an observer asked to stop
+  std::string message;   ///< failure description (time, norms, worst unknown)
   double t_reached = 0;
   long steps = 0, newton_iterations = 0, factorizations = 0, residual_evaluations = 0;
   long matrix_evaluations = 0, halvings = 0;
-  long fresh_factor_retries = 0;   ///< steps redone with a fresh factorization (modified_across_steps)
-  long increment_rejections = 0;   ///< residual test passed, Newton correction still above tol_q
+  long fresh_factor_retries =
+      0;  ///< steps redone with a fresh factorization (modified_across_steps)
+  long increment_rejections = 0;  ///< residual test passed, Newton correction still above tol_q
   /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
-  /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations, back-solves.
+  /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations,
+  /// back-solves.
   struct Seconds {
     double setup = 0, residual = 0, matrix = 0, factor = 0, solve = 0;
   } seconds;
@@ -83,7 +83,8 @@ struct IntegratorSummary {
   double k = 0, zeta = 0;
   double force_floor = 0;  ///< largest per-row round-off floor met [N] (residual_floor_N)
   double wall_seconds = 0;
-  nlohmann::json to_json() const;
+  RunStatus status() const;
+  std::string report() const;  ///< outcome and counts, one paragraph
 };
 
 class GeneralizedAlpha {

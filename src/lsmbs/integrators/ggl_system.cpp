@@ -14,7 +14,8 @@ State GglSystem::state(double t, const double* y, const double* yp) const {
   return s;
 }
 
-bool GglSystem::residual(const ModelParams& p, double t, const double* y, const double* yp, double* F) {
+bool GglSystem::residual(const ModelParams& p, double t, const double* y, const double* yp,
+                         double* F) {
   const int nq = nq_, nc = nc_;
   const State s = state(t, y, yp);
   m_.residual(s, p, 1.0, 0.0, R_);
@@ -29,7 +30,8 @@ bool GglSystem::residual(const ModelParams& p, double t, const double* y, const 
   return true;
 }
 
-SpMat GglSystem::jacobian(const ModelParams& p, double t, double cj, const double* y, const double* yp) {
+SpMat GglSystem::jacobian(const ModelParams& p, double t, double cj, const double* y,
+                          const double* yp) {
   const int nq = nq_, nc = nc_, N = n_;
   const double s1 = sc_.s1, s3 = sc_.s3, s4 = sc_.s4;
   const State s = state(t, y, yp);
@@ -49,7 +51,8 @@ SpMat GglSystem::jacobian(const ModelParams& p, double t, double cj, const doubl
     tr.emplace_back(r1 + i, ov + i, -s1);
   }
   for (int k = 0; k < Hmu.outerSize(); ++k)
-    for (SpMat::InnerIterator it(Hmu, k); it; ++it) tr.emplace_back(r1 + it.row(), oq + it.col(), s1 * it.value());
+    for (SpMat::InnerIterator it(Hmu, k); it; ++it)
+      tr.emplace_back(r1 + it.row(), oq + it.col(), s1 * it.value());
   for (int k = 0; k < A.outerSize(); ++k)
     for (SpMat::InnerIterator it(A, k); it; ++it) {
       const int i = static_cast<int>(it.row()), j = static_cast<int>(it.col());
@@ -67,16 +70,19 @@ SpMat GglSystem::jacobian(const ModelParams& p, double t, double cj, const doubl
     for (SpMat::InnerIterator it(B, k); it; ++it)
       if (it.row() < nq && it.col() < nq) tr.emplace_back(r2 + it.row(), ov + it.col(), it.value());
   for (int k = 0; k < Vj.outerSize(); ++k)
-    for (SpMat::InnerIterator it(Vj, k); it; ++it) tr.emplace_back(r4 + it.row(), oq + it.col(), s4 * it.value());
+    for (SpMat::InnerIterator it(Vj, k); it; ++it)
+      tr.emplace_back(r4 + it.row(), oq + it.col(), s4 * it.value());
   SpMat Jm(N, N);
   Jm.setFromTriplets(tr.begin(), tr.end());
   Jm.makeCompressed();
   return Jm;
 }
 
-void GglSystem::sensitivity_residual(const ModelParams& p, double t, const double* y, const double* yp,
-                                     std::span<const ParamDirection> dirs, std::span<const double* const> yS,
-                                     std::span<const double* const> ypS, std::span<double* const> rS) {
+void GglSystem::sensitivity_residual(const ModelParams& p, double t, const double* y,
+                                     const double* yp, std::span<const ParamDirection> dirs,
+                                     std::span<const double* const> yS,
+                                     std::span<const double* const> ypS,
+                                     std::span<double* const> rS) {
   const int nq = nq_, N = n_;
   const State s = state(t, y, yp);
   // M = S(1, 0, 0) − S(0, 0, 0) (the iteration matrix is linear in its coefficients)
@@ -99,7 +105,8 @@ void GglSystem::sensitivity_residual(const ModelParams& p, double t, const doubl
   }
 }
 
-void GglSystem::pattern_transpose_product(const std::vector<double>& v, const Vec& x, Vec& out) const {
+void GglSystem::pattern_transpose_product(const std::vector<double>& v, const Vec& x,
+                                          Vec& out) const {
   const CscPattern& P = m_.pattern();
   out.resize(P.n);
   for (int j = 0; j < P.n; ++j) {
@@ -110,12 +117,14 @@ void GglSystem::pattern_transpose_product(const std::vector<double>& v, const Ve
 }
 
 bool GglSystem::adjoint_residual(const ModelParams& p, double t, const double* y, const double* yp,
-                                 const double* xi_, const double* xid_, const Vec& gq, const Vec& gv, double* rB) {
+                                 const double* xi_, const double* xid_, const Vec& gq,
+                                 const Vec& gv, double* rB) {
   const int nq = nq_, nc = nc_, N = n_;
   const double s1 = sc_.s1, s3 = sc_.s3, s4 = sc_.s4;
   const State s = state(t, y, yp);
   const Eigen::Map<const Vec> xi(xi_, N), xid(xid_, N);
-  const auto xq = xi.head(nq), xv = xi.segment(nq, nq), xl = xi.segment(2 * nq, nc), xm = xi.tail(nc);
+  const auto xq = xi.head(nq), xv = xi.segment(nq, nq), xl = xi.segment(2 * nq, nc),
+             xm = xi.tail(nc);
   // F_yᵀ ξ from transposed products with the model's blocks on its pattern:
   //   [K_t Φ_qᵀ; Φ_q 0]ᵀ [ξ_v; s₃ξ_λ] = [K_tᵀξ_v + s₃Φ_qᵀξ_λ; Φ_q ξ_v]
   //   [C_t Φ_qᵀ; Φ_q 0]ᵀ [ξ_v; s₄ξ_μ] = [C_tᵀξ_v + s₄Φ_qᵀξ_μ; Φ_q ξ_v],  and Φ_q ξ_q
@@ -131,7 +140,8 @@ bool GglSystem::adjoint_residual(const ModelParams& p, double t, const double* y
   const SpMat Hmu = m_.constraint_hessian(t, s.q, Eigen::Map<const Vec>(y + 2 * nq + nc, nc));
   const SpMat Vj = m_.velocity_constraint_jacobian(t, s.q, s.v);
   Eigen::Map<Vec> r(rB, N);
-  r.head(nq) = s1 * xid.head(nq) - (s1 * (Hmu * xq) + adj_yk_.head(nq) + s4 * (Vj.transpose() * xm)) + gq;
+  r.head(nq) =
+      s1 * xid.head(nq) - (s1 * (Hmu * xq) + adj_yk_.head(nq) + s4 * (Vj.transpose() * xm)) + gq;
   adj_a_ = xid.segment(nq, nq);
   adj_zero_.setZero(nq, 1);
   m_.mass_damping_product(s, p, adj_a_, adj_zero_, adj_ma_);  // M ξ̇_v (C·0)

@@ -53,8 +53,9 @@ class GglSystem {
   ///   λ:  −Φ_q ξ_v,   μ:  −s₁ Φ_q ξ_q
   /// (H_μ = Σ μ_i ∂²Φ_i/∂q²). It has the GGL's Hessenberg index-2 structure: ξ_λ and ξ_μ are
   /// algebraic and act on ξ_q, ξ_v through Φ_qᵀ. False when the result is not finite.
-  bool adjoint_residual(const ModelParams& p, double t, const double* y, const double* yp, const double* xi,
-                        const double* xid, const Vec& gq, const Vec& gv, double* rB);
+  bool adjoint_residual(const ModelParams& p, double t, const double* y, const double* yp,
+                        const double* xi, const double* xid, const Vec& gq, const Vec& gv,
+                        double* rB);
 
  private:
   // out = Sᵀ x for S given by its values v on the model's pattern (no matrix assembled).

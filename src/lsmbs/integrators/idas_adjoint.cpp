@@ -1,5 +1,4 @@
 #include <Eigen/SparseLU>
-
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -18,15 +17,15 @@ bool IdasGGL::Impl::adjoint_integrand(int k, const State& s) {
   return quad->integrand_gradient(k, s, nominal, adj_gq, adj_gv, adj_gp, adj_error);
 }
 
-int IdasGGL::Impl::adjoint_residual(int k, double t, const double* y, const double* yp, const double* yB,
-                                    const double* ypB, double* rB) {
+int IdasGGL::Impl::adjoint_residual(int k, double t, const double* y, const double* yp,
+                                    const double* yB, const double* ypB, double* rB) {
   if (!adjoint_integrand(k, state(t, y, yp))) return -1;
   return ggl.adjoint_residual(nominal, t, y, yp, yB, ypB, adj_gq, adj_gv, rB) ? 0 : 1;
 }
 
 // rhsQB = ξᵀ F_p − ∂g/∂p: integrated from t_b back to t0 it gives ∫_{t0}^{t_b} (∂g/∂p − ξᵀF_p) dt.
-int IdasGGL::Impl::adjoint_quadrature(int k, double t, const double* y, const double* yp, const double* yB,
-                                      double* qB) {
+int IdasGGL::Impl::adjoint_quadrature(int k, double t, const double* y, const double* yp,
+                                      const double* yB, double* qB) {
   const State s = state(t, y, yp);
   if (!adjoint_integrand(k, s)) return -1;
   const Eigen::Map<const Vec> xv(yB + nq, nq);
@@ -43,8 +42,8 @@ int IdasGGL::Impl::adjoint_quadrature(int k, double t, const double* y, const do
 //   [M Φ_qᵀ; Φ_q 0] [ξ̇_v; −s₄ ξ_μ] = [−∂g/∂q̇; 0]
 //   [I Φ_qᵀ; Φ_q 0] [s₁ ξ̇_q; −s₃ ξ_λ] = [s₄ (∂(Φ_q v)/∂q)ᵀ ξ_μ − ∂g/∂q; 0]
 // Also returns scales of the four blocks and of the gradient for the absolute tolerances.
-bool IdasGGL::Impl::adjoint_final_values(int k, double tb, const Vec& y, const Vec& yp, Vec& xi, Vec& xid,
-                                         double scale[5]) {
+bool IdasGGL::Impl::adjoint_final_values(int k, double tb, const Vec& y, const Vec& yp, Vec& xi,
+                                         Vec& xid, double scale[5]) {
   const State s = state(tb, y.data(), yp.data());
   if (!adjoint_integrand(k, s)) return false;
   m.iteration_matrix(s, nominal, Coefficients{1, 0, 0}, 1.0, 0.0, adj_vals);
@@ -63,7 +62,8 @@ bool IdasGGL::Impl::adjoint_final_values(int k, double tb, const Vec& y, const V
   lu_m.compute(SM);
   lu_i.compute(SI);
   if (lu_m.info() != Eigen::Success || lu_i.info() != Eigen::Success) {
-    adj_error = "singular constraint system for the adjoint final values at t = " + std::to_string(tb);
+    adj_error =
+        "singular constraint system for the adjoint final values at t = " + std::to_string(tb);
     return false;
   }
   Vec rhs = Vec::Zero(nq + nc);
@@ -85,7 +85,8 @@ bool IdasGGL::Impl::adjoint_final_values(int k, double tb, const Vec& y, const V
   const double W = std::max(tb - t_start, 1e-300);
   double mmax = 0;
   for (int i = 0; i < nq; ++i) mmax = std::max(mmax, std::abs(SM.coeff(i, i)));
-  double sq = xid.head(nq).lpNorm<Eigen::Infinity>() * W, sv = xid.segment(nq, nq).lpNorm<Eigen::Infinity>() * W;
+  double sq = xid.head(nq).lpNorm<Eigen::Infinity>() * W,
+         sv = xid.segment(nq, nq).lpNorm<Eigen::Infinity>() * W;
   sv = std::max(sv, s1 * sq * W / mmax);
   sq = std::max(sq, mmax * sv / (s1 * W));
   if (!(sq > 0)) sq = sv = 1;  // g independent of the state: ξ ≡ 0
@@ -108,16 +109,18 @@ namespace {
 
 using sun::map;
 
-int res_b_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector yB, N_Vector ypB, N_Vector rB, void* ud) {
+int res_b_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector yB, N_Vector ypB, N_Vector rB,
+                void* ud) {
   auto* b = static_cast<BackwardProblem*>(ud);
-  return b->im->adjoint_residual(b->k, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(yB),
-                                 N_VGetArrayPointer(ypB), N_VGetArrayPointer(rB));
+  return b->im->adjoint_residual(b->k, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
+                                 N_VGetArrayPointer(yB), N_VGetArrayPointer(ypB),
+                                 N_VGetArrayPointer(rB));
 }
 
 // ∂resB/∂ξ + c_jB ∂resB/∂ξ̇ = −(F_y − c_jB F_ẏ)ᵀ: the forward Jacobian at c_j = −c_jB, transposed
 // and negated (Ṁ, the derivative of Ṁ ξ_v, is left out: O(|q̇|) against c_jB M).
-int jac_b_tramp(realtype t, realtype cjB, N_Vector y, N_Vector yp, N_Vector, N_Vector, N_Vector, SUNMatrix J, void* ud,
-                N_Vector, N_Vector, N_Vector) {
+int jac_b_tramp(realtype t, realtype cjB, N_Vector y, N_Vector yp, N_Vector, N_Vector, N_Vector,
+                SUNMatrix J, void* ud, N_Vector, N_Vector, N_Vector) {
   auto* b = static_cast<BackwardProblem*>(ud);
   const SpMat A = b->im->jacobian(t, -cjB, N_VGetArrayPointer(y), N_VGetArrayPointer(yp));
   SpMat At = -SpMat(A.transpose());
@@ -126,17 +129,20 @@ int jac_b_tramp(realtype t, realtype cjB, N_Vector y, N_Vector yp, N_Vector, N_V
   return 0;
 }
 
-int quad_b_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector yB, N_Vector, N_Vector qB, void* ud) {
+int quad_b_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector yB, N_Vector, N_Vector qB,
+                 void* ud) {
   auto* b = static_cast<BackwardProblem*>(ud);
-  return b->im->adjoint_quadrature(b->k, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(yB),
-                                   N_VGetArrayPointer(qB));
+  return b->im->adjoint_quadrature(b->k, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp),
+                                   N_VGetArrayPointer(yB), N_VGetArrayPointer(qB));
 }
 
 }  // namespace
 
-std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<Breakpoint>& breaks, double t0,
-                          bool positions_only, int max_order, long nnz, IdasStats& st, std::vector<Mat>& dQ) {
-  const int nq = im.nq, nc = im.nc, N = im.N, nQ = im.quad->size(), nv = static_cast<int>(im.dirs.size());
+std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<Breakpoint>& breaks,
+                          double t0, bool positions_only, int max_order, long nnz, IdasStats& st,
+                          std::vector<Mat>& dQ) {
+  const int nq = im.nq, nc = im.nc, N = im.N, nQ = im.quad->size(),
+            nv = static_cast<int>(im.dirs.size());
   Vec xi, xid;
   double scale[5];
   dQ.assign(breaks.size(), Mat::Constant(nQ, nv, NAN));
@@ -163,25 +169,27 @@ std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<
       // M ξ̇_v = −s₁ ξ_q …) only when the forward test has velocities (rigid models); the gradient
       // quadratures too. The adjoint load ∂g/∂q switches on at t_b like a step load and excites
       // every undamped structural mode of ξ_v at the amplitude of its static response, which
-      // costs many backward steps on flexible models. Taking ξ_v out of the test (quadratures
-      // only) was 9× cheaper on the 12 × 2 test arm but 2 % wrong on the robot arm's mesh over
-      // 0.4 s and 20 % over 2.5 s against central differences of IDAS runs: the quadrature's local
-      // error estimate does not see the accumulated error of ξ_v.
+      // costs many backward steps on flexible models. ξ_v stays in the test nevertheless: the
+      // quadratures' local error estimate does not see the accumulated error of ξ_v, and without
+      // it the gradients drift (docs/methods.md, "Adjoint sensitivities").
       const double off = 1e30;  // weight ≈ 0: out of the error test
       map(B.atolB.get()) << Vec::Constant(nq, positions_only ? off : im.o.atol * scale[0]),
           Vec::Constant(nq, im.o.atol * scale[1]), Vec::Constant(nc, im.o.atol * scale[2]),
           Vec::Constant(nc, im.o.atol * scale[3]);
       N_VConst(0.0, B.qB.get());
       void* mem = sd.mem.get();
-      if (IDACreateB(mem, &B.which) || IDAInitB(mem, B.which, res_b_tramp, tb, B.yB.get(), B.ypB.get()) ||
-          IDASVtolerancesB(mem, B.which, im.o.rtol, B.atolB.get()) || IDASetUserDataB(mem, B.which, &B) ||
-          IDASetIdB(mem, B.which, B.idB.get()) || IDASetSuppressAlgB(mem, B.which, SUNTRUE) ||
-          IDASetMaxOrdB(mem, B.which, max_order) || IDASetMaxNumStepsB(mem, B.which, im.o.max_steps))
+      if (IDACreateB(mem, &B.which) ||
+          IDAInitB(mem, B.which, res_b_tramp, tb, B.yB.get(), B.ypB.get()) ||
+          IDASVtolerancesB(mem, B.which, im.o.rtol, B.atolB.get()) ||
+          IDASetUserDataB(mem, B.which, &B) || IDASetIdB(mem, B.which, B.idB.get()) ||
+          IDASetSuppressAlgB(mem, B.which, SUNTRUE) || IDASetMaxOrdB(mem, B.which, max_order) ||
+          IDASetMaxNumStepsB(mem, B.which, im.o.max_steps))
         return "IDAS backward problem set-up failed";
       B.A.reset(SUNSparseMatrix(N, N, nnz, CSC_MAT, sd.ctx.get()));
       B.LS = sun::new_sparse_lu_solver(sd.ctx, im.o.klu_pivot_tolerance, false);
       if (!B.LS || IDASetLinearSolverB(mem, B.which, B.LS.get(), B.A.get()) ||
-          IDASetJacFnB(mem, B.which, jac_b_tramp) || IDAQuadInitB(mem, B.which, quad_b_tramp, B.qB.get()))
+          IDASetJacFnB(mem, B.which, jac_b_tramp) ||
+          IDAQuadInitB(mem, B.which, quad_b_tramp, B.qB.get()))
         return "IDAS backward linear solver or quadrature set-up failed";
       // the gradient quadratures are in the error test (absolute part: atol × gradient scale)
       if (IDAQuadSStolerancesB(mem, B.which, im.o.rtol, im.o.atol * scale[4]) ||
@@ -191,20 +199,21 @@ std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<
     return "";
   };
   // Backward in chunks (64 over the span, plus every breakpoint). The a-priori gradient scale
-  // (scale[4]) can be orders of magnitude too large (300× on the flexible test arm); after each
-  // chunk the absolute tolerance of each gradient quadrature becomes atol × the largest |dQ/dp|
-  // accumulated so far. (With the a-priori scale alone the full robot arm's gradient at rtol 1e-8
-  // was 10× too small.) A breakpoint's problems are created when the pass reaches it: IDASolveB
-  // requires every existing backward problem to lie ahead of tBout.
+  // (scale[4]) can be orders of magnitude too large; after each chunk the absolute tolerance of
+  // each gradient quadrature becomes atol × the largest |dQ/dp| accumulated so far
+  // (docs/methods.md, "Adjoint sensitivities"). A breakpoint's problems are created when the pass
+  // reaches it: IDASolveB requires every existing backward problem to lie ahead of tBout.
   double t_hi = t0;
   for (const auto& bp : breaks) t_hi = std::max(t_hi, bp.t);
   constexpr int kChunks = 64;
   std::vector<double> stops;
-  for (int c = 0; c <= kChunks; ++c) stops.push_back(c == kChunks ? t0 : t_hi - (t_hi - t0) * c / kChunks);
+  for (int c = 0; c <= kChunks; ++c)
+    stops.push_back(c == kChunks ? t0 : t_hi - (t_hi - t0) * c / kChunks);
   for (const auto& bp : breaks) stops.push_back(bp.t);
   std::sort(stops.begin(), stops.end(), std::greater<>());
   const double eps = 1e-12 * std::max(1.0, std::abs(t_hi));
-  stops.erase(std::unique(stops.begin(), stops.end(), [&](double a, double b) { return std::abs(a - b) <= eps; }),
+  stops.erase(std::unique(stops.begin(), stops.end(),
+                          [&](double a, double b) { return std::abs(a - b) <= eps; }),
               stops.end());
   im.adj_error.clear();
   int flag = 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <vector>
 
@@ -31,35 +32,10 @@ std::string IdasOptions::validate() const {
   if (!(t_end > 0)) return "t_end: expected a positive final time";
   if (max_steps < 1) return "max_steps: expected at least 1";
   if (max_order < 0 || max_order > 5) return "max_order: expected 0 (auto) or 1-5";
-  if (!(klu_pivot_tolerance > 0 && klu_pivot_tolerance <= 1)) return "klu_pivot_tolerance: expected a value in (0, 1]";
+  if (!(klu_pivot_tolerance > 0 && klu_pivot_tolerance <= 1))
+    return "klu_pivot_tolerance: expected a value in (0, 1]";
   if (adjoint_checkpoint_steps < 1) return "adjoint_checkpoint_steps: expected at least 1";
   return {};
-}
-
-nlohmann::json IdasOptions::to_json() const {
-  return {{"rtol", rtol}, {"atol", atol}, {"h_out", h_out}, {"t_end", t_end}, {"max_steps", max_steps},
-          {"max_order", max_order > 0 ? nlohmann::json(max_order) : nlohmann::json("auto")},
-          {"klu_pivot_tolerance", klu_pivot_tolerance},
-          {"corrector", staggered ? "staggered" : "simultaneous"},
-          {"error_test", error_test == ErrorTest::kPositions                ? "positions"
-                         : error_test == ErrorTest::kPositionsAndVelocities ? "positions+velocities"
-                                                                            : "auto"},
-          {"sensitivity_residual", analytic_sensitivity_residual ? "analytic" : "idas_difference_quotients"},
-          {"adjoint_checkpoint_steps", adjoint_checkpoint_steps}};
-}
-
-nlohmann::json IdasStats::to_json() const {
-  nlohmann::json j = {{"ok", ok}, {"message", message}, {"steps", steps}, {"residual_evaluations", residual_evaluations},
-          {"jacobian_evaluations", jacobian_evaluations}, {"nonlinear_iterations", nonlinear_iterations},
-          {"error_test_failures", error_test_failures}, {"nonlinear_convergence_failures", nonlinear_convergence_failures},
-          {"sensitivity_residual_evaluations", sensitivity_residual_evaluations}, {"wall_seconds", wall_seconds},
-          {"error_test", error_test}, {"max_order", max_order}, {"massless_velocities", massless_velocities}};
-  if (adjoint_problems > 0)
-    j["adjoint"] = {{"backward_problems", adjoint_problems}, {"steps", adjoint_steps},
-                    {"residual_evaluations", adjoint_residual_evaluations},
-                    {"jacobian_evaluations", adjoint_jacobian_evaluations}, {"checkpoints", checkpoints},
-                    {"wall_seconds", adjoint_wall_seconds}};
-  return j;
 }
 
 const ModelParams& IdasGGL::Impl::params() {
@@ -77,7 +53,9 @@ const ModelParams& IdasGGL::Impl::params() {
 }
 
 int IdasGGL::Impl::residual(double t, const double* y, const double* yp, double* F) {
-  return ggl.residual(params(), t, y, yp, F) ? 0 : 1;  // 1 recoverable: IDAS retries with a smaller step
+  return ggl.residual(params(), t, y, yp, F)
+             ? 0
+             : 1;  // 1 recoverable: IDAS retries with a smaller step
 }
 
 SpMat IdasGGL::Impl::jacobian(double t, double cj, const double* y, const double* yp) {
@@ -85,7 +63,8 @@ SpMat IdasGGL::Impl::jacobian(double t, double cj, const double* y, const double
 }
 
 // Analytic sensitivity residuals F_y yS + F_ẏ ẏS + F_p (all variables).
-int IdasGGL::Impl::sens_residual(double t, const double* y, const double* yp, std::span<const double* const> yS,
+int IdasGGL::Impl::sens_residual(double t, const double* y, const double* yp,
+                                 std::span<const double* const> yS,
                                  std::span<const double* const> ypS, std::span<double* const> rS) {
   ggl.sensitivity_residual(nominal, t, y, yp, dirs, yS, ypS, rS);
   return 0;
@@ -96,7 +75,8 @@ int IdasGGL::Impl::quad_rhs(double t, const double* y, const double* yp, double*
   return 0;
 }
 
-int IdasGGL::Impl::quad_sens_rhs(double t, const double* y, const double* yp, std::span<const double* const> yS,
+int IdasGGL::Impl::quad_sens_rhs(double t, const double* y, const double* yp,
+                                 std::span<const double* const> yS,
                                  std::span<const double* const> ypS, std::span<double* const> gS) {
   const int nv = static_cast<int>(yS.size());
   qs_dq.resize(nq, nv), qs_dv.resize(nq, nv), qs_da.resize(nq, nv), qs_dl.resize(nc, nv);
@@ -121,8 +101,8 @@ int res_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector rr, void* ud) {
                                                    N_VGetArrayPointer(rr));
 }
 
-int jac_tramp(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
-              N_Vector) {
+int jac_tramp(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud,
+              N_Vector, N_Vector, N_Vector) {
   auto* im = static_cast<IdasGGL::Impl*>(ud);
   sun::copy_to(im->jacobian(t, cj, N_VGetArrayPointer(y), N_VGetArrayPointer(yp)), J);
   return 0;
@@ -132,17 +112,19 @@ int jac_tramp(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMat
 struct SensitivityArrays {
   std::vector<const double*> a, b;
   std::vector<double*> c;
-  SensitivityArrays(int n, const N_Vector* va, const N_Vector* vb, const N_Vector* vc) : a(n), b(n), c(n) {
+  SensitivityArrays(int n, const N_Vector* va, const N_Vector* vb, const N_Vector* vc)
+      : a(n), b(n), c(n) {
     for (int i = 0; i < n; ++i)
-      a[i] = N_VGetArrayPointer(va[i]), b[i] = N_VGetArrayPointer(vb[i]), c[i] = N_VGetArrayPointer(vc[i]);
+      a[i] = N_VGetArrayPointer(va[i]), b[i] = N_VGetArrayPointer(vb[i]),
+      c[i] = N_VGetArrayPointer(vc[i]);
   }
 };
 
-int sens_tramp(int Ns, realtype t, N_Vector y, N_Vector yp, N_Vector, N_Vector* yS, N_Vector* ypS, N_Vector* rS,
-               void* ud, N_Vector, N_Vector, N_Vector) {
+int sens_tramp(int Ns, realtype t, N_Vector y, N_Vector yp, N_Vector, N_Vector* yS, N_Vector* ypS,
+               N_Vector* rS, void* ud, N_Vector, N_Vector, N_Vector) {
   const SensitivityArrays v(Ns, yS, ypS, rS);
-  return static_cast<IdasGGL::Impl*>(ud)->sens_residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), v.a, v.b,
-                                                        v.c);
+  return static_cast<IdasGGL::Impl*>(ud)->sens_residual(t, N_VGetArrayPointer(y),
+                                                        N_VGetArrayPointer(yp), v.a, v.b, v.c);
 }
 
 int quad_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector rQ, void* ud) {
@@ -150,11 +132,11 @@ int quad_tramp(realtype t, N_Vector y, N_Vector yp, N_Vector rQ, void* ud) {
                                                    N_VGetArrayPointer(rQ));
 }
 
-int quad_sens_tramp(int Ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_Vector* ypS, N_Vector, N_Vector* rQS,
-                    void* ud, N_Vector, N_Vector, N_Vector) {
+int quad_sens_tramp(int Ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_Vector* ypS,
+                    N_Vector, N_Vector* rQS, void* ud, N_Vector, N_Vector, N_Vector) {
   const SensitivityArrays v(Ns, yS, ypS, rQS);
-  return static_cast<IdasGGL::Impl*>(ud)->quad_sens_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), v.a, v.b,
-                                                        v.c);
+  return static_cast<IdasGGL::Impl*>(ud)->quad_sens_rhs(t, N_VGetArrayPointer(y),
+                                                        N_VGetArrayPointer(yp), v.a, v.b, v.c);
 }
 
 }  // namespace
@@ -164,24 +146,31 @@ IdasGGL::IdasGGL(const Model& model, const ModelParams& params, IdasOptions o)
 IdasGGL::~IdasGGL() = default;
 void IdasGGL::set_quadrature(IdasQuadrature* q) { impl_->quad = q; }
 
-IdasStats IdasGGL::run(State s0, const Output& out) { return run_mode(std::move(s0), nullptr, Vec(), out, Mode::kPrimal); }
-
-IdasStats IdasGGL::run_with_sensitivities(State s0, const Parameterization& design, const Vec& pv, const Output& out) {
-  return run_mode(std::move(s0), &design, pv, out, design.size() > 0 ? Mode::kForward : Mode::kPrimal);
+IdasStats IdasGGL::run(State s0, const Output& out) {
+  return run_mode(std::move(s0), nullptr, Vec(), out, Mode::kPrimal);
 }
 
-IdasStats IdasGGL::run_adjoint(State s0, const Parameterization& design, const Vec& pv, const Output& out) {
+IdasStats IdasGGL::run_with_sensitivities(State s0, const Parameterization& design, const Vec& pv,
+                                          const Output& out) {
+  return run_mode(std::move(s0), &design, pv, out,
+                  design.size() > 0 ? Mode::kForward : Mode::kPrimal);
+}
+
+IdasStats IdasGGL::run_adjoint(State s0, const Parameterization& design, const Vec& pv,
+                               const Output& out) {
   return run_mode(std::move(s0), &design, pv, out, Mode::kAdjoint);
 }
 
-IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec& pv, const Output& out, Mode mode) {
+IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec& pv,
+                            const Output& out, Mode mode) {
   auto& im = *impl_;
   const auto t_start = std::chrono::steady_clock::now();
   IdasStats st;
   auto fail = [&](const std::string& msg) {
     st.ok = false;
     st.message = msg;
-    st.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    st.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     return st;
   };
   if (auto msg = im.o.validate(); !msg.empty()) return fail("invalid IDAS option " + msg);
@@ -190,24 +179,29 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
   const int nv = design ? design->size() : 0;
   const bool sens = mode == Mode::kForward && nv > 0, adjoint = mode == Mode::kAdjoint;
   if (adjoint && (nv == 0 || !im.quad || im.quad->size() == 0))
-    return fail("an adjoint run needs design variables and at least one time-integral response (quadrature)");
+    return fail(
+        "an adjoint run needs design variables and at least one time-integral response "
+        "(quadrature)");
   // ---- consistent initial values (index-1 system), scaling
   s0.v.conservativeResize(nq);
   if (s0.lambda.size() != nc) s0.lambda.setZero(nc);
   if (s0.a.size() != nq) s0.a.setZero(nq);
   SparseLU lu;
   lu.analyze(m.pattern());
-  if (auto r = project_initial_state(m, im.nominal, s0, lu, 1e-13 * m.length_scale()); !r.ok()) return fail(r.message);
+  if (auto r = project_initial_state(m, im.nominal, s0, lu, 1e-13 * m.length_scale()); !r.ok())
+    return fail(r.message);
   {
     // ẏ(t0) from the right limit of the drivers' accelerations: a law that switches on at t0
     // (a ramp) has q̈(t0⁺) ≠ q̈(t0⁻), and IDAS fails its first error tests from the left limit
     State right = s0;
     right.t = s0.t + 1e-9 * im.o.h_out;
-    if (auto r = consistent_accelerations(m, im.nominal, 1.0, right, lu); !r.ok()) return fail(r.message);
+    if (auto r = consistent_accelerations(m, im.nominal, 1.0, right, lu); !r.ok())
+      return fail(r.message);
     s0.a = right.a;
     s0.lambda = right.lambda;
   }
-  const double kappa = GeneralizedAlpha::automatic_scaling(m, im.nominal, s0, AlphaCoefficients::make(0.8, im.o.h_out));
+  const double kappa = GeneralizedAlpha::automatic_scaling(
+      m, im.nominal, s0, AlphaCoefficients::make(0.8, im.o.h_out));
   im.ggl.set_scales({.s1 = kappa * im.o.h_out, .s3 = kappa, .s4 = kappa * im.o.h_out});
   im.t_start = s0.t;
   Mat dqdd0, dl0;
@@ -238,7 +232,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
   sd.id = sun::new_vector(N, sd.ctx);
   sd.atol = sun::new_vector(N, sd.ctx);
   sd.dky = sun::new_vector(N, sd.ctx);
-  Eigen::Map<Vec> y = map(sd.y.get()), yp = map(sd.yp.get()), id = map(sd.id.get()), atol = map(sd.atol.get());
+  Eigen::Map<Vec> y = map(sd.y.get()), yp = map(sd.yp.get()), id = map(sd.id.get()),
+                  atol = map(sd.atol.get());
   y << s0.q, s0.v, s0.lambda, Vec::Zero(nc);
   yp << s0.v, s0.a, Vec::Zero(nc), Vec::Zero(nc);
   id << Vec::Ones(2 * nq), Vec::Zero(2 * nc);
@@ -248,30 +243,34 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
   // on generated mechanisms with massless links at tight tolerances; it is algebraic.
   {
     Mat x(nq, 1), Mx(nq, 1);
-    for (int i = 0; i < nq; ++i) x(i, 0) = 1.0 + 0.37 * std::sin(1.0 + i);  // generic: no cancellation
+    for (int i = 0; i < nq; ++i)
+      x(i, 0) = 1.0 + 0.37 * std::sin(1.0 + i);  // generic: no cancellation
     m.mass_damping_product(s0, im.nominal, x, Mat::Zero(nq, 1), Mx);
     const double scale = Mx.cwiseAbs().maxCoeff();
     for (int i = 0; i < nq; ++i)
       if (std::abs(Mx(i, 0)) <= 1e-14 * scale) id[nq + i] = 0, ++st.massless_velocities;
   }
   const double L = m.length_scale(), T = std::max(im.o.t_end, im.o.h_out);
-  const bool positions_only = im.o.error_test == IdasOptions::ErrorTest::kPositions ||
-                              (im.o.error_test == IdasOptions::ErrorTest::kAuto && !m.flexible_bodies().empty());
+  const bool positions_only =
+      im.o.error_test == IdasOptions::ErrorTest::kPositions ||
+      (im.o.error_test == IdasOptions::ErrorTest::kAuto && !m.flexible_bodies().empty());
   st.error_test = positions_only ? "positions" : "positions+velocities";
   st.max_order = im.o.max_order > 0 ? im.o.max_order : m.flexible_bodies().empty() ? 5 : 2;
   // velocities out of the error test: an absolute tolerance so large that their weight vanishes
-  atol << Vec::Constant(nq, im.o.atol * L), Vec::Constant(nq, positions_only ? 1e30 : im.o.atol * L / T),
-      Vec::Constant(2 * nc, 1.0);
+  atol << Vec::Constant(nq, im.o.atol * L),
+      Vec::Constant(nq, positions_only ? 1e30 : im.o.atol * L / T), Vec::Constant(2 * nc, 1.0);
   if (!sd.mem.create(sd.ctx)) return fail("IDACreate failed");
   void* const mem = sd.mem.get();
-  if (IDAInit(mem, res_tramp, 0.0 + s0.t, sd.y.get(), sd.yp.get()) || IDASVtolerances(mem, im.o.rtol, sd.atol.get()) ||
-      IDASetUserData(mem, &im) || IDASetId(mem, sd.id.get()) || IDASetSuppressAlg(mem, SUNTRUE) ||
+  if (IDAInit(mem, res_tramp, 0.0 + s0.t, sd.y.get(), sd.yp.get()) ||
+      IDASVtolerances(mem, im.o.rtol, sd.atol.get()) || IDASetUserData(mem, &im) ||
+      IDASetId(mem, sd.id.get()) || IDASetSuppressAlg(mem, SUNTRUE) ||
       IDASetMaxNumSteps(mem, im.o.max_steps) || IDASetMaxOrd(mem, st.max_order))
     return fail("IDAS set-up failed");
   // Initial step (at t0 and at each restart): where ½h²‖q̈‖ reaches the position tolerance.
   // IDAS's own estimate bounds h‖ẏ‖ by the weights of every component, and velocities that start
   // at rest have only their absolute tolerance, atol·L/t_end: on Andrews' squeezer at rtol ≤ 5e-11
-  // that gave h ~ 1e-19 s, where the corrector cannot converge in floating point (flag -4 at t = 0).
+  // that gave h ~ 1e-19 s, where the corrector cannot converge in floating point (flag -4 at t =
+  // 0).
   auto set_initial_step = [&](const Vec& q, const Vec& a) -> bool {
     double wa = 0;
     for (int i = 0; i < nq; ++i) {
@@ -279,7 +278,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
       wa += w * w;
     }
     wa = std::sqrt(wa / nq);
-    const double h0 = wa > 0 && std::isfinite(wa) ? std::min(0.1 * im.o.h_out, std::sqrt(2.0 / wa)) : 0.0;
+    const double h0 =
+        wa > 0 && std::isfinite(wa) ? std::min(0.1 * im.o.h_out, std::sqrt(2.0 / wa)) : 0.0;
     return IDASetInitStep(mem, h0) == IDA_SUCCESS;  // 0: IDAS's own estimate
   };
   if (!set_initial_step(s0.q, s0.a)) return fail("IDAS set-up failed (initial step)");
@@ -292,7 +292,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
   // recomputed interval could take more steps and crash (the full robot arm at rtol 1e-8 did).
   // A factorization with fresh pivoting at every Jacobian makes each solve history-free.
   sd.LS = sun::new_sparse_lu_solver(sd.ctx, im.o.klu_pivot_tolerance, /*fresh_each_setup=*/adjoint);
-  if (!sd.A || !sd.LS || IDASetLinearSolver(mem, sd.LS.get(), sd.A.get()) || IDASetJacFn(mem, jac_tramp))
+  if (!sd.A || !sd.LS || IDASetLinearSolver(mem, sd.LS.get(), sd.A.get()) ||
+      IDASetJacFn(mem, jac_tramp))
     return fail("IDAS linear solver set-up failed");
   std::vector<double> pbar;
   if (sens) {
@@ -309,8 +310,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
       pbar.push_back(std::max(std::abs(pv[i]), 1e-2 * range[i]));
     }
     const int ism = im.o.staggered ? IDA_STAGGERED : IDA_SIMULTANEOUS;
-    if (IDASensInit(mem, nv, ism, im.o.analytic_sensitivity_residual ? sens_tramp : nullptr, sd.yS.get(),
-                    sd.ypS.get()) ||
+    if (IDASensInit(mem, nv, ism, im.o.analytic_sensitivity_residual ? sens_tramp : nullptr,
+                    sd.yS.get(), sd.ypS.get()) ||
         IDASensEEtolerances(mem) || IDASetSensErrCon(mem, SUNTRUE) ||
         IDASetSensParams(mem, im.p.data(), pbar.data(), nullptr))
       return fail("IDAS sensitivity set-up failed");
@@ -323,7 +324,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
     if (sens) {
       sd.yQS = sun::VectorArray(nv, sd.yQ.get());
       for (int i = 0; i < nv; ++i) N_VConst(0.0, sd.yQS[i]);
-      if (IDAQuadSensInit(mem, im.o.analytic_sensitivity_residual ? quad_sens_tramp : nullptr, sd.yQS.get()))
+      if (IDAQuadSensInit(mem, im.o.analytic_sensitivity_residual ? quad_sens_tramp : nullptr,
+                          sd.yQS.get()))
         return fail("IDAS quadrature sensitivity set-up failed");
     }
   }
@@ -349,8 +351,10 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
   for (double t : breaks) stops.push_back({t, true, false});
   if (!adjoint) {
     const double margin = 1e-12 * im.o.h_out;
-    for (double t : im.m.time_kinks(s0.t + margin, im.o.t_end - margin)) stops.push_back({t, false, true});
-    std::stable_sort(stops.begin(), stops.end(), [](const Stop& a, const Stop& b) { return a.t < b.t; });
+    for (double t : im.m.time_kinks(s0.t + margin, im.o.t_end - margin))
+      stops.push_back({t, false, true});
+    std::stable_sort(stops.begin(), stops.end(),
+                     [](const Stop& a, const Stop& b) { return a.t < b.t; });
     std::vector<Stop> merged;  // one stop for near-equal times (a window boundary keeps its time)
     for (const Stop& x : stops) {
       if (!merged.empty() && x.t - merged.back().t <= margin) {
@@ -370,7 +374,7 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
   std::vector<idas::Breakpoint> at_breaks;  // adjoint runs
   auto report_quadrature = [&](double t) {
     // Q interpolated at t itself: after IDASolveF (adjoint runs) IDAGetQuad returned Q at an
-    // earlier return time (0.039 for 0.04 on generated seed 111: values 2 % off)
+    // earlier return time than the one asked for
     IDAGetQuadDky(mem, t, 0, sd.yQ.get());
     Qv = map(sd.yQ.get());
     if (adjoint) return at_breaks.push_back({t, Qv, y, yp});
@@ -404,8 +408,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
       if (sens) IDAGetQuadSens(mem, &tr, sd.yQS.get());
     }
     if (IDAReInit(mem, tk, sd.y.get(), sd.yp.get()) != IDA_SUCCESS || !set_initial_step(s.q, s.a) ||
-        (sens && IDASensReInit(mem, im.o.staggered ? IDA_STAGGERED : IDA_SIMULTANEOUS, sd.yS.get(), sd.ypS.get()) !=
-                     IDA_SUCCESS) ||
+        (sens && IDASensReInit(mem, im.o.staggered ? IDA_STAGGERED : IDA_SIMULTANEOUS, sd.yS.get(),
+                               sd.ypS.get()) != IDA_SUCCESS) ||
         (nQ > 0 && IDAQuadReInit(mem, sd.yQ.get()) != IDA_SUCCESS) ||
         (nQ > 0 && sens && IDAQuadSensReInit(mem, sd.yQS.get()) != IDA_SUCCESS))
       return "IDAS could not restart at the law kink t = " + std::to_string(tk);
@@ -453,7 +457,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
     if (!adjoint) {
       // window boundaries are stop times (set before IDAS's internal time can pass them): a step
       // ends exactly on each
-      while ((flag = IDASolve(mem, tout, &tret, sd.y.get(), sd.yp.get(), IDA_NORMAL)) == IDA_TSTOP_RETURN) {
+      while ((flag = IDASolve(mem, tout, &tret, sd.y.get(), sd.yp.get(), IDA_NORMAL)) ==
+             IDA_TSTOP_RETURN) {
         if (stops[next_stop].is_break) report_quadrature(tret);
         if (stops[next_stop].is_kink)
           if (auto msg = restart_at_kink(tret); !msg.empty()) {
@@ -484,7 +489,8 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
     if (flag < 0) {
       st.ok = false;
       if (st.message.empty())
-        st.message = "IDAS failed at t = " + std::to_string(tret) + " (flag " + std::to_string(flag) + ")";
+        st.message =
+            "IDAS failed at t = " + std::to_string(tret) + " (flag " + std::to_string(flag) + ")";
       break;
     }
     emit(tout);
@@ -503,14 +509,36 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
     st.checkpoints = ncheck;
     const auto t_back = std::chrono::steady_clock::now();
     std::vector<Mat> dQb;
-    const std::string msg =
-        idas::backward_pass(sd, im, at_breaks, s0.t, positions_only, st.max_order, J0.nonZeros(), st, dQb);
-    st.adjoint_wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_back).count();
+    const std::string msg = idas::backward_pass(sd, im, at_breaks, s0.t, positions_only,
+                                                st.max_order, J0.nonZeros(), st, dQb);
+    st.adjoint_wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_back).count();
     if (!msg.empty()) return fail(msg);
-    for (size_t b = 0; b < at_breaks.size(); ++b) im.quad->on_breakpoint(at_breaks[b].t, at_breaks[b].Q, &dQb[b]);
+    for (size_t b = 0; b < at_breaks.size(); ++b)
+      im.quad->on_breakpoint(at_breaks[b].t, at_breaks[b].Q, &dQb[b]);
   }
-  st.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  st.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return st;
+}
+
+RunStatus IdasStats::status() const { return ok ? RunStatus::kComplete : RunStatus::kFailed; }
+
+std::string IdasStats::report() const {
+  char b[320];
+  std::snprintf(b, sizeof b,
+                "IDAS: %s: %ld steps, %ld residual evaluations, %ld Jacobian evaluations, %ld "
+                "nonlinear iterations, "
+                "%ld error-test failures, %.3f s",
+                run_status_name(status()), steps, residual_evaluations, jacobian_evaluations,
+                nonlinear_iterations, error_test_failures, wall_seconds);
+  std::string r = b;
+  if (adjoint_problems > 0) {
+    std::snprintf(b, sizeof b, "; adjoint: %ld backward problems, %ld steps, %ld checkpoints",
+                  adjoint_problems, adjoint_steps, checkpoints);
+    r += b;
+  }
+  return message.empty() ? r : r + "\n  " + message;
 }
 
 }  // namespace lsmbs

@@ -34,7 +34,12 @@ struct IdasGGL::Impl {
   double t_start = 0;
 
   Impl(const Model& model, const ModelParams& params, IdasOptions opt)
-      : m(model), nominal(params), o(opt), nq(model.nq()), nc(model.nc()), N(2 * model.nq() + 2 * model.nc()),
+      : m(model),
+        nominal(params),
+        o(opt),
+        nq(model.nq()),
+        nc(model.nc()),
+        N(2 * model.nq() + 2 * model.nc()),
         ggl(model) {}
 
   /// The nominal parameters, or those at the design point IDAS perturbed p to (cached).
@@ -57,10 +62,12 @@ struct IdasGGL::Impl {
   std::vector<double> adj_vals;
   std::string adj_error;  // why a backward callback failed (reported by run_adjoint)
   bool adjoint_integrand(int k, const State& s);
-  int adjoint_residual(int k, double t, const double* y, const double* yp, const double* yB, const double* ypB,
-                       double* rB);
-  int adjoint_quadrature(int k, double t, const double* y, const double* yp, const double* yB, double* qB);
-  bool adjoint_final_values(int k, double tb, const Vec& y, const Vec& yp, Vec& xi, Vec& xid, double scale[5]);
+  int adjoint_residual(int k, double t, const double* y, const double* yp, const double* yB,
+                       const double* ypB, double* rB);
+  int adjoint_quadrature(int k, double t, const double* y, const double* yp, const double* yB,
+                         double* qB);
+  bool adjoint_final_values(int k, double tb, const Vec& y, const Vec& yp, Vec& xi, Vec& xid,
+                            double scale[5]);
 };
 
 namespace idas {
@@ -97,8 +104,9 @@ struct Breakpoint {
 // The backward pass of an adjoint run (idas_adjoint.cpp): one backward problem per (quadrature
 // k, breakpoint t_b) asked for, all integrated to t0 by one IDASolveB; fills dQ[b] (rows not
 // asked for: NaN). Returns an empty string or the reason of a failure.
-std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<Breakpoint>& breaks, double t0,
-                          bool positions_only, int max_order, long nnz, IdasStats& st, std::vector<Mat>& dQ);
+std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<Breakpoint>& breaks,
+                          double t0, bool positions_only, int max_order, long nnz, IdasStats& st,
+                          std::vector<Mat>& dQ);
 
 }  // namespace idas
 }  // namespace lsmbs

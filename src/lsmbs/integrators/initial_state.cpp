@@ -28,9 +28,9 @@ Vec velocity_weights(const Model& model) {
 // [ W  Φ_qᵀ ; Φ_q  −δI ] on the model pattern. Held unknowns get an identity row and no coupling
 // to the constraints, so their correction is zero; δ > 0 keeps the matrix regular when the
 // constraints restricted to the other unknowns are dependent (velocities given for every body).
-Status factor_velocity_projection(const Model& model, const ModelParams& p, const State& s, SparseLU& lu,
-                                  std::vector<double>& vals, const Vec& w, const std::vector<char>* held,
-                                  double delta) {
+Status factor_velocity_projection(const Model& model, const ModelParams& p, const State& s,
+                                  SparseLU& lu, std::vector<double>& vals, const Vec& w,
+                                  const std::vector<char>* held, double delta) {
   model.iteration_matrix(s, p, Coefficients{0, 0, 0}, 1.0, 0.0, vals);
   const int nq = model.nq(), n = model.n();
   const auto& pat = model.pattern();
@@ -40,7 +40,8 @@ Status factor_velocity_projection(const Model& model, const ModelParams& p, cons
         const int i = pat.row_ind[k];
         if ((j < nq && i >= nq && (*held)[j]) || (j >= nq && i < nq && (*held)[i])) vals[k] = 0;
       }
-  for (int i = 0; i < nq; ++i) model.assembler().add_diagonal(vals, i, held && (*held)[i] ? 1.0 : w[i]);
+  for (int i = 0; i < nq; ++i)
+    model.assembler().add_diagonal(vals, i, held && (*held)[i] ? 1.0 : w[i]);
   for (int i = nq; i < n && delta > 0; ++i) model.assembler().add_diagonal(vals, i, -delta);
   lu.reset_pivoting();
   return lu.factor(vals);
@@ -48,8 +49,8 @@ Status factor_velocity_projection(const Model& model, const ModelParams& p, cons
 
 }  // namespace
 
-Status project_initial_state(const Model& model, const ModelParams& p, State& s, SparseLU& lu, double tol,
-                             ProjectionReport* rep, const std::vector<char>* held) {
+Status project_initial_state(const Model& model, const ModelParams& p, State& s, SparseLU& lu,
+                             double tol, ProjectionReport* rep, const std::vector<char>* held) {
   const int nq = model.nq(), nc = model.nc();
   if (nc == 0) return Status::Ok();
   std::vector<double> vals;
@@ -64,12 +65,14 @@ Status project_initial_state(const Model& model, const ModelParams& p, State& s,
     lu.solve(rhs);
     s.q += rhs.head(nq);
     model.constraints(s.t, s.q, p, phi);
-    if (!phi.allFinite()) return Status::Fail(Status::Code::kNonFinite, "initial position projection diverged");
+    if (!phi.allFinite())
+      return Status::Fail(Status::Code::kNonFinite, "initial position projection diverged");
   }
   if (phi.lpNorm<Eigen::Infinity>() > tol)
     return Status::Fail(Status::Code::kNotConverged,
                         "cannot assemble the initial configuration: ‖Φ‖ = " +
-                            std::to_string(phi.lpNorm<Eigen::Infinity>()) + " after 50 projections");
+                            std::to_string(phi.lpNorm<Eigen::Infinity>()) +
+                            " after 50 projections");
   if (rep) {
     rep->phi_after = phi.lpNorm<Eigen::Infinity>();
     rep->iterations = it;
@@ -107,7 +110,8 @@ Status project_initial_state(const Model& model, const ModelParams& p, State& s,
     // Iterated regularized projection: each pass removes all but δ/(σ² + δ) of the residual along
     // every direction the free unknowns can reach (σ² the eigenvalues of J_F W⁻¹ J_Fᵀ).
     const double delta = 1e-10 * min_row;
-    if (auto st = factor_velocity_projection(model, p, s, lu, vals, w, held, delta); !st.ok()) return st;
+    if (auto st = factor_velocity_projection(model, p, s, lu, vals, w, held, delta); !st.ok())
+      return st;
     double v_now = violation(vc);
     for (int pass = 0; pass < 10 && v_now > 1e-15 * speed; ++pass) {
       rhs.head(nq).setZero();
@@ -129,27 +133,32 @@ Status project_initial_state(const Model& model, const ModelParams& p, State& s,
       std::vector<char> in_conflict(nq, 0);
       for (int i = 0; i < nc; ++i) {
         if (!(row_norm[i] > 0) || !(std::abs(vc[i]) / row_norm[i] > 1e-9 * speed)) continue;
-        if (rep) rep->conflicting_rows.push_back(i), rep->conflict_speed.push_back(std::abs(vc[i]) / row_norm[i]);
+        if (rep)
+          rep->conflicting_rows.push_back(i),
+              rep->conflict_speed.push_back(std::abs(vc[i]) / row_norm[i]);
         if (msg.size() < 400)
           msg += (msg.empty() ? "" : "; ") + model.describe_unknown(nq + i) + " violated by " +
                  std::to_string(std::abs(vc[i]) / row_norm[i]) + " m/s";
       }
       for (int j = 0; j < J.outerSize(); ++j)
         for (SpMat::InnerIterator e(J, j); e; ++e)
-          if ((*held)[j] && e.value() != 0 && std::abs(vc[e.row()]) / row_norm[e.row()] > 1e-9 * speed)
+          if ((*held)[j] && e.value() != 0 &&
+              std::abs(vc[e.row()]) / row_norm[e.row()] > 1e-9 * speed)
             in_conflict[j] = 1;
       if (rep)
         for (int j = 0; j < nq; ++j)
           if (in_conflict[j]) rep->conflicting_held.push_back(j);
       s.v = v_given;
       lu.reset_pivoting();
-      return Status::Fail(Status::Code::kNotConverged,
-                          "the given initial velocities contradict the constraints (" + msg +
-                              "; speeds in the metric where an angular rate counts times the length scale " +
-                              std::to_string(model.length_scale()) + " m)");
+      return Status::Fail(
+          Status::Code::kNotConverged,
+          "the given initial velocities contradict the constraints (" + msg +
+              "; speeds in the metric where an angular rate counts times the length scale " +
+              std::to_string(model.length_scale()) + " m)");
     }
   } else if (vc.lpNorm<Eigen::Infinity>() > 0) {
-    if (auto st = factor_velocity_projection(model, p, s, lu, vals, w, nullptr, 0.0); !st.ok()) return st;
+    if (auto st = factor_velocity_projection(model, p, s, lu, vals, w, nullptr, 0.0); !st.ok())
+      return st;
     rhs.head(nq).setZero();
     rhs.tail(nc) = -vc;
     lu.solve(rhs);
@@ -161,7 +170,8 @@ Status project_initial_state(const Model& model, const ModelParams& p, State& s,
   return Status::Ok();
 }
 
-Status consistent_accelerations(const Model& model, const ModelParams& p, double k, State& s, SparseLU& lu) {
+Status consistent_accelerations(const Model& model, const ModelParams& p, double k, State& s,
+                                SparseLU& lu) {
   const int nq = model.nq(), nc = model.nc();
   State s0 = s;
   s0.a.setZero(nq);
@@ -174,14 +184,16 @@ Status consistent_accelerations(const Model& model, const ModelParams& p, double
   model.iteration_matrix(s0, p, Coefficients{1, 0, 0}, k, 0.0, vals);
   lu.reset_pivoting();
   if (auto st = lu.factor(vals); !st.ok())
-    return Status::Fail(st.code, "consistent initial accelerations: " + st.message +
-                                     " — " + model.describe_unknown(lu.singular_column()) +
+    return Status::Fail(st.code, "consistent initial accelerations: " + st.message + " — " +
+                                     model.describe_unknown(lu.singular_column()) +
                                      " has no mass and is not fixed by a constraint");
   Vec rhs(model.n());
   rhs.head(nq) = -R.head(nq);
   rhs.tail(nc) = -k * gamma;
   lu.solve(rhs);
-  if (!rhs.allFinite()) return Status::Fail(Status::Code::kNonFinite, "consistent initial accelerations are not finite");
+  if (!rhs.allFinite())
+    return Status::Fail(Status::Code::kNonFinite,
+                        "consistent initial accelerations are not finite");
   s.a = rhs.head(nq);
   s.lambda = rhs.tail(nc);
   return Status::Ok();  // the factorization of the start system stays in `lu` for the caller

@@ -19,8 +19,8 @@
 namespace lsmbs {
 
 struct ProjectionReport {
-  double phi_before = 0, phi_after = 0;       ///< ‖Φ‖∞ before / after
-  double vel_before = 0, vel_after = 0;       ///< ‖Φ_q q̇ + Φ_t‖∞
+  double phi_before = 0, phi_after = 0;  ///< ‖Φ‖∞ before / after
+  double vel_before = 0, vel_after = 0;  ///< ‖Φ_q q̇ + Φ_t‖∞
   int iterations = 0;
   /// With held velocities that contradict the constraints: the violated constraint rows, their
   /// violation as a speed (|Φ_q q̇ + Φ_t|_i divided by the W⁻¹-norm of row i of Φ_q) and the held

@@ -1,6 +1,7 @@
 #include "lsmbs/integrators/static_solver.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "lsmbs/linalg/sparse_lu.hpp"
@@ -16,7 +17,8 @@ std::string StaticOptions::validate() const {
   return {};
 }
 
-StaticResult solve_static(const Model& model, const ModelParams& p, State& s, const StaticOptions& o) {
+StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
+                          const StaticOptions& o) {
   StaticResult res;
   if (auto msg = o.validate(); !msg.empty()) {
     res.message = "invalid static option " + msg;
@@ -37,12 +39,14 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s, co
     double sum = 0;
     int cnt = 0;
     for (int j = 0; j < nq; ++j)
-      if (int i = model.pattern().find(j, j); i >= 0 && vals[i] != 0) sum += std::abs(vals[i]), ++cnt;
+      if (int i = model.pattern().find(j, j); i >= 0 && vals[i] != 0)
+        sum += std::abs(vals[i]), ++cnt;
     k = cnt ? sum / cnt : 1.0;
   }
   Vec R, r_abs, dx;
   auto norm = [&](const Vec& r) {
-    return std::max(r.head(nq).lpNorm<Eigen::Infinity>(), nc ? r.tail(nc).lpNorm<Eigen::Infinity>() : 0.0);
+    return std::max(r.head(nq).lpNorm<Eigen::Infinity>(),
+                    nc ? r.tail(nc).lpNorm<Eigen::Infinity>() : 0.0);
   };
   // Round-off floor of the constraint terms, as in the dynamic Newton iteration.
   const double floor = std::max(1e-12, 100 * 2.2e-16 * k * model.length_scale());
@@ -51,7 +55,8 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s, co
     const double scale = r_abs.size() ? r_abs.maxCoeff() : 0.0;
     res.residual_norm = R.head(nq).lpNorm<Eigen::Infinity>();
     const double pn = nc ? R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
-    if (res.residual_norm <= std::max(o.tol_r * scale, floor) && pn <= o.tol_phi * model.length_scale()) {
+    if (res.residual_norm <= std::max(o.tol_r * scale, floor) &&
+        pn <= o.tol_phi * model.length_scale()) {
       res.ok = true;
       return res;
     }
@@ -76,8 +81,18 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s, co
       step *= 0.5;
     }
   }
-  res.message = "static Newton did not converge (‖r‖∞ = " + std::to_string(res.residual_norm) + " N)";
+  res.message =
+      "static Newton did not converge (‖r‖∞ = " + std::to_string(res.residual_norm) + " N)";
   return res;
+}
+
+RunStatus StaticResult::status() const { return ok ? RunStatus::kComplete : RunStatus::kFailed; }
+
+std::string StaticResult::report() const {
+  char b[160];
+  std::snprintf(b, sizeof b, "static equilibrium: %s: %d Newton iterations, residual norm %.3e",
+                run_status_name(status()), iterations, residual_norm);
+  return message.empty() ? std::string(b) : std::string(b) + "\n  " + message;
 }
 
 }  // namespace lsmbs

@@ -5,6 +5,7 @@
 // comparisons with quasi-static approaches.
 #include <string>
 
+#include "lsmbs/core/status.hpp"
 #include "lsmbs/mbs/model.hpp"
 
 namespace lsmbs {
@@ -14,7 +15,7 @@ struct StaticOptions {
   double tol_r = 1e-10;  ///< relative to the force scale of the residual's terms
   double tol_phi = 1e-12;
   int max_iter = 50;
-  double k = 0;          ///< 0: automatic (mean |diag K_t|)
+  double k = 0;  ///< 0: automatic (mean |diag K_t|)
 
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
@@ -25,9 +26,12 @@ struct StaticResult {
   int iterations = 0;
   double residual_norm = 0;
   std::string message;
+  RunStatus status() const;
+  std::string report() const;  ///< outcome and counts, one paragraph
 };
 
 /// Invalid options: not ok, with a message naming the option.
-StaticResult solve_static(const Model& model, const ModelParams& p, State& s, const StaticOptions& o = {});
+StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
+                          const StaticOptions& o = {});
 
 }  // namespace lsmbs

@@ -20,12 +20,12 @@ struct AlphaCoefficients {
 };
 
 struct StepInfo {
-  int step = 0;              ///< number of converged steps so far (1 for the first)
-  bool grid_point = true;    ///< false for sub-steps created by step halving
-  const State* prev = nullptr;     ///< converged state at t_n
+  int step = 0;                        ///< number of converged steps so far (1 for the first)
+  bool grid_point = true;              ///< false for sub-steps created by step halving
+  const State* prev = nullptr;         ///< converged state at t_n
   const Vec* prev_acc_like = nullptr;  ///< a_n
-  const State* state = nullptr;    ///< converged state at t_{n+1}
-  const Vec* acc_like = nullptr;   ///< a_{n+1}
+  const State* state = nullptr;        ///< converged state at t_{n+1}
+  const Vec* acc_like = nullptr;       ///< a_{n+1}
   AlphaCoefficients coef;
   double k = 1, zeta = 0;
   const SparseLU* factor = nullptr;  ///< LU of S_t (eq. 20) from the last Newton iteration
@@ -37,8 +37,8 @@ class StepObserver {
   virtual ~StepObserver() = default;
   /// Called once with the initial state (a = acceleration-like a_0). `start_factor` is the LU of
   /// the consistent-start system [M kΦ_qᵀ; kΦ_q 0] (null for the zero start of Algorithm 1).
-  virtual void on_start(const State& /*s0*/, const Vec& /*a0*/, const AlphaCoefficients&, double /*k*/,
-                        double /*zeta*/, const SparseLU* /*start_factor*/) {}
+  virtual void on_start(const State& /*s0*/, const Vec& /*a0*/, const AlphaCoefficients&,
+                        double /*k*/, double /*zeta*/, const SparseLU* /*start_factor*/) {}
   /// Return false to stop the integration (the run is then reported as aborted).
   virtual bool on_step(const StepInfo& info) = 0;
   /// True when on_step may run on a worker thread, one step behind the integrator, on a copy of
@@ -68,26 +68,31 @@ struct StepObserverOptions {
   int threads = 1;
 
   /// Empty string when valid, otherwise "field: what is expected".
-  std::string validate() const { return threads < 1 || threads > 2 ? "threads: expected 1 or 2" : ""; }
+  std::string validate() const {
+    return threads < 1 || threads > 2 ? "threads: expected 1 or 2" : "";
+  }
 };
 
-/// Progress of one time integration on a ProgressLine: "<label> t = … s (…%)  step …  Newton …"
-/// (null line: nothing).
+/// Reports the progress of one time integration to a callback (empty callback: nothing).
 class ProgressObserver : public StepObserver {
  public:
-  ProgressObserver(ProgressLine* line, double t_end, std::string label = {})
-      : line_(line), t_end_(t_end), label_(std::move(label)) {}
+  ProgressObserver(ProgressCallback callback, double t_end, std::string label = {})
+      : callback_(std::move(callback)) {
+    progress_.t_end = t_end;
+    progress_.label = std::move(label);
+  }
   bool on_step(const StepInfo& i) override {
-    if (line_ && line_->enabled())
-      line_->update(false, "%s t = %.5f s (%3.0f %%)  step %d  Newton %d", label_.c_str(), i.state->t,
-                    t_end_ > 0 ? 100.0 * i.state->t / t_end_ : 0.0, i.step, i.newton_iterations);
+    if (!callback_) return true;
+    progress_.t = i.state->t;
+    progress_.step = i.step;
+    progress_.newton_iterations = i.newton_iterations;
+    callback_(progress_);
     return true;
   }
 
  private:
-  ProgressLine* line_;
-  double t_end_;
-  std::string label_;
+  ProgressCallback callback_;
+  Progress progress_;
 };
 
 /// Stops the integration at the next step, or within the step in progress, once an interrupt

@@ -25,14 +25,17 @@ int set_flag(SparseLuContent& c, int flag) {
 }
 
 // Whether the CSC arrays of A are those of `p`.
-bool same_pattern(const CscPattern& p, sunindextype n, const sunindextype* cp, const sunindextype* ri) {
+bool same_pattern(const CscPattern& p, sunindextype n, const sunindextype* cp,
+                  const sunindextype* ri) {
   if (p.n != n || p.nnz() != cp[n]) return false;
-  return std::equal(p.col_ptr.begin(), p.col_ptr.end(), cp) && std::equal(p.row_ind.begin(), p.row_ind.end(), ri);
+  return std::equal(p.col_ptr.begin(), p.col_ptr.end(), cp) &&
+         std::equal(p.row_ind.begin(), p.row_ind.end(), ri);
 }
 
 int setup(SUNLinearSolver S, SUNMatrix A) {
   auto& c = content(S);
-  if (SUNMatGetID(A) != SUNMATRIX_SPARSE || SM_SPARSETYPE_S(A) != CSC_MAT || SM_ROWS_S(A) != SM_COLUMNS_S(A))
+  if (SUNMatGetID(A) != SUNMATRIX_SPARSE || SM_SPARSETYPE_S(A) != CSC_MAT ||
+      SM_ROWS_S(A) != SM_COLUMNS_S(A))
     return set_flag(c, SUNLS_ILL_INPUT);
   const sunindextype n = SM_COLUMNS_S(A), *cp = SM_INDEXPTRS_S(A), *ri = SM_INDEXVALS_S(A);
   const std::span<const double> values(SM_DATA_S(A), static_cast<size_t>(cp[n]));
@@ -67,7 +70,8 @@ int setup(SUNLinearSolver S, SUNMatrix A) {
 
 int solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype /*tol*/) {
   auto& c = content(S);
-  if (!c.lu.factored() || SM_COLUMNS_S(A) != c.pattern.n) return set_flag(c, SUNLS_PACKAGE_FAIL_UNREC);
+  if (!c.lu.factored() || SM_COLUMNS_S(A) != c.pattern.n)
+    return set_flag(c, SUNLS_PACKAGE_FAIL_UNREC);
   N_VScale(1.0, b, x);
   c.lu.solve(std::span<double>(N_VGetArrayPointer(x), static_cast<size_t>(c.pattern.n)));
   return set_flag(c, SUNLS_SUCCESS);
@@ -83,7 +87,8 @@ int free_solver(SUNLinearSolver S) {
 
 }  // namespace
 
-LinearSolver new_sparse_lu_solver(const Context& ctx, double pivot_tolerance, bool fresh_each_setup) {
+LinearSolver new_sparse_lu_solver(const Context& ctx, double pivot_tolerance,
+                                  bool fresh_each_setup) {
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx.get());
   if (!S) return nullptr;
   auto* c = new SparseLuContent;

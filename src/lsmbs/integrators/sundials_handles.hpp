@@ -38,10 +38,14 @@ struct VectorDeleter {
   void operator()(N_Vector v) const { N_VDestroy(v); }
 };
 using Vector = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorDeleter>;
-inline Vector new_vector(sunindextype n, const Context& ctx) { return Vector(N_VNew_Serial(n, ctx.get())); }
+inline Vector new_vector(sunindextype n, const Context& ctx) {
+  return Vector(N_VNew_Serial(n, ctx.get()));
+}
 
 /// Eigen view of a serial N_Vector.
-inline Eigen::Map<Vec> map(N_Vector v) { return {N_VGetArrayPointer(v), static_cast<Eigen::Index>(N_VGetLength(v))}; }
+inline Eigen::Map<Vec> map(N_Vector v) {
+  return {N_VGetArrayPointer(v), static_cast<Eigen::Index>(N_VGetLength(v))};
+}
 
 /// An array of n clones of a vector (N_VCloneVectorArray), as IDAS's sensitivity functions take.
 class VectorArray {
@@ -85,7 +89,8 @@ using LinearSolver = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, Lin
 /// ε^(2/3) and its condest confirms a condition number above ε^(−2/3). A failed refactorization
 /// or estimate is recoverable (IDAS retries with a smaller step), a failed fresh factorization is
 /// not. `fresh_each_setup`: every setup factorizes with fresh pivoting (history-free solves).
-LinearSolver new_sparse_lu_solver(const Context& ctx, double pivot_tolerance, bool fresh_each_setup);
+LinearSolver new_sparse_lu_solver(const Context& ctx, double pivot_tolerance,
+                                  bool fresh_each_setup);
 
 /// Copies a compressed CSC matrix into a SUNDIALS sparse matrix (CSC_MAT), growing its storage
 /// when needed.
@@ -95,7 +100,8 @@ inline void copy_to(const SpMat& A, SUNMatrix J) {
   sunindextype* ri = SM_INDEXVALS_S(J);
   realtype* d = SM_DATA_S(J);
   for (int c = 0; c <= A.cols(); ++c) cp[c] = A.outerIndexPtr()[c];
-  for (Eigen::Index k = 0; k < A.nonZeros(); ++k) ri[k] = A.innerIndexPtr()[k], d[k] = A.valuePtr()[k];
+  for (Eigen::Index k = 0; k < A.nonZeros(); ++k)
+    ri[k] = A.innerIndexPtr()[k], d[k] = A.valuePtr()[k];
 }
 
 /// The IDAS memory (IDACreate / IDAFree). IDAFree also frees the memories of the backward

@@ -14,7 +14,9 @@
 
 namespace lsmbs {
 namespace {
-double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 long peak_rss_kb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -22,14 +24,23 @@ long peak_rss_kb() {
 }
 }  // namespace
 
+std::string BenchOptions::validate() const {
+  if (repetitions < 1) return "repetitions: expected at least 1";
+  if (threads < 1 || threads > 2) return "threads: expected 1 or 2";
+  return {};
+}
+
 nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
+  if (auto msg = o.validate(); !msg.empty()) throw Error("bench option " + msg);
   Case cs = load_case(file);
   for (const auto& m : o.methods) {
     SensitivityOptions::Method mm;
-    if (!SensitivityOptions::parse(m, mm)) throw Error("--methods: unknown sensitivity method '" + m + "'");
+    if (!SensitivityOptions::parse(m, mm))
+      throw Error("--methods: unknown sensitivity method '" + m + "'");
   }
   if (!o.methods.empty() && (!cs.design || cs.responses.empty()))
-    throw Error(file, "/design", "sensitivity benchmarks need design variables and responses (or --methods none)");
+    throw Error(file, "/design",
+                "sensitivity benchmarks need design variables and responses (or --methods none)");
   std::filesystem::create_directories(o.out_dir);
   const Model& m = *cs.model;
   // ---- floor at the initial state
@@ -51,7 +62,8 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   for (int i = 0; i < n; ++i) m.residual(s, m.params(), k, k, R);
   const double t_res = (now() - t) / n;
   t = now();
-  for (int i = 0; i < n; ++i) m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
+  for (int i = 0; i < n; ++i)
+    m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
   const double t_mat = (now() - t) / n;
   t = now();
   for (int i = 0; i < n; ++i) lu.factor(vals);
@@ -59,7 +71,8 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   const Vec ones = Vec::Ones(m.n());
   t = now();
   for (int i = 0; i < n; ++i) {
-    x = ones;  // a fresh right-hand side: repeated solves of one vector would underflow to denormals
+    x = ones;  // a fresh right-hand side: repeated solves of one vector would underflow to
+               // denormals
     lu.solve(x);
   }
   const double t_solve = (now() - t) / n;
@@ -74,11 +87,14 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   nlohmann::json J = provenance(o.command_line, file, cs.sha256);
   J["case_name"] = cs.name;
   J["status"] = "complete";
-  J["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"nonzeros", m.pattern().nnz()},
-                {"ordering", SparseLU::ordering_name(lu.ordering())}, {"lu_nonzeros", lu.factor_nonzeros()}};
-  J["floor_seconds"] = {{"residual", t_res},        {"iteration_matrix", t_mat},
-                        {"klu_refactor", t_factor}, {"klu_solve", t_solve},
-                        {"klu_refactor_and_solve", t_lu}, {"total", floor}};
+  J["model"] = {{"dofs", m.nq()},
+                {"constraints", m.nc()},
+                {"nonzeros", m.pattern().nnz()},
+                {"ordering", SparseLU::ordering_name(lu.ordering())},
+                {"lu_nonzeros", lu.factor_nonzeros()}};
+  J["floor_seconds"] = {
+      {"residual", t_res},    {"iteration_matrix", t_mat},      {"klu_refactor", t_factor},
+      {"klu_solve", t_solve}, {"klu_refactor_and_solve", t_lu}, {"total", floor}};
   // Per step, without the run's setup (symbolic analysis, projection, consistent start), split
   // as the integrator timed it (IntegratorSummary::seconds).
   const auto& ps = primal.seconds;
@@ -100,7 +116,8 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   for (const auto& name : o.methods) {
     SensitivityOptions probe;
     SensitivityOptions::parse(name, probe.method);
-    const bool direct = !probe.is_idas() && probe.method != SensitivityOptions::Method::kFdForward &&
+    const bool direct = !probe.is_idas() &&
+                        probe.method != SensitivityOptions::Method::kFdForward &&
                         probe.method != SensitivityOptions::Method::kFdCentral;
     // the default matrix under the method's name; the others (direct methods) as "method/matrix"
     std::vector<std::string> matrices = {SensitivityOptions::matrix_name(probe.matrix)};
@@ -130,7 +147,10 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   }
   J["sensitivities"] = sens;
   J["peak_rss_kb"] = peak_rss_kb();
-  J["options"] = {{"repetitions", o.repetitions}, {"methods", o.methods}, {"matrices", o.matrices}, {"threads", o.threads}};
+  J["options"] = {{"repetitions", o.repetitions},
+                  {"methods", o.methods},
+                  {"matrices", o.matrices},
+                  {"threads", o.threads}};
   J["responses"] = nlohmann::json::object();
   write_json_atomic(o.out_dir + "/bench.json", J);
   write_json_atomic(o.out_dir + "/summary.json", J);

@@ -5,10 +5,9 @@
 //  * the average step of the primal run and its ratio to the floor;
 //  * time(primal + sensitivities) / time(primal) for the listed methods (cases with a design);
 //  * peak resident memory.
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace lsmbs {
 
@@ -19,6 +18,8 @@ struct BenchOptions {
   std::vector<std::string> matrices = {"last"};
   int repetitions = 20;
   int threads = 2;  ///< SensitivityOptions::threads of the timed sensitivity runs
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
   std::string command_line;
 };
 

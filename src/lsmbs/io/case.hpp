@@ -5,10 +5,9 @@
 // path, what was expected) before anything is written.
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/mbs/time_law.hpp"
@@ -25,16 +24,16 @@ struct OutputSpec {
 /// and what only the file has (its name, hash and document, output strides, the optimization
 /// section, names of drivers and joints).
 struct Case : Study {
-  std::string file;     ///< path as given
+  std::string file;  ///< path as given
   std::string name;
-  std::string sha256;   ///< of the case file's bytes
+  std::string sha256;  ///< of the case file's bytes
   nlohmann::json raw;
   /// simulation.check_constraints: refuse redundant or conflicting constraints at load time
   /// (false only for models that are evaluated, never integrated, e.g. derivative tests).
   bool check_constraints = true;
   OutputSpec output;
   std::map<std::string, std::shared_ptr<const TimeLaw>> drivers;  ///< by driver name
-  std::map<std::string, std::vector<int>> joint_rows;              ///< constraint rows by joint name
+  std::map<std::string, std::vector<int>> joint_rows;             ///< constraint rows by joint name
   nlohmann::json optimization;  ///< the "optimization" section (parsed by parse_optimization)
 };
 
@@ -45,6 +44,7 @@ Error locate(const std::string& case_file, const SetupError& e);
 /// Loads and validates a case file (paths inside are relative to its folder).
 Case load_case(const std::string& path);
 /// Same from an already parsed document (tests); `base_dir` resolves relative file names.
-Case load_case_json(const nlohmann::json& j, const std::string& file_label, const std::string& base_dir);
+Case load_case_json(const nlohmann::json& j, const std::string& file_label,
+                    const std::string& base_dir);
 
 }  // namespace lsmbs

@@ -92,11 +92,12 @@ struct Loader {
     std::shared_ptr<const TimeLaw> out;
     try {
       if (type == "trapezoid") {
-        out = std::make_shared<TrapezoidLaw>(r.number("from"), r.number("to"), r.positive("acceleration"),
-                                             r.positive("speed"), r.number("start", 0.0));
+        out = std::make_shared<TrapezoidLaw>(r.number("from"), r.number("to"),
+                                             r.positive("acceleration"), r.positive("speed"),
+                                             r.number("start", 0.0));
       } else if (type == "ramp") {
-        out = std::make_shared<RampLaw>(r.number("from", 0.0), r.number("speed"), r.positive("ramp_time"),
-                                        r.number("start", 0.0));
+        out = std::make_shared<RampLaw>(r.number("from", 0.0), r.number("speed"),
+                                        r.positive("ramp_time"), r.number("start", 0.0));
       } else if (type == "constant") {
         out = std::make_shared<ConstantLaw>(r.number("value"));
       } else {
@@ -111,17 +112,20 @@ struct Loader {
   }
 
   Table1D table(const JsonReader& r) {
-    const auto interp = r.one_of("interpolation", {"cubic", "linear"}, "cubic") == "cubic" ? Table1D::Interp::kCubic
-                                                                                         : Table1D::Interp::kLinear;
+    const auto interp = r.one_of("interpolation", {"cubic", "linear"}, "cubic") == "cubic"
+                            ? Table1D::Interp::kCubic
+                            : Table1D::Interp::kLinear;
     const double period = r.non_negative("period", 0.0);
     // x_scale multiplies the abscissae (which must increase): a positive factor; y_scale any factor
     const double xs = r.positive("x_scale", 1.0), ys = r.number("y_scale", 1.0);
-    if (r.has("file") && r.has("points")) r.fail("expected either \"file\" or \"points\", not both");
+    if (r.has("file") && r.has("points"))
+      r.fail("expected either \"file\" or \"points\", not both");
     if (r.has("file")) {
       const std::string f = resolve(r.string("file"));
       try {
         return Table1D::read_csv(f, interp, period, xs, ys);
-      } catch (const Error& e) {  // name the case's JSON path too (the message names the table file)
+      } catch (
+          const Error& e) {  // name the case's JSON path too (the message names the table file)
         r.fail("file", e.what());
       }
     }
@@ -144,8 +148,11 @@ struct Loader {
   // index out of range) while the object is read.
   Point point(const JsonReader& r) {
     if (r.is_string()) {
-      if (r.as_string() == "ground") r.fail("a ground point needs coordinates: {\"ground\": [x, y]}");
-      r.fail("expected a point object ({\"ground\": [x, y]}, {\"body\": name, \"at\": [x, y]}, {\"body\": name, \"node\": i})");
+      if (r.as_string() == "ground")
+        r.fail("a ground point needs coordinates: {\"ground\": [x, y]}");
+      r.fail(
+          "expected a point object ({\"ground\": [x, y]}, {\"body\": name, \"at\": [x, y]}, "
+          "{\"body\": name, \"node\": i})");
     }
     if (!r.is_object()) r.fail("expected a point object");
     if (r.has("ground")) {
@@ -157,13 +164,20 @@ struct Loader {
     Point p = Point::at(body);  // an unknown body: the builder names it below
     switch (builder.body_kind(body)) {
       case ModelBuilder::BodyKind::kRigid:
-        if (r.has("at_global")) p = Point::at_global(body, r.vec2("at_global"));
-        else p = Point::at(body, r.vec2("at", Vec2::Zero()));
+        if (r.has("at_global"))
+          p = Point::at_global(body, r.vec2("at_global"));
+        else
+          p = Point::at(body, r.vec2("at", Vec2::Zero()));
         break;
       case ModelBuilder::BodyKind::kFlexible:
-        if (r.has("node")) p = Point::node(body, r.integer("node", 0));
-        else if (r.has("nearest")) p = Point::nearest(body, r.vec2("nearest"));
-        else r.fail("a point on a flexible body needs \"node\": index or \"nearest\": [x, y] (mesh frame)");
+        if (r.has("node"))
+          p = Point::node(body, r.integer("node", 0));
+        else if (r.has("nearest"))
+          p = Point::nearest(body, r.vec2("nearest"));
+        else
+          r.fail(
+              "a point on a flexible body needs \"node\": index or \"nearest\": [x, y] (mesh "
+              "frame)");
         break;
       case ModelBuilder::BodyKind::kNone:
         break;
@@ -199,19 +213,23 @@ struct Loader {
       const double nx = el.at(0).as_number(), ny = el.at(1).as_number();
       if (nx < 1 || ny < 1 || nx != std::floor(nx) || ny != std::floor(ny) || nx * ny > 5e6)
         el.fail("expected two positive integers [nx, ny]");
-      mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx), static_cast<int>(ny));
+      mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx),
+                               static_cast<int>(ny));
     } else {
       const std::string f = resolve(m.string("file"));
       try {
         mesh = Mesh2D::read_gmsh(f);
       } catch (const Error& e) {
-        throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() + "/file)");
+        throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() +
+                    "/file)");
       }
       const double sc = m.positive("scale", 1.0);
       for (auto& x : mesh.nodes) {
         x *= sc;
-        if (!x.allFinite() || x.norm() > 1e100)  // lengths beyond 1e100 m overflow in the element integrals
-          m.fail("scale", "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
+        if (!x.allFinite() ||
+            x.norm() > 1e100)  // lengths beyond 1e100 m overflow in the element integrals
+          m.fail("scale",
+                 "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
       }
     }
     m.finish();
@@ -228,18 +246,22 @@ struct Loader {
     o.rho = mat.positive("rho");
     mat.finish();
     o.thickness = r.positive("thickness");
-    o.integration = r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full"
-                        ? QuadIntegration::kFull
-                        : QuadIntegration::kSelectiveShear;
+    o.integration =
+        r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full"
+            ? QuadIntegration::kFull
+            : QuadIntegration::kSelectiveShear;
     // Node sets by selector (mesh frame), added to the mesh's own (rectangle sides, Gmsh groups).
     if (auto ns = r.optional_child("node_sets")) {
       if (!ns->is_object()) ns->fail("expected an object {name: selector}");
       for (const auto& key : ns->keys()) {
         const JsonReader s = ns->child(key);
-        const double tol = s.has("tolerance") ? s.positive("tolerance") : -1.0;  // -1: the mesh's default
+        const double tol =
+            s.has("tolerance") ? s.positive("tolerance") : -1.0;  // -1: the mesh's default
         std::vector<int> sel;
-        if (s.has("line_x")) sel = mesh.nodes_on_line_x(s.number("line_x"), tol);
-        else if (s.has("line_y")) sel = mesh.nodes_on_line_y(s.number("line_y"), tol);
+        if (s.has("line_x"))
+          sel = mesh.nodes_on_line_x(s.number("line_x"), tol);
+        else if (s.has("line_y"))
+          sel = mesh.nodes_on_line_y(s.number("line_y"), tol);
         else if (s.has("circle")) {
           const JsonReader c = s.child("circle");
           sel = mesh.nodes_on_circle(c.vec2("center"), c.positive("radius"), tol);
@@ -251,7 +273,8 @@ struct Loader {
         } else if (s.has("nodes")) {
           for (const auto& it : s.items("nodes")) {
             const double v = it.as_number();
-            if (v < 0 || v >= mesh.num_nodes() || v != std::floor(v)) it.fail("expected a node index of the mesh");
+            if (v < 0 || v >= mesh.num_nodes() || v != std::floor(v))
+              it.fail("expected a node index of the mesh");
             sel.push_back(static_cast<int>(v));
           }
         } else {
@@ -268,15 +291,16 @@ struct Loader {
     try {  // the builder checks the element geometry (inverted or degenerate quadrilaterals)
       builder.flexible_body(name, std::move(mesh), o);
     } catch (const ModelError& e) {
-      if (e.field() == "mesh") r.fail("mesh", e.message() + " (check the mesh's coordinates: origin, size, scale)");
+      if (e.field() == "mesh")
+        r.fail("mesh", e.message() + " (check the mesh's coordinates: origin, size, scale)");
       fail_at(r, e);
     }
   }
 
   // ---------------------------------------------------------------- joints and drivers
   void joint(const JsonReader& r, int index) {
-    const std::string type =
-        r.one_of("type", {"revolute", "prismatic", "rigid_connection", "clamp", "rotation_driver", "translation_driver"});
+    const std::string type = r.one_of("type", {"revolute", "prismatic", "rigid_connection", "clamp",
+                                               "rotation_driver", "translation_driver"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
     entry(r, name, false);
     if (type == "revolute") {
@@ -295,7 +319,8 @@ struct Loader {
       o.lock_rotation = r.boolean("lock_rotation", true);
       at_entry(r, [&] { builder.prismatic(name, a, u, o); });
     } else if (type == "rigid_connection") {
-      const std::string rigid = r.string("rigid"), flexible = r.string("flexible"), set = r.string("node_set");
+      const std::string rigid = r.string("rigid"), flexible = r.string("flexible"),
+                        set = r.string("node_set");
       at_entry(r, [&] { builder.rigid_connection(name, rigid, flexible, set); });
     } else if (type == "clamp") {
       const std::string flexible = r.string("flexible"), set = r.string("node_set");
@@ -318,8 +343,8 @@ struct Loader {
 
   // ---------------------------------------------------------------- forces
   void force(const JsonReader& r, int index) {
-    const std::string type = r.one_of(
-        "type", {"point_force", "spring_damper", "pressure", "point_mass", "torque", "rotational_spring_damper"});
+    const std::string type = r.one_of("type", {"point_force", "spring_damper", "pressure",
+                                               "point_mass", "torque", "rotational_spring_damper"});
     const std::string name = r.string("name", type + "_" + std::to_string(index));
     entry(r, name, false);
     if (type == "point_mass") {
@@ -338,8 +363,10 @@ struct Loader {
       }
       const double scale = r.number("scale", 1.0);
       at_entry(r, [&] {
-        if (f) builder.point_force(name, p, *f, scale);
-        else builder.point_force(name, p, fx, fy, scale);
+        if (f)
+          builder.point_force(name, p, *f, scale);
+        else
+          builder.point_force(name, p, fx, fy, scale);
       });
     } else if (type == "spring_damper") {
       const Point a = point(r.child("a")), b = point(r.child("b"));
@@ -350,7 +377,8 @@ struct Loader {
       at_entry(r, [&] { builder.spring_damper(name, a, b, o); });
     } else if (type == "torque") {
       const std::string body = r.string("body");
-      if (r.has("torque") == r.has("law")) r.fail("expected either \"torque\": T or \"law\": {...} (one of them)");
+      if (r.has("torque") == r.has("law"))
+        r.fail("expected either \"torque\": T or \"law\": {...} (one of them)");
       std::shared_ptr<const TimeLaw> l =
           r.has("torque") ? std::make_shared<ConstantLaw>(r.number("torque")) : law(r.child("law"));
       const double scale = r.number("scale", 1.0);
@@ -373,7 +401,8 @@ struct Loader {
       if (r.has("argument")) {
         const JsonReader a = r.child("argument");
         if (a.is_string()) {
-          if (a.as_string() != "time") a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
+          if (a.as_string() != "time")
+            a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
         } else {
           arg.angle_of = a.string("angle_of");
           arg.offset = a.number("offset", 0.0);
@@ -388,11 +417,12 @@ struct Loader {
 
   // ---------------------------------------------------------------- measures and responses
   void measure(const JsonReader& r) {
-    const std::string type =
-        r.one_of("type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation", "path_deviation",
-                          "constraint_force", "kinetic_energy", "strain_energy", "mass"});
+    const std::string type = r.one_of(
+        "type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation",
+                 "path_deviation", "constraint_force", "kinetic_energy", "strain_energy", "mass"});
     const std::string name = r.string("name");
-    // constraint_force measures are placeholders (null) until the model is built: their names are pending
+    // constraint_force measures are placeholders (null) until the model is built: their names are
+    // pending
     for (const auto& m : cs.measures)
       if (m && m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
     for (const auto& pending : pending_forces)
@@ -403,14 +433,19 @@ struct Loader {
       return at_key(r, "body", [&] { return builder.angle_dof(body); });
     };
     std::unique_ptr<Measure> m;
-    if (type == "position") m = std::make_unique<PositionMeasure>(name, point_ref("point"));
-    else if (type == "velocity") m = std::make_unique<VelocityMeasure>(name, point_ref("point"));
-    else if (type == "angle") m = std::make_unique<AngleMeasure>(name, angle_dof());
-    else if (type == "angular_velocity") m = std::make_unique<AngularVelocityMeasure>(name, angle_dof());
+    if (type == "position")
+      m = std::make_unique<PositionMeasure>(name, point_ref("point"));
+    else if (type == "velocity")
+      m = std::make_unique<VelocityMeasure>(name, point_ref("point"));
+    else if (type == "angle")
+      m = std::make_unique<AngleMeasure>(name, angle_dof());
+    else if (type == "angular_velocity")
+      m = std::make_unique<AngularVelocityMeasure>(name, angle_dof());
     else if (type == "distance" || type == "elongation") {
       const PointRef a = point_ref("a"), b = point_ref("b");
-      const double ref =
-          type == "elongation" ? (builder.initial_position(b) - builder.initial_position(a)).norm() : 0.0;
+      const double ref = type == "elongation"
+                             ? (builder.initial_position(b) - builder.initial_position(a)).norm()
+                             : 0.0;
       m = std::make_unique<DistanceMeasure>(name, a, b, ref);
     } else if (type == "path_deviation") {
       const PointRef p = point_ref("point");
@@ -434,13 +469,15 @@ struct Loader {
       r.finish();
       cs.measures.push_back(nullptr);  // filled after build() (rows known then)
       return;
-    } else if (type == "kinetic_energy") m = std::make_unique<KineticEnergyMeasure>(name);
-    else if (type == "strain_energy") m = std::make_unique<StrainEnergyMeasure>(name);
+    } else if (type == "kinetic_energy")
+      m = std::make_unique<KineticEnergyMeasure>(name);
+    else if (type == "strain_energy")
+      m = std::make_unique<StrainEnergyMeasure>(name);
     else {
       const std::string body = r.string("body");
-      m = std::make_unique<FlexibleMassMeasure>(name, &at_key(r, "body", [&]() -> const FlexibleBody& {
-        return builder.flexible(body);
-      }));
+      m = std::make_unique<FlexibleMassMeasure>(
+          name,
+          &at_key(r, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); }));
     }
     r.finish();
     cs.measures.push_back(std::move(m));
@@ -456,12 +493,18 @@ struct Loader {
       if (cols[i] == meas) col = static_cast<int>(i);
     if (col < 0) r.fail("measure", "unknown measure column '" + meas + "'");
     s.column = col;
-    const std::string agg =
-        r.one_of("aggregate", {"average", "average_eq45", "max", "min", "final", "integral", "rms", "per_step", "ks"});
+    const std::string agg = r.one_of("aggregate", {"average", "average_eq45", "max", "min", "final",
+                                                   "integral", "rms", "per_step", "ks"});
     using K = ResponseSpec::Kind;
-    s.kind = agg == "average" ? K::kAverage : agg == "average_eq45" ? K::kAverageEq45 : agg == "max" ? K::kMax
-           : agg == "min" ? K::kMin : agg == "final" ? K::kFinal : agg == "integral" ? K::kIntegral
-           : agg == "rms" ? K::kRms : agg == "per_step" ? K::kPerStep : K::kKS;
+    s.kind = agg == "average"        ? K::kAverage
+             : agg == "average_eq45" ? K::kAverageEq45
+             : agg == "max"          ? K::kMax
+             : agg == "min"          ? K::kMin
+             : agg == "final"        ? K::kFinal
+             : agg == "integral"     ? K::kIntegral
+             : agg == "rms"          ? K::kRms
+             : agg == "per_step"     ? K::kPerStep
+                                     : K::kKS;
     if (s.kind == K::kKS) s.ks = r.positive("ks");
     if (auto w = r.optional_child("window")) {
       if (w->has("phase")) {
@@ -477,7 +520,9 @@ struct Loader {
             s.t0 = p.t0, s.t1 = p.t1, found = true;
           }
         }
-        if (!found) w->fail("phase", "driver '" + d + "' has no phase '" + ph + "' (phases: " + (avail.empty() ? "none" : avail) + ")");
+        if (!found)
+          w->fail("phase", "driver '" + d + "' has no phase '" + ph +
+                               "' (phases: " + (avail.empty() ? "none" : avail) + ")");
         s.window_text = "phase '" + ph + "' of driver '" + d + "'";
       } else {
         s.t0 = w->number("t0", -1e300);
@@ -500,7 +545,8 @@ struct Loader {
     for (size_t i = 0; i < cs.measures.size(); ++i) {
       if (cs.measures[i]) {
         for (auto& s : cs.measures[i]->components()) c.push_back(s);
-      } else {  // constraint-force measure (built after build()): components from the joint's equations
+      } else {  // constraint-force measure (built after build()): components from the joint's
+                // equations
         const auto& [nm, j] = pending_forces[pending_index(i)];
         const int m = builder.joint_equations(j);
         for (int k = 0; k < m; ++k) c.push_back(nm + "." + std::to_string(k));
@@ -530,9 +576,12 @@ struct Loader {
     o.consistent_start = r.boolean("consistent_start", o.consistent_start);
     o.project_initial = r.boolean("project_initial", o.project_initial);
     {
-      const std::string nw = r.one_of("newton", {"full", "modified", "modified_across_steps"}, "full");
+      const std::string nw =
+          r.one_of("newton", {"full", "modified", "modified_across_steps"}, "full");
       using N = GeneralizedAlphaOptions::Newton;
-      o.newton = nw == "full" ? N::kFull : nw == "modified" ? N::kModified : N::kModifiedAcrossSteps;
+      o.newton = nw == "full"       ? N::kFull
+                 : nw == "modified" ? N::kModified
+                                    : N::kModifiedAcrossSteps;
     }
     cs.check_constraints = r.boolean("check_constraints", true);
     o.ordering = r.one_of("ordering", {"amd", "nested_dissection"}, "amd") == "amd"
@@ -545,16 +594,20 @@ struct Loader {
       r.fail(msg.substr(0, colon), msg.substr(colon + 2));
     }
     if (o.t_end / o.h > 1e8) r.fail("h", "more than 1e8 steps requested");
-    if (o.h > o.t_end * (1 + 1e-9))  // zero steps: the run would end at t = 0 and report it complete
-      r.fail("h", "h = " + format_g(o.h) + " is longer than t_end = " + format_g(o.t_end) + " (the run would have no step)");
+    if (o.h >
+        o.t_end * (1 + 1e-9))  // zero steps: the run would end at t = 0 and report it complete
+      r.fail("h", "h = " + format_g(o.h) + " is longer than t_end = " + format_g(o.t_end) +
+                      " (the run would have no step)");
     {  // the output grid must end on t_end: no silent overshoot (the run starts at t = 0)
       const double n = o.t_end / o.h;
       if (std::abs(n - std::round(n)) > 1e-9 * std::max(1.0, n)) {
         char msg[256];
         std::snprintf(msg, sizeof msg,
-                      "t_end = %.10g is not a multiple of h = %.10g (%.6g steps): the run would end after t_end; "
+                      "t_end = %.10g is not a multiple of h = %.10g (%.6g steps): the run would "
+                      "end after t_end; "
                       "use h = %.10g (%ld steps) or t_end = %.10g",
-                      o.t_end, o.h, n, o.t_end / std::ceil(n), static_cast<long>(std::ceil(n)), std::ceil(n) * o.h);
+                      o.t_end, o.h, n, o.t_end / std::ceil(n), static_cast<long>(std::ceil(n)),
+                      std::ceil(n) * o.h);
         r.fail("h", msg);
       }
     }
@@ -595,7 +648,8 @@ struct Loader {
       n.feature = it->second;
       return n;
     }
-    if (!r.is_object()) r.fail("expected a feature name or {\"and\" | \"or\": [...]} or {\"not\": ...}");
+    if (!r.is_object())
+      r.fail("expected a feature name or {\"and\" | \"or\": [...]} or {\"not\": ...}");
     if (r.has("not")) {
       n.op = LevelSetNode::Op::kNot;
       n.children.push_back(region(r.child("not"), features));
@@ -617,21 +671,24 @@ struct Loader {
     for (const auto& v : r.items("variables", true)) {
       DesignVariable dv;
       dv.name = v.string("name");
-      if (d->variable_index(dv.name) >= 0) v.fail("name", "duplicate design variable '" + dv.name + "'");
+      if (d->variable_index(dv.name) >= 0)
+        v.fail("name", "duplicate design variable '" + dv.name + "'");
       dv.lower = v.number("lower");
       dv.upper = v.number("upper");
       dv.initial = v.number("initial");
       if (!(dv.upper > dv.lower)) v.fail("upper", "expected upper > lower");
       if (dv.initial < dv.lower || dv.initial > dv.upper)
-        v.fail("initial", "initial value " + std::to_string(dv.initial) + " is outside its bounds [" +
-                              std::to_string(dv.lower) + ", " + std::to_string(dv.upper) + "]");
+        v.fail("initial", "initial value " + std::to_string(dv.initial) +
+                              " is outside its bounds [" + std::to_string(dv.lower) + ", " +
+                              std::to_string(dv.upper) + "]");
       v.finish();
       d->variables.push_back(dv);
     }
     if (d->variables.empty()) r.fail("variables", "expected at least one design variable");
     for (const auto& g : r.items("geometry")) {
       const std::string body = g.string("body");
-      const FlexibleBody& fb = at_key(g, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); });
+      const FlexibleBody& fb =
+          at_key(g, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); });
       for (const auto& other : d->bodies)
         if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
       std::vector<Feature> feats;
@@ -644,8 +701,10 @@ struct Loader {
         const auto type = Feature::parse_type(ts, &ok);
         std::vector<ParamBinding> ps;
         for (const auto& pn : Feature::parameter_names(type)) {
-          if (pn == "angle" && !f.has("angle")) ps.push_back(ParamBinding{});
-          else ps.push_back(binding(f, pn, *d));
+          if (pn == "angle" && !f.has("angle"))
+            ps.push_back(ParamBinding{});
+          else
+            ps.push_back(binding(f, pn, *d));
         }
         const bool hole = f.boolean("hole", true);
         f.finish();
@@ -653,8 +712,10 @@ struct Loader {
         // each parameter is monotone in its variable: its extremes are at the bounds
         std::vector<double> lo, hi;
         for (const auto& b : ps) {
-          const double a = b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].lower;
-          const double c = b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].upper;
+          const double a =
+              b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].lower;
+          const double c =
+              b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].upper;
           lo.push_back(std::min(a, c));
           hi.push_back(std::max(a, c));
         }
@@ -679,7 +740,8 @@ struct Loader {
       g.finish();
       BodyDesign bd;
       bd.body = &fb;
-      bd.map = std::make_unique<DesignMap>(fb.mesh, LevelSet(std::move(feats), std::move(root), d->size()), mo);
+      bd.map = std::make_unique<DesignMap>(
+          fb.mesh, LevelSet(std::move(feats), std::move(root), d->size()), mo);
       d->bodies.push_back(std::move(bd));
     }
     for (const auto& b : r.items("parameters")) {
@@ -688,7 +750,8 @@ struct Loader {
       pb.parameter = builder.parameter(pname);
       if (pb.parameter < 0) {
         std::string avail;
-        for (const auto& n : builder.model().parameter_names()) avail += (avail.empty() ? "" : ", ") + n;
+        for (const auto& n : builder.model().parameter_names())
+          avail += (avail.empty() ? "" : ", ") + n;
         b.fail("parameter", "unknown model parameter '" + pname + "' (parameters: " + avail + ")");
       }
       const std::string vname = b.string("variable");
@@ -698,14 +761,16 @@ struct Loader {
       pb.offset = b.number("offset", 0.0);
       b.finish();
       for (const auto& o : d->bindings)
-        if (o.parameter == pb.parameter) b.fail("parameter", "parameter '" + pname + "' is bound twice");
+        if (o.parameter == pb.parameter)
+          b.fail("parameter", "parameter '" + pname + "' is bound twice");
       d->bindings.push_back(pb);
     }
     r.finish();
     cs.design = std::move(d);
   }
 
-  std::vector<std::pair<std::string, std::string>> pending_forces;  ///< constraint-force measures: name, joint
+  std::vector<std::pair<std::string, std::string>>
+      pending_forces;  ///< constraint-force measures: name, joint
 };
 
 }  // namespace
@@ -727,11 +792,14 @@ static void check_constraint_rank(const Case& cs) {
   const int shown = std::min<int>(m.nc() - static_cast<int>(qr.rank()), 6);
   for (int k = static_cast<int>(qr.rank()); k < static_cast<int>(qr.rank()) + shown; ++k)
     dependent += (dependent.empty() ? "" : "; ") + m.describe_unknown(m.nq() + perm[k]);
-  throw Error(cs.file, "/joints",
-              std::to_string(m.nc() - qr.rank()) + " of the " + std::to_string(m.nc()) +
-                  " constraint equations are redundant or conflicting at t = 0 (the rows of the constraint "
-                  "Jacobian are dependent): " + dependent +
-                  " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) locked twice");
+  throw Error(
+      cs.file, "/joints",
+      std::to_string(m.nc() - qr.rank()) + " of the " + std::to_string(m.nc()) +
+          " constraint equations are redundant or conflicting at t = 0 (the rows of the constraint "
+          "Jacobian are dependent): " +
+          dependent +
+          " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) locked "
+          "twice");
 }
 
 // Values beyond double precision, seen before any run: every force element's residual and
@@ -739,7 +807,8 @@ static void check_constraint_rank(const Case& cs) {
 // Algorithm 1, S = β′M + γ′C_t + K_t), the assembled matrix with the automatic scaling k = ζ, and
 // the constraints Φ, Φ_t and γ at t = 0 must be finite. A mass of 1e308 kg, for instance,
 // overflows in β′M; without this check the KLU factorization of the start system fails and blames
-// an unrelated joint. The message names the JSON entry (`paths`: by entity name) and its parameters.
+// an unrelated joint. The message names the JSON entry (`paths`: by entity name) and its
+// parameters.
 static void check_finite_start(const Case& cs, const ModelBuilder& builder,
                                const std::map<std::string, std::string>& paths) {
   const Model& m = *cs.model;
@@ -747,7 +816,8 @@ static void check_finite_start(const Case& cs, const ModelBuilder& builder,
   const AlphaCoefficients c = AlphaCoefficients::make(cs.simulation.rho_inf, cs.simulation.h);
   const Coefficients co{c.beta_p, c.gamma_p, 1.0};
   char when[160];
-  std::snprintf(when, sizeof when, "at t = 0 with h = %g s (β′ = %.3g s⁻²)", cs.simulation.h, c.beta_p);
+  std::snprintf(when, sizeof when, "at t = 0 with h = %g s (β′ = %.3g s⁻²)", cs.simulation.h,
+                c.beta_p);
   struct Entry {
     std::string path, name;
   };
@@ -761,7 +831,8 @@ static void check_finite_start(const Case& cs, const ModelBuilder& builder,
     std::string out;
     char buf[64];
     for (int i : builder.parameters_of(name)) {
-      std::snprintf(buf, sizeof buf, "%s = %g", m.parameter_names()[i].substr(name.size() + 1).c_str(), p.scalars[i]);
+      std::snprintf(buf, sizeof buf, "%s = %g",
+                    m.parameter_names()[i].substr(name.size() + 1).c_str(), p.scalars[i]);
       out += (out.empty() ? "" : ", ") + std::string(buf);
     }
     return out.empty() ? std::string() : " (" + out + ")";
@@ -785,9 +856,10 @@ static void check_finite_start(const Case& cs, const ModelBuilder& builder,
       continue;
     }
     const auto e = entry_of(f);
-    throw Error(cs.file, e ? e->path : "", forces[f]->describe() + ": its forces or iteration matrix are not finite " +
-                                               when + ": a value is beyond double precision; check its parameters" +
-                                               (e ? parameters_of(e->name) : "") + ", its initial velocity and the gravity");
+    throw Error(cs.file, e ? e->path : "",
+                forces[f]->describe() + ": its forces or iteration matrix are not finite " + when +
+                    ": a value is beyond double precision; check its parameters" +
+                    (e ? parameters_of(e->name) : "") + ", its initial velocity and the gravity");
   }
   // The factorization of [S kΦ_qᵀ; kΦ_q 0] forms products of entries (k²/S in the pivots of the
   // constraint rows, with k the mean diagonal of S): entries beyond ~1e100 overflow there even
@@ -799,9 +871,10 @@ static void check_finite_start(const Case& cs, const ModelBuilder& builder,
     const auto e = entry_of(f_max);
     char buf[96];
     std::snprintf(buf, sizeof buf, "its iteration-matrix entries reach %.3g ", s_max);
-    throw Error(cs.file, e ? e->path : "", forces[f_max]->describe() + ": " + buf + when +
-                                               ": beyond 1e100 the sparse factorization overflows; check its parameters" +
-                                               (e ? parameters_of(e->name) : ""));
+    throw Error(cs.file, e ? e->path : "",
+                forces[f_max]->describe() + ": " + buf + when +
+                    ": beyond 1e100 the sparse factorization overflows; check its parameters" +
+                    (e ? parameters_of(e->name) : ""));
   }
   Vec phi, phi_t, gamma;
   m.constraints(0.0, q, p, phi);
@@ -810,22 +883,29 @@ static void check_finite_start(const Case& cs, const ModelBuilder& builder,
     if (!std::isfinite(phi[i]) || !std::isfinite(phi_t[i]) || !std::isfinite(gamma[i])) {
       std::string path = "/joints";
       for (size_t k = 0; k < m.constraints().size(); ++k)
-        if (i >= m.constraint_offset(static_cast<int>(k)) && i < m.constraint_offset(static_cast<int>(k)) + m.constraints()[k]->size())
-          if (auto it = paths.find(m.constraints()[k]->name()); it != paths.end()) path = it->second;
-      throw Error(cs.file, path, m.describe_unknown(m.nq() + static_cast<int>(i)) +
-                                     ": the constraint, its velocity or its acceleration term is not finite at t = 0 "
-                                     "(a position, velocity or driver law value beyond double precision)");
+        if (i >= m.constraint_offset(static_cast<int>(k)) &&
+            i < m.constraint_offset(static_cast<int>(k)) + m.constraints()[k]->size())
+          if (auto it = paths.find(m.constraints()[k]->name()); it != paths.end())
+            path = it->second;
+      throw Error(
+          cs.file, path,
+          m.describe_unknown(m.nq() + static_cast<int>(i)) +
+              ": the constraint, its velocity or its acceleration term is not finite at t = 0 "
+              "(a position, velocity or driver law value beyond double precision)");
     }
   const double k = GeneralizedAlpha::automatic_scaling(m, p, cs.initial, c);
   // A scaling or penalty far from the automatic one makes the constraint rows dominate (or vanish
   // in) the iteration matrix: the results then carry round-off of that ratio (ζ = 1e300 gave a
   // side force of 1e277 N, exit 0). The results do not depend on them within 1e-3 ... 1e3
   // (test_pendulum); more than 1e8 away is refused.
-  for (const auto& [key, value] : {std::pair<const char*, double>{"k", cs.simulation.k}, {"zeta", cs.simulation.zeta}})
+  for (const auto& [key, value] :
+       {std::pair<const char*, double>{"k", cs.simulation.k}, {"zeta", cs.simulation.zeta}})
     if (value > 0 && std::isfinite(k) && k > 0 && (value > 1e8 * k || value < 1e-8 * k)) {
       char buf[200];
-      std::snprintf(buf, sizeof buf, "%g is more than 1e8 times away from the automatic scaling %.3g of this model "
-                                     "(give 0 for the automatic value)", value, k);
+      std::snprintf(buf, sizeof buf,
+                    "%g is more than 1e8 times away from the automatic scaling %.3g of this model "
+                    "(give 0 for the automatic value)",
+                    value, k);
       throw Error(cs.file, std::string("/simulation/") + key, buf);
     }
   std::vector<double> vals;
@@ -836,16 +916,19 @@ static void check_finite_start(const Case& cs, const ModelBuilder& builder,
     for (int at = pat.col_ptr[col]; at < pat.col_ptr[col + 1]; ++at)
       if (!std::isfinite(vals[at]) || !std::isfinite(k))
         throw Error(cs.file, "/simulation",
-                    "the iteration matrix is not finite " + std::string(when) + " in the equations of " +
-                        m.describe_unknown(col) + " (the sum of its masses or stiffnesses overflows; automatic "
-                        "scaling k = " + std::to_string(k) + "): a value is beyond double precision");
+                    "the iteration matrix is not finite " + std::string(when) +
+                        " in the equations of " + m.describe_unknown(col) +
+                        " (the sum of its masses or stiffnesses overflows; automatic "
+                        "scaling k = " +
+                        std::to_string(k) + "): a value is beyond double precision");
 }
 
 // Initial velocities the case gives are kept; the others follow from the constraints
 // (integrators/initial_state.hpp). Given velocities that contradict the constraints are an input
 // error naming the first body concerned. Positions and velocities are projected here, so that
 // every run starts from the same consistent state. `paths`: JSON path of each body by name.
-static void hold_given_velocities(Case& cs, std::vector<char> held, const std::vector<GivenVelocity>& given,
+static void hold_given_velocities(Case& cs, std::vector<char> held,
+                                  const std::vector<GivenVelocity>& given,
                                   const std::map<std::string, std::string>& paths) {
   const Model& m = *cs.model;
   if (given.empty() || m.nc() == 0 || !cs.simulation.project_initial) return;
@@ -854,19 +937,23 @@ static void hold_given_velocities(Case& cs, std::vector<char> held, const std::v
   lu.analyze(m.pattern());
   ProjectionReport rep;
   State s = cs.initial;
-  const Status st = project_initial_state(m, m.params(), s, lu, 1e-13 * m.length_scale(), &rep, &held);
+  const Status st =
+      project_initial_state(m, m.params(), s, lu, 1e-13 * m.length_scale(), &rep, &held);
   if (st.ok()) cs.initial = s;
   if (st.ok() || rep.conflicting_rows.empty()) return;  // other failures: reported by the run
   std::string path = "/bodies";
   for (const auto& g : given)
     for (int j : rep.conflicting_held)
       if (j >= g.first && j < g.end && path == "/bodies") path = paths.at(g.body) + "/" + g.field;
-  throw Error(cs.file, path,
-              st.message + " — give only the velocities that determine the motion (the others are computed), "
-                           "or velocities that satisfy the joints and drivers at t = 0");
+  throw Error(
+      cs.file, path,
+      st.message +
+          " — give only the velocities that determine the motion (the others are computed), "
+          "or velocities that satisfy the joints and drivers at t = 0");
 }
 
-Case load_case_json(const nlohmann::json& j, const std::string& file_label, const std::string& base_dir) {
+Case load_case_json(const nlohmann::json& j, const std::string& file_label,
+                    const std::string& base_dir) {
   Case cs;
   cs.file = file_label;
   cs.raw = j;
@@ -882,8 +969,10 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
     const std::string name = b.string("name");
     L.entry(b, name, true);
     const std::string type = b.one_of("type", {"rigid", "flexible"});
-    if (type == "rigid") L.rigid_body(b, name);
-    else L.flexible_body(b, name);
+    if (type == "rigid")
+      L.rigid_body(b, name);
+    else
+      L.flexible_body(b, name);
   }
   int i = 0;
   for (const auto& jt : root.items("joints")) L.joint(jt, i++);
@@ -918,10 +1007,13 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
   // every response window must contain a time step of the run [0, t_end]
   for (size_t i = 0; i < cs.responses.size(); ++i) {
     const auto& r = cs.responses[i];
-    const double h = cs.simulation.h, a = std::max(r.t0, 0.0), b = std::min(r.t1, cs.simulation.t_end);
+    const double h = cs.simulation.h, a = std::max(r.t0, 0.0),
+                 b = std::min(r.t1, cs.simulation.t_end);
     const double k_first = std::ceil(a / h - 1e-9), k_last = std::floor(b / h + 1e-9);
     if (b < a || k_last < k_first)
-      throw Error(file_label, "/output/responses/" + std::to_string(i) + (r.t0 > -1e299 || r.t1 < 1e299 ? "/window" : ""),
+      throw Error(file_label,
+                  "/output/responses/" + std::to_string(i) +
+                      (r.t0 > -1e299 || r.t1 < 1e299 ? "/window" : ""),
                   "the window (" + r.window_text + ") contains no time step of the run [0, " +
                       std::to_string(cs.simulation.t_end) + "] s with h = " + std::to_string(h));
   }
@@ -938,13 +1030,15 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label, cons
     for (double v : vals)
       if (!std::isfinite(v))
         throw Error(file_label, "/output/measures/" + std::to_string(i),
-                    "measure '" + cs.measures[i]->name() + "' is not finite at t = 0 (a point or value beyond double precision)");
+                    "measure '" + cs.measures[i]->name() +
+                        "' is not finite at t = 0 (a point or value beyond double precision)");
   }
   return cs;
 }
 
 Case load_case(const std::string& path) {
-  if (const auto why = unreadable_file_reason(path); !why.empty()) throw Error(path, "", "case file: " + why);
+  if (const auto why = unreadable_file_reason(path); !why.empty())
+    throw Error(path, "", "case file: " + why);
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, "", "cannot open case file");
   std::stringstream ss;
@@ -956,7 +1050,8 @@ Case load_case(const std::string& path) {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw Error(path, "byte " + std::to_string(e.byte), std::string("invalid JSON: ") + e.what());
-  } catch (const nlohmann::json::exception& e) {  // e.g. out_of_range: a number like 1e999 (found by fuzzing)
+  } catch (const nlohmann::json::exception&
+               e) {  // e.g. out_of_range: a number like 1e999 (found by fuzzing)
     throw Error(path, "", std::string("invalid JSON: ") + e.what());
   }
   Case cs = load_case_json(j, path, fs::path(path).parent_path().string());

@@ -9,15 +9,23 @@
 
 namespace lsmbs {
 
+std::string GeometryRunOptions::validate() const {
+  if (image_width < 16 || image_width > 20000) return "image_width: expected 16..20000 pixels";
+  return {};
+}
+
 nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o) {
-  if (!cs.design) throw Error(cs.file, "/design", "the case has no design section (nothing to map)");
+  if (auto msg = o.validate(); !msg.empty()) throw Error("geometry option " + msg);
+  if (!cs.design)
+    throw Error(cs.file, "/design", "the case has no design section (nothing to map)");
   const auto t0 = std::chrono::steady_clock::now();
   const Design& d = *cs.design;
   ModelParams& params = cs.model->params();
   for (const auto& b : d.bodies)
     for (const auto& f : b.map->level_set().features())
       if (auto msg = f.check(f.values(p)); !msg.empty())
-        throw Error(cs.file, "/design", "feature '" + f.name() + "' is degenerate at this design: " + msg);
+        throw Error(cs.file, "/design",
+                    "feature '" + f.name() + "' is degenerate at this design: " + msg);
   std::vector<SpMat> dmu;
   d.apply(p, params, &dmu);
   if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
@@ -36,10 +44,17 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
     }
     nlohmann::json g = nlohmann::json::object();
     for (int k = 0; k < d.size(); ++k) g[d.variables[k].name] = grad[k];
-    nlohmann::json jb = {{"body", bd.body->name}, {"mass", mass}, {"mass_gradient", g}, {"domain_area", solid},
-                         {"void_area", voids}, {"cut_elements", bd.map->last_cut_count()},
-                         {"elements", mu.size()}, {"epsilon", bd.map->epsilon()},
-                         {"mu_min", mu_min}, {"subgrid", bd.map->options().subgrid}, {"band", bd.map->options().band}};
+    nlohmann::json jb = {{"body", bd.body->name},
+                         {"mass", mass},
+                         {"mass_gradient", g},
+                         {"domain_area", solid},
+                         {"void_area", voids},
+                         {"cut_elements", bd.map->last_cut_count()},
+                         {"elements", mu.size()},
+                         {"epsilon", bd.map->epsilon()},
+                         {"mu_min", mu_min},
+                         {"subgrid", bd.map->options().subgrid},
+                         {"band", bd.map->options().band}};
     if (!o.out_dir.empty()) {
       const std::string base = o.out_dir + "/" + bd.body->name;
       write_vtu(base + ".vtu", *bd.body, cs.initial.q, params);
@@ -52,7 +67,8 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
   }
   nlohmann::json vars = nlohmann::json::object();
   for (int k = 0; k < d.size(); ++k) vars[d.variables[k].name] = p[k];
-  nlohmann::json S = provenance(o.command_line.empty() ? "geometry" : o.command_line, cs.file, cs.sha256);
+  nlohmann::json S =
+      provenance(o.command_line.empty() ? "geometry" : o.command_line, cs.file, cs.sha256);
   S["case_name"] = cs.name;
   S["status"] = "complete";
   S["design"] = vars;

@@ -62,14 +62,18 @@ double JsonReader::checked_number(const nlohmann::json& v, const std::string& ke
 }
 
 double JsonReader::number(const std::string& key) const { return checked_number(get(key), key); }
-double JsonReader::number(const std::string& key, double def) const { return has(key) ? number(key) : def; }
+double JsonReader::number(const std::string& key, double def) const {
+  return has(key) ? number(key) : def;
+}
 
 double JsonReader::positive(const std::string& key) const {
   const double d = number(key);
   if (!(d > 0)) fail(key, "expected a positive number, got " + shown((*j_)[key]));
   return d;
 }
-double JsonReader::positive(const std::string& key, double def) const { return has(key) ? positive(key) : def; }
+double JsonReader::positive(const std::string& key, double def) const {
+  return has(key) ? positive(key) : def;
+}
 
 double JsonReader::non_negative(const std::string& key) const {
   const double d = number(key);
@@ -82,9 +86,11 @@ double JsonReader::non_negative(const std::string& key, double def) const {
 
 int JsonReader::integer(const std::string& key, int min_value) const {
   const auto& v = get(key);
-  if (!v.is_number_integer()) fail(key, "expected an integer, got " + type_name(v) + " " + shown(v));
+  if (!v.is_number_integer())
+    fail(key, "expected an integer, got " + type_name(v) + " " + shown(v));
   const long long i = v.get<long long>();
-  if (i < min_value || i > 100000000) fail(key, "expected an integer >= " + std::to_string(min_value) + ", got " + shown(v));
+  if (i < min_value || i > 100000000)
+    fail(key, "expected an integer >= " + std::to_string(min_value) + ", got " + shown(v));
   return static_cast<int>(i);
 }
 int JsonReader::integer(const std::string& key, int def, int min_value) const {
@@ -122,10 +128,13 @@ bool JsonReader::boolean(const std::string& key, bool def) const {
 
 Vec2 JsonReader::vec2(const std::string& key) const {
   const auto& v = get(key);
-  if (!v.is_array() || v.size() != 2) fail(key, "expected an array of two numbers [x, y], got " + shown(v));
+  if (!v.is_array() || v.size() != 2)
+    fail(key, "expected an array of two numbers [x, y], got " + shown(v));
   return Vec2(checked_number(v[0], key + "/0"), checked_number(v[1], key + "/1"));
 }
-Vec2 JsonReader::vec2(const std::string& key, const Vec2& def) const { return has(key) ? vec2(key) : def; }
+Vec2 JsonReader::vec2(const std::string& key, const Vec2& def) const {
+  return has(key) ? vec2(key) : def;
+}
 
 double JsonReader::as_number() const {
   if (!j_->is_number()) fail("expected a number, got " + type_name(*j_));
@@ -142,7 +151,8 @@ std::string JsonReader::as_string() const {
 void JsonReader::finish() const {
   if (!j_->is_object()) return;
   for (auto it = j_->begin(); it != j_->end(); ++it)
-    if (!used_->count(it.key()) && it.key().rfind("_", 0) != 0 && it.key() != "comment" && it.key() != "description")
+    if (!used_->count(it.key()) && it.key().rfind("_", 0) != 0 && it.key() != "comment" &&
+        it.key() != "description")
       fail(it.key(), "unknown key (check the spelling; see docs/case-format.md)");
 }
 

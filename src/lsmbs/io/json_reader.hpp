@@ -3,12 +3,11 @@
 // range and throws lsmbs::Error naming the file, the JSON path and what was expected; finish()
 // rejects keys that were never read (typos such as "thickess" fail instead of being ignored).
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
@@ -19,7 +18,10 @@ namespace lsmbs {
 class JsonReader {
  public:
   JsonReader(const nlohmann::json& j, std::string file, std::string path = "")
-      : j_(&j), file_(std::move(file)), path_(std::move(path)), used_(std::make_shared<std::set<std::string>>()) {}
+      : j_(&j),
+        file_(std::move(file)),
+        path_(std::move(path)),
+        used_(std::make_shared<std::set<std::string>>()) {}
 
   const std::string& path() const { return path_; }
   const std::string& file() const { return file_; }
@@ -30,14 +32,16 @@ class JsonReader {
   bool is_string() const { return j_->is_string(); }
   size_t size() const { return j_->size(); }
 
-  [[noreturn]] void fail(const std::string& what) const { throw Error(file_, path_.empty() ? "/" : path_, what); }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw Error(file_, path_.empty() ? "/" : path_, what);
+  }
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {
     throw Error(file_, path_ + "/" + key, what);
   }
 
   JsonReader child(const std::string& key) const;  ///< required
   std::optional<JsonReader> optional_child(const std::string& key) const;
-  JsonReader at(size_t i) const;                   ///< array element
+  JsonReader at(size_t i) const;  ///< array element
   std::vector<JsonReader> items(const std::string& key, bool required = false) const;  ///< array of
   std::vector<std::string> keys() const;
 
@@ -51,7 +55,8 @@ class JsonReader {
   int integer(const std::string& key, int def, int min_value) const;
   std::string string(const std::string& key) const;
   std::string string(const std::string& key, const std::string& def) const;
-  std::string one_of(const std::string& key, const std::vector<std::string>& allowed, const std::string& def = "") const;
+  std::string one_of(const std::string& key, const std::vector<std::string>& allowed,
+                     const std::string& def = "") const;
   bool boolean(const std::string& key, bool def) const;
   Vec2 vec2(const std::string& key) const;
   Vec2 vec2(const std::string& key, const Vec2& def) const;

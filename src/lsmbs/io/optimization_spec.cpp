@@ -5,8 +5,10 @@
 namespace lsmbs {
 
 OptimizationSpec parse_optimization(const Case& cs) {
-  if (cs.optimization.is_null()) throw Error(cs.file, "/optimization", "the case has no optimization section");
-  if (!cs.design) throw Error(cs.file, "/design", "optimization needs a design section (design variables)");
+  if (cs.optimization.is_null())
+    throw Error(cs.file, "/optimization", "the case has no optimization section");
+  if (!cs.design)
+    throw Error(cs.file, "/design", "optimization needs a design section (design variables)");
   const JsonReader r(cs.optimization, cs.file, "/optimization");
   if (!r.is_object()) r.fail("expected an object");
   OptimizationSpec s;
@@ -14,7 +16,8 @@ OptimizationSpec parse_optimization(const Case& cs) {
     const std::string n = at.string(key);
     for (const auto& resp : cs.responses)
       if (resp.name == n) {
-        if (scalar && resp.kind == ResponseSpec::Kind::kPerStep) at.fail(key, "the objective must be a scalar response");
+        if (scalar && resp.kind == ResponseSpec::Kind::kPerStep)
+          at.fail(key, "the objective must be a scalar response");
         return n;
       }
     at.fail(key, "unknown response '" + n + "' (define it in output.responses)");
@@ -24,16 +27,20 @@ OptimizationSpec parse_optimization(const Case& cs) {
     OptimizationSpec::Constraint k;
     k.response = response(c, "response", false);
     k.upper = c.number("upper");
-    if (k.upper == 0) c.fail("upper", "expected a non-zero bound (constraints are scaled by |bound|)");
+    if (k.upper == 0)
+      c.fail("upper", "expected a non-zero bound (constraints are scaled by |bound|)");
     c.finish();
     s.constraints.push_back(k);
   }
   s.optimizer = r.one_of("optimizer", {"mma", "ccsaq", "slsqp", "mma-svanberg"}, "mma");
   if (r.has("move_limit")) {
     if (s.optimizer != "mma-svanberg")
-      r.fail("move_limit", "a move limit needs \"optimizer\": \"mma-svanberg\" (NLopt 2.7 cannot bound its steps)");
+      r.fail(
+          "move_limit",
+          "a move limit needs \"optimizer\": \"mma-svanberg\" (NLopt 2.7 cannot bound its steps)");
     s.move_limit = r.positive("move_limit");
-    if (s.move_limit > 1) r.fail("move_limit", "expected a fraction of the variable range in (0, 1]");
+    if (s.move_limit > 1)
+      r.fail("move_limit", "expected a fraction of the variable range in (0, 1]");
   }
   if (auto so = r.optional_child("sensitivity")) {
     const std::string m = so->string("method", "direct-analytic");
@@ -43,11 +50,16 @@ OptimizationSpec parse_optimization(const Case& cs) {
       so->fail("method", "expected one of " + all);
     }
     if (s.sensitivity.method == SensitivityOptions::Method::kIdasAdjoint)
-      so->fail("method", "idas-adjoint gives gradients of the time-integral quadratures only, not of the grid "
-                         "responses the optimizer uses; expected another method");
+      so->fail(
+          "method",
+          "idas-adjoint gives gradients of the time-integral quadratures only, not of the grid "
+          "responses the optimizer uses; expected another method");
     s.sensitivity.delta = so->positive("delta", s.sensitivity.delta);
-    s.sensitivity.relative = so->one_of("delta_mode", {"relative", "absolute"}, "relative") == "relative";
-    if (!SensitivityOptions::parse_matrix(so->string("matrix", SensitivityOptions::matrix_name(SensitivityOptions{}.matrix)), s.sensitivity.matrix))
+    s.sensitivity.relative =
+        so->one_of("delta_mode", {"relative", "absolute"}, "relative") == "relative";
+    if (!SensitivityOptions::parse_matrix(
+            so->string("matrix", SensitivityOptions::matrix_name(SensitivityOptions{}.matrix)),
+            s.sensitivity.matrix))
       so->fail("matrix", "expected last, converged or refined");
     s.sensitivity.threads = so->integer("threads", s.sensitivity.threads, 1);
     if (s.sensitivity.threads > 2) so->fail("threads", "expected 1 or 2");
@@ -61,7 +73,8 @@ OptimizationSpec parse_optimization(const Case& cs) {
   }
   s.inner_max_evaluations = r.integer("inner_max_evaluations", 0, 0);
   if (s.inner_max_evaluations > 0 && s.optimizer == "mma-svanberg")
-    r.fail("inner_max_evaluations", "the classic MMA has no inner iterations (this option is for mma and ccsaq)");
+    r.fail("inner_max_evaluations",
+           "the classic MMA has no inner iterations (this option is for mma and ccsaq)");
   r.finish();
   return s;
 }

@@ -1,5 +1,7 @@
 #include "lsmbs/io/output.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -7,7 +9,6 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
-#include <unistd.h>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/version.hpp"
@@ -31,18 +32,23 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
   const int nn = b.mesh.num_nodes(), ne = b.mesh.num_elements();
   std::ostringstream os;
   os << std::setprecision(12);
-  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-     << "<UnstructuredGrid><Piece NumberOfPoints=\"" << nn << "\" NumberOfCells=\"" << ne << "\">\n";
+  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+        "byte_order=\"LittleEndian\">\n"
+     << "<UnstructuredGrid><Piece NumberOfPoints=\"" << nn << "\" NumberOfCells=\"" << ne
+     << "\">\n";
   os << "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
   for (int i = 0; i < nn; ++i) os << q[b.node_dof(i)] << " " << q[b.node_dof(i) + 1] << " 0\n";
-  os << "</DataArray></Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (const auto& c : b.mesh.quads) os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
+  os << "</DataArray></Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" "
+        "format=\"ascii\">\n";
+  for (const auto& c : b.mesh.quads)
+    os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
   os << "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
   for (int e = 1; e <= ne; ++e) os << 4 * e << "\n";
   os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
   for (int e = 0; e < ne; ++e) os << "9\n";
   os << "</DataArray>\n</Cells>\n<PointData Vectors=\"displacement\">\n"
-     << "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+     << "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" "
+        "format=\"ascii\">\n";
   for (int i = 0; i < nn; ++i) {
     const Vec2 u = q.segment<2>(b.node_dof(i)) - b.placed(i);
     os << u.x() << " " << u.y() << " 0\n";
@@ -61,30 +67,36 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
     b.elements[e].centre_strain(x, Ev, F);
     const double E = mu[e] * E0, c = E / (1 - nu * nu);
     Mat2 S;
-    S << c * (Ev[0] + nu * Ev[1]), c * (1 - nu) / 2 * Ev[2], c * (1 - nu) / 2 * Ev[2], c * (Ev[1] + nu * Ev[0]);
+    S << c * (Ev[0] + nu * Ev[1]), c * (1 - nu) / 2 * Ev[2], c * (1 - nu) / 2 * Ev[2],
+        c * (Ev[1] + nu * Ev[0]);
     const Mat2 sig = F * S * F.transpose() / F.determinant();
-    const double vm = std::sqrt(sig(0, 0) * sig(0, 0) - sig(0, 0) * sig(1, 1) + sig(1, 1) * sig(1, 1) + 3 * sig(0, 1) * sig(0, 1));
+    const double vm = std::sqrt(sig(0, 0) * sig(0, 0) - sig(0, 0) * sig(1, 1) +
+                                sig(1, 1) * sig(1, 1) + 3 * sig(0, 1) * sig(0, 1));
     os << vm << "\n";
   }
   os << "</DataArray>\n</CellData>\n</Piece></UnstructuredGrid>\n</VTKFile>\n";
   write_file_atomic(path, os.str());
 }
 
-void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries) {
+void write_pvd(const std::string& path,
+               const std::vector<std::pair<double, std::string>>& entries) {
   std::ostringstream os;
   os << std::setprecision(12);
   os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-  for (const auto& [t, f] : entries) os << "<DataSet timestep=\"" << t << "\" file=\"" << f << "\"/>\n";
+  for (const auto& [t, f] : entries)
+    os << "<DataSet timestep=\"" << t << "\" file=\"" << f << "\"/>\n";
   os << "</Collection>\n</VTKFile>\n";
   write_file_atomic(path, os.str());
 }
 
-nlohmann::json provenance(const std::string& command, const std::string& case_file, const std::string& sha) {
+nlohmann::json provenance(const std::string& command, const std::string& case_file,
+                          const std::string& sha) {
   char buf[32];
   const std::time_t now = std::time(nullptr);
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  return {{"program", "lsmbs"}, {"version", kVersion}, {"git_commit", git_commit()}, {"command", command},
-          {"case_file", case_file}, {"case_sha256", sha}, {"created_utc", buf}};
+  return {{"program", "lsmbs"}, {"version", kVersion},    {"git_commit", git_commit()},
+          {"command", command}, {"case_file", case_file}, {"case_sha256", sha},
+          {"created_utc", buf}};
 }
 
 }  // namespace lsmbs

@@ -5,11 +5,10 @@
 //  * write_vtu: one flexible body at one instant (ParaView), with displacement, μ_e and the
 //    von Mises stress of the Cauchy stress at the element centre;
 //  * write_pvd: the time series of VTU files.
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/mbs/model.hpp"
@@ -18,10 +17,12 @@ namespace lsmbs {
 
 void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<std::vector<double>>& rows);
-void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q, const ModelParams& p);
+void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q,
+               const ModelParams& p);
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
 
 /// Provenance block of every summary.json: version, git commit, case file and hash.
-nlohmann::json provenance(const std::string& command, const std::string& case_file, const std::string& case_sha256);
+nlohmann::json provenance(const std::string& command, const std::string& case_file,
+                          const std::string& case_sha256);
 
 }  // namespace lsmbs

@@ -44,17 +44,19 @@ bool plot(const PlotSpec& s) {
   const std::string script = s.png + ".gp";
   {
     std::ofstream g(script);
-    g << "set terminal pngcairo size 900,560 noenhanced\nset output " << gnuplot_quote(s.png) << "\n"
+    g << "set terminal pngcairo size 900,560 noenhanced\nset output " << gnuplot_quote(s.png)
+      << "\n"
       << "set datafile separator ','\nset title " << gnuplot_quote(s.title) << "\nset xlabel "
-      << gnuplot_quote(s.xlabel) << "\nset ylabel " << gnuplot_quote(s.ylabel) << "\nset grid\nset key outside right\n";
+      << gnuplot_quote(s.xlabel) << "\nset ylabel " << gnuplot_quote(s.ylabel)
+      << "\nset grid\nset key outside right\n";
     if (s.logx) g << "set logscale x\nset format x '%.0e'\n";
     if (s.logy) g << "set logscale y\nset format y '%.0e'\n";
     if (s.ymax > s.ymin) g << "set yrange [" << s.ymin << ":" << s.ymax << "]\n";
     g << "plot ";
     bool first = true;
     for (const auto& p : s.series) {
-      g << (first ? "" : ", ") << gnuplot_quote(p.csv) << " every ::1 using " << p.x_column << ":" << p.y_column
-        << " with " << p.style << " title " << gnuplot_quote(p.title);
+      g << (first ? "" : ", ") << gnuplot_quote(p.csv) << " every ::1 using " << p.x_column << ":"
+        << p.y_column << " with " << p.style << " title " << gnuplot_quote(p.title);
       first = false;
     }
     for (const auto& f : s.functions) {

@@ -8,8 +8,8 @@
 namespace lsmbs {
 
 struct PlotSeries {
-  std::string csv;       ///< comma-separated file with a header line
-  int x_column = 1;      ///< 1-based
+  std::string csv;   ///< comma-separated file with a header line
+  int x_column = 1;  ///< 1-based
   int y_column = 2;
   std::string title;
   std::string style = "linespoints";

@@ -73,7 +73,8 @@ void write_png_gray(const std::string& path, int w, int h, const std::vector<uin
   write_file_atomic(path, png);
 }
 
-std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, double mu_min, int width, int& height) {
+std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, double mu_min,
+                                          int width, int& height) {
   Vec2 lo = mesh.nodes[0], hi = mesh.nodes[0];
   for (const auto& p : mesh.nodes) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const double margin = 0.02 * (hi - lo).maxCoeff();
@@ -93,8 +94,10 @@ std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, dou
     }
     const double t = std::clamp((1 - mu[e]) / (1 - mu_min), 0.0, 1.0);
     const uint8_t g = static_cast<uint8_t>(std::lround(255 * t));
-    for (int y = std::max(0, static_cast<int>(bl.y())); y <= std::min(height - 1, static_cast<int>(bh.y())); ++y)
-      for (int x = std::max(0, static_cast<int>(bl.x())); x <= std::min(width - 1, static_cast<int>(bh.x())); ++x) {
+    for (int y = std::max(0, static_cast<int>(bl.y()));
+         y <= std::min(height - 1, static_cast<int>(bh.y())); ++y)
+      for (int x = std::max(0, static_cast<int>(bl.x()));
+           x <= std::min(width - 1, static_cast<int>(bh.x())); ++x) {
         const Vec2 c(x + 0.5, y + 0.5);
         bool in = true;  // convex quad, clockwise after the y flip: same-side test
         double sgn = 0;
@@ -102,8 +105,10 @@ std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, dou
           const Vec2 a = P[k], b = P[(k + 1) % 4];
           const double cr = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
           if (cr != 0) {
-            if (sgn == 0) sgn = cr;
-            else if ((cr > 0) != (sgn > 0)) in = false;
+            if (sgn == 0)
+              sgn = cr;
+            else if ((cr > 0) != (sgn > 0))
+              in = false;
           }
         }
         if (in) px[static_cast<size_t>(y) * width + x] = g;

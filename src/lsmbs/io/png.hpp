@@ -10,11 +10,13 @@
 
 namespace lsmbs {
 
-void write_png_gray(const std::string& path, int width, int height, const std::vector<uint8_t>& pixels);
+void write_png_gray(const std::string& path, int width, int height,
+                    const std::vector<uint8_t>& pixels);
 
 /// Image of the mesh (design frame) `width` pixels wide; element e painted with grey level
 /// 255 (1 − μ_e)/(1 − μ_min). Returns the pixels (row-major, top row first); `height` receives
 /// the image height.
-std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, double mu_min, int width, int& height);
+std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, double mu_min,
+                                          int width, int& height);
 
 }  // namespace lsmbs

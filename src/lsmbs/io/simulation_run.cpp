@@ -7,6 +7,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/records/json.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
 
 namespace lsmbs {
@@ -26,10 +27,12 @@ namespace {
 
 class Recorder : public StepObserver {
  public:
-  Recorder(const Case& cs, SimulationResult& res, const RunOptions& ro) : cs_(cs), res_(res), ro_(ro) {
+  Recorder(const Case& cs, SimulationResult& res, const RunOptions& ro)
+      : cs_(cs), res_(res), ro_(ro) {
     ncols_ = res.columns.size();
   }
-  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double, const SparseLU*) override {
+  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double,
+                const SparseLU*) override {
     for (auto& m : cs_.measures)
       if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
     record(s0, 0);
@@ -75,7 +78,14 @@ class Recorder : public StepObserver {
 
 }  // namespace
 
+std::string RunOptions::validate() const {
+  if (idas)
+    if (auto msg = idas_options.validate(); !msg.empty()) return "idas_options." + msg;
+  return {};
+}
+
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
+  // the options of IDAS are checked by IDAS (a run that refuses them reports which, not ok)
   SimulationResult res;
   res.columns = cs.measure_columns();
   if (!ro.out_dir.empty()) {
@@ -87,7 +97,6 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
       std::filesystem::create_directories(ro.out_dir + "/vtu");
   }
   Recorder rec(cs, res, ro);
-  ProgressLine line(ro.progress);
   if (ro.idas) {
     IdasOptions io = ro.idas_options;
     io.h_out = cs.simulation.h;
@@ -96,16 +105,18 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     ResponseQuadrature quad(cs, {}, cs.initial.t, io.t_end);
     if (!quad.empty()) idas.set_quadrature(&quad);
     bool first = true;
-    res.idas = idas.run(cs.initial, [&](const State& s, const Mat*, const Mat*, const Mat*, const Mat*) {
-      if (first) {
-        rec.on_start(s, s.a, AlphaCoefficients{}, 1.0, 0.0, nullptr);  // IDAS multipliers are physical: k = 1
-        first = false;
-      } else {
-        rec.record_state(s);
-      }
-      line.update(false, " IDAS t = %.5f s (%3.0f %%)", s.t, 100.0 * s.t / io.t_end);
-      res.final_state = s;
-    });
+    res.idas =
+        idas.run(cs.initial, [&](const State& s, const Mat*, const Mat*, const Mat*, const Mat*) {
+          if (first) {
+            rec.on_start(s, s.a, AlphaCoefficients{}, 1.0, 0.0,
+                         nullptr);  // IDAS multipliers are physical: k = 1
+            first = false;
+          } else {
+            rec.record_state(s);
+          }
+          if (ro.progress) ro.progress(Progress{"IDAS", s.t, io.t_end, 0, 0});
+          res.final_state = s;
+        });
     res.integrator.ok = res.idas.ok;
     res.integrator.message = res.idas.message;
     res.integrator.steps = res.idas.steps;
@@ -116,17 +127,17 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     if (!quad.empty()) res.quadratures = quad.results();
   } else {
     GeneralizedAlpha ga(cs.simulation);
-    ProgressObserver prog(&line, cs.simulation.t_end);
+    ProgressObserver prog(ro.progress, cs.simulation.t_end);
     InterruptObserver stop;
-    res.integrator = ga.run(*cs.model, cs.model->params(), cs.initial, {&rec, &prog, &stop}, &res.final_state);
+    res.integrator =
+        ga.run(*cs.model, cs.model->params(), cs.initial, {&rec, &prog, &stop}, &res.final_state);
     if (res.integrator.aborted && interrupted()) {
       res.integrator.ok = false;
       res.interrupted = true;
-      res.integrator.message = "interrupted (signal " + std::to_string(interrupted()) + ") at t = " +
-                               std::to_string(res.integrator.t_reached) + " s";
+      res.integrator.message = "interrupted (signal " + std::to_string(interrupted()) +
+                               ") at t = " + std::to_string(res.integrator.t_reached) + " s";
     }
   }
-  line.clear();
 
   nlohmann::json responses = nlohmann::json::object(), windows = nlohmann::json::object();
   for (const auto& r : cs.responses) {
@@ -139,15 +150,21 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     res.responses[r.name] = val;
     res.response_counts[r.name] = n;
     // a run that did not reach t_end has no responses (its aggregates cover part of the run)
-    responses[r.name] = std::isfinite(val) && res.integrator.ok ? nlohmann::json(val) : nlohmann::json(nullptr);
-    windows[r.name] = {{"measure", res.columns[r.column]}, {"aggregate", ResponseSpec::kind_name(r.kind)},
-                       {"window", r.window_text}, {"t0", r.t0 > -1e299 ? nlohmann::json(r.t0) : nlohmann::json(nullptr)},
-                       {"t1", r.t1 < 1e299 ? nlohmann::json(r.t1) : nlohmann::json(nullptr)}, {"steps", n}};
+    responses[r.name] =
+        std::isfinite(val) && res.integrator.ok ? nlohmann::json(val) : nlohmann::json(nullptr);
+    windows[r.name] = {{"measure", res.columns[r.column]},
+                       {"aggregate", ResponseSpec::kind_name(r.kind)},
+                       {"window", r.window_text},
+                       {"t0", r.t0 > -1e299 ? nlohmann::json(r.t0) : nlohmann::json(nullptr)},
+                       {"t1", r.t1 < 1e299 ? nlohmann::json(r.t1) : nlohmann::json(nullptr)},
+                       {"steps", n}};
   }
   const Model& m = *cs.model;
   nlohmann::json bodies = nlohmann::json::array();
   for (const auto& b : m.flexible_bodies())
-    bodies.push_back({{"name", b->name}, {"nodes", b->mesh.num_nodes()}, {"elements", b->mesh.num_elements()},
+    bodies.push_back({{"name", b->name},
+                      {"nodes", b->mesh.num_nodes()},
+                      {"elements", b->mesh.num_elements()},
                       {"mass", b->mass(m.params())}});
   nlohmann::json& S = res.summary;
   S = provenance(ro.command_line.empty() ? "simulate" : ro.command_line, cs.file, cs.sha256);
@@ -155,19 +172,25 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["status"] = res.integrator.ok ? "complete" : "partial";
   if (!res.integrator.ok) S["failure"] = res.integrator.message;
   if (res.interrupted) S["reason"] = "interrupted";
-  S["options"] = {{"integrator", ro.idas ? "idas" : "generalized-alpha"},
-                  {ro.idas ? "idas" : "generalized_alpha", ro.idas ? res.idas_options.to_json() : cs.simulation.to_json()},
-                  {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};
+  S["options"] = {
+      {"integrator", ro.idas ? "idas" : "generalized-alpha"},
+      {ro.idas ? "idas" : "generalized_alpha",
+       ro.idas ? nlohmann::json(res.idas_options) : nlohmann::json(cs.simulation)},
+      {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};
   if (cs.design) {
     const Vec p = ro.design_point.size() ? ro.design_point : cs.design->initial();
     nlohmann::json d = nlohmann::json::object();
     for (int i = 0; i < cs.design->size(); ++i) d[cs.design->variables[i].name] = p[i];
     S["design"] = d;
   }
-  S["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}, {"unknowns", m.n()}, {"nonzeros", m.pattern().nnz()},
-                {"rigid_bodies", m.rigid_bodies().size()}, {"flexible_bodies", bodies}};
-  S["counts"] = ro.idas ? res.idas.to_json() : res.integrator.to_json();
-  if (!res.quadratures.empty()) S["quadratures"] = ResponseQuadrature::to_json(res.quadratures, {});
+  S["model"] = {{"dofs", m.nq()},
+                {"constraints", m.nc()},
+                {"unknowns", m.n()},
+                {"nonzeros", m.pattern().nnz()},
+                {"rigid_bodies", m.rigid_bodies().size()},
+                {"flexible_bodies", bodies}};
+  S["counts"] = ro.idas ? nlohmann::json(res.idas) : nlohmann::json(res.integrator);
+  if (!res.quadratures.empty()) S["quadratures"] = quadratures_json(res.quadratures, {});
   S["wall_seconds"] = res.integrator.wall_seconds;
   S["responses"] = responses;
   S["response_definitions"] = windows;
@@ -184,13 +207,30 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     const size_t stride = static_cast<size_t>(cs.output.csv_stride);
     for (size_t i = 0; i < res.history.size(); i += stride) add_row(i);
     // the last recorded state is always written, whatever the stride
-    if (!res.history.empty() && (res.history.size() - 1) % stride != 0) add_row(res.history.size() - 1);
+    if (!res.history.empty() && (res.history.size() - 1) % stride != 0)
+      add_row(res.history.size() - 1);
     write_csv(ro.out_dir + "/history.csv", header, rows);
-    for (const auto& [body, entries] : rec.pvd_) write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
+    for (const auto& [body, entries] : rec.pvd_)
+      write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
     S["files"] = {{"history", "history.csv"}};
     write_json_atomic(ro.out_dir + "/summary.json", S);
   }
   return res;
+}
+
+RunStatus SimulationResult::status() const {
+  if (interrupted) return RunStatus::kInterrupted;
+  return integrator.status();
+}
+
+std::string SimulationResult::report() const {
+  std::string r = idas.steps > 0 ? idas.report() : integrator.report();
+  char b[160];
+  for (const auto& [name, v] : responses) {
+    std::snprintf(b, sizeof b, "\n  %-28s %.10g", name.c_str(), v);
+    r += b;
+  }
+  return r;
 }
 
 }  // namespace lsmbs

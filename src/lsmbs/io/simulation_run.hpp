@@ -3,10 +3,9 @@
 // generalized-α scheme, records every measure at every grid step, aggregates the responses,
 // and (when an output folder is given) writes history.csv, VTU/PVD series and summary.json.
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/io/case.hpp"
@@ -16,31 +15,35 @@ namespace lsmbs {
 
 struct SimulationResult {
   IntegratorSummary integrator;
-  IdasStats idas;  ///< when run with IDAS
+  IdasStats idas;            ///< when run with IDAS
   IdasOptions idas_options;  ///< the options IDAS ran with (output grid and final time: the case's)
   /// With IDAS: the time-integral responses from IDAS quadratures (continuous-time values).
   std::vector<QuadratureResponse> quadratures;
-  std::vector<double> times;                     ///< grid times, starting at t0
-  std::vector<std::vector<double>> history;      ///< per grid time: measure columns
+  std::vector<double> times;                 ///< grid times, starting at t0
+  std::vector<std::vector<double>> history;  ///< per grid time: measure columns
   std::vector<std::string> columns;
   std::map<std::string, double> responses;
-  std::map<std::string, int> response_counts;    ///< steps in each response's window
+  std::map<std::string, int> response_counts;  ///< steps in each response's window
   State final_state;
-  bool interrupted = false;                      ///< stopped by SIGINT/SIGTERM (partial)
-  nlohmann::json summary;                        ///< what summary.json contains
+  bool interrupted = false;  ///< stopped by SIGINT/SIGTERM (partial)
+  nlohmann::json summary;    ///< what summary.json contains
+  RunStatus status() const;
+  std::string report() const;  ///< the integrator's report, then the responses
   /// Column of the history by name (throws if unknown).
   std::vector<double> column(const std::string& name) const;
 };
 
 struct RunOptions {
-  std::string out_dir;       ///< empty: nothing written
-  bool progress = false;     ///< progress line on stderr
-  std::string command_line;  ///< recorded in summary.json
-  bool idas = false;         ///< integrate with IDAS (GGL) instead of generalized-α
+  std::string out_dir;        ///< empty: nothing written
+  ProgressCallback progress;  ///< called at every step (empty: none)
+  std::string command_line;   ///< recorded in summary.json
+  bool idas = false;          ///< integrate with IDAS (GGL) instead of generalized-α
   IdasOptions idas_options = IdasOptions::reference();
   /// Design point the case's parameters were set to (recorded in summary.json; empty: the
   /// case's initial design, if it has one).
   Vec design_point;
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro = {});

@@ -13,6 +13,7 @@
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
 #include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
@@ -27,19 +28,11 @@ Case make(const json& j, const std::string& file) {
   return c;
 }
 
-// Worst over response values of ‖g − g_ref‖∞ / ‖g_ref‖∞ (the tests' gradient-check metric).
-// Relative differences are taken against the largest reference gradient of the response over
-// all its steps (per-step responses): a step where the response is still at rest (elongation
-// before the crank moves) has gradients at round-off level, and relative errors there say nothing.
 double scale_of(const Mat& g) { return g.size() ? g.cwiseAbs().maxCoeff() : 0.0; }
 
+// Worst relative gradient difference, per response (GradientNorm::kPerResponse).
 double worst(const SensitivityResult& a, const SensitivityResult& ref) {
-  double w = 0;
-  for (size_t r = 0; r < ref.responses.size(); ++r) {
-    const double n = scale_of(ref.responses[r].gradient);
-    if (n > 0) w = std::max(w, (a.responses[r].gradient - ref.responses[r].gradient).cwiseAbs().maxCoeff() / n);
-  }
-  return w;
+  return compare_gradients(a.responses, ref.responses, GradientNorm::kPerResponse).worst;
 }
 
 std::string fmt(const char* f, double v) {
@@ -50,9 +43,21 @@ std::string fmt(const char* f, double v) {
 
 }  // namespace
 
+std::string VerifyOptions::validate() const {
+  if (!(fd_delta > 0 && fd_delta < 1) && !fd_absolute)
+    return "fd_delta: expected a relative step in (0, 1)";
+  if (!(fd_delta > 0) || !std::isfinite(fd_delta))
+    return "fd_delta: expected a positive finite step";
+  if (!(tol_fd > 0) || !std::isfinite(tol_fd)) return "tol_fd: expected a positive threshold";
+  if (!(tol_semi > 0) || !std::isfinite(tol_semi)) return "tol_semi: expected a positive threshold";
+  return {};
+}
+
 VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
+  if (auto msg = o.validate(); !msg.empty()) throw Error("verify option " + msg);
   const auto t0 = std::chrono::steady_clock::now();
-  Case cs = load_case(file);  // validates everything (nesting depth included) before anything is written
+  Case cs =
+      load_case(file);  // validates everything (nesting depth included) before anything is written
   const json base = cs.raw;
   if (!cs.design) throw Error(file, "/design", "verification needs design variables");
   if (cs.responses.empty()) throw Error(file, "/output/responses", "verification needs responses");
@@ -72,16 +77,20 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     verdicts.push_back(std::string(ok ? "PASS" : "FAIL") + " — " + what);
     vr.pass &= ok;
   };
-  md << "# Verification report: " << cs.name << "\n\nCase `" << file << "` (SHA-256 " << cs.sha256.substr(0, 16)
-     << "…), " << d.size() << " design variables, " << cs.responses.size() << " responses, h = " << cs.simulation.h
-     << " s, t_end = " << cs.simulation.t_end << " s. Produced by `" << o.command_line << "`.\n\nDesign point:";
-  for (int i = 0; i < d.size(); ++i) md << (i ? ", " : " ") << d.variables[i].name << " = " << fmt("%.6g", p[i]);
+  md << "# Verification report: " << cs.name << "\n\nCase `" << file << "` (SHA-256 "
+     << cs.sha256.substr(0, 16) << "…), " << d.size() << " design variables, "
+     << cs.responses.size() << " responses, h = " << cs.simulation.h
+     << " s, t_end = " << cs.simulation.t_end << " s. Produced by `" << o.command_line
+     << "`.\n\nDesign point:";
+  for (int i = 0; i < d.size(); ++i)
+    md << (i ? ", " : " ") << d.variables[i].name << " = " << fmt("%.6g", p[i]);
   md << (o.design_overrides.empty() ? " (the case's initial design).\n\n" : ".\n\n");
 
   // ---- primal and all methods
   auto t_primal = std::chrono::steady_clock::now();
   run_simulation(cs);
-  const double primal = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_primal).count();
+  const double primal =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_primal).count();
   struct Run {
     std::string name;
     SensitivityResult r;
@@ -101,26 +110,35 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   // in the pseudo-loads; the paper's last-iteration matrix gets its own column
   runs.push_back({"direct-analytic", sens(Method::kDirectAnalytic, 1e-6, false, M::kRefined)});
   runs.push_back({"semi-analytical", sens(Method::kSemiAnalytical, 1e-6, false, M::kRefined)});
-  runs.push_back({"semi-analytical-central", sens(Method::kSemiAnalyticalCentral, 1e-6, false, M::kRefined)});
-  runs.push_back({"fd-central", sens(Method::kFdCentral, o.fd_delta, o.fd_absolute, M::kLastIteration)});
-  runs.push_back({"direct-analytic (last-iteration matrix)", sens(Method::kDirectAnalytic, 1e-6, false, M::kLastIteration)});
-  if (o.idas) runs.push_back({"idas", sens(Method::kIdas, 0, false, M::kLastIteration)});
+  runs.push_back(
+      {"semi-analytical-central", sens(Method::kSemiAnalyticalCentral, 1e-6, false, M::kRefined)});
+  runs.push_back(
+      {"fd-central", sens(Method::kFdCentral, o.fd_delta, o.fd_absolute, M::kLastIteration)});
+  runs.push_back({"direct-analytic (last-iteration matrix)",
+                  sens(Method::kDirectAnalytic, 1e-6, false, M::kLastIteration)});
+  if (o.idas) runs.push_back({"idas", sens(Method::kIdas, 1e-6, false, M::kLastIteration)});
   {  // what a user gets without options: checked against fd-central like the reference
     Case c = load_case(file);
-    runs.push_back({"default options (" + std::string(SensitivityOptions::name(SensitivityOptions{}.method)) +
-                        ", --matrix " + SensitivityOptions::matrix_name(SensitivityOptions{}.matrix) + ")",
-                    compute_sensitivities(c, p, SensitivityOptions{})});
+    runs.push_back(
+        {"default options (" + std::string(SensitivityOptions::name(SensitivityOptions{}.method)) +
+             ", --matrix " + SensitivityOptions::matrix_name(SensitivityOptions{}.matrix) + ")",
+         compute_sensitivities(c, p, SensitivityOptions{})});
   }
   const auto& defaults = runs.back().r;
   const auto& ref = runs[0].r;
 
   // ---- 1. gradient table
-  md << "## 1. Gradients\n\nReference: `direct-analytic` with the converged-state matrix (`refined`, as the two "
-        "semi-analytical columns); the last-iteration-matrix column is the paper's Algorithm 2 matrix (for "
-        "comparison, not checked); the last column is what `lsmbs sensitivity` gives without options, checked "
+  md << "## 1. Gradients\n\nReference: `direct-analytic` with the converged-state matrix "
+        "(`refined`, as the two "
+        "semi-analytical columns); the last-iteration-matrix column is the paper's Algorithm 2 "
+        "matrix (for "
+        "comparison, not checked); the last column is what `lsmbs sensitivity` gives without "
+        "options, checked "
         "against fd-central like the reference. For the other "
-        "methods the table gives the relative difference |g − g_ref| / ‖g_ref‖∞ (per response value, over the "
-        "variables; for a per-step response ‖g_ref‖∞ over all steps) and the agreeing digits −log10 of it. fd-central step: "
+        "methods the table gives the relative difference |g − g_ref| / ‖g_ref‖∞ (per response "
+        "value, over the "
+        "variables; for a per-step response ‖g_ref‖∞ over all steps) and the agreeing digits "
+        "−log10 of it. fd-central step: "
      << o.fd_delta << (o.fd_absolute ? " (absolute)" : " (relative)") << ".\n\n";
   std::ofstream gcsv(o.out_dir + "/gradients.csv");
   gcsv << "response,variable";
@@ -129,7 +147,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   for (size_t k = 0; k < ref.responses.size(); ++k) {
     const auto& rr = ref.responses[k];
     const bool per_step = !rr.times.empty();
-    md << "### " << rr.name << (per_step ? " (per step: worst step shown)" : "") << "\n\n| variable | direct-analytic |";
+    md << "### " << rr.name << (per_step ? " (per step: worst step shown)" : "")
+       << "\n\n| variable | direct-analytic |";
     for (size_t m = 1; m < runs.size(); ++m) md << " " << runs[m].name << " |";
     md << "\n|---|---|";
     for (size_t m = 1; m < runs.size(); ++m) md << "---|";
@@ -139,7 +158,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     if (per_step) {
       double w = -1;
       for (Eigen::Index i = 0; i < rr.gradient.rows(); ++i) {
-        const double e = (runs[3].r.responses[k].gradient.row(i) - rr.gradient.row(i)).cwiseAbs().maxCoeff();
+        const double e =
+            (runs[3].r.responses[k].gradient.row(i) - rr.gradient.row(i)).cwiseAbs().maxCoeff();
         if (e > w) w = e, row = i;
       }
     }
@@ -148,7 +168,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       md << "| " << d.variables[i].name << " | " << fmt("%.8e", rr.gradient(row, i)) << " |";
       gcsv << rr.name << "," << d.variables[i].name << "," << fmt("%.15e", rr.gradient(row, i));
       for (size_t m = 1; m < runs.size(); ++m) {
-        const double g = runs[m].r.responses[k].gradient(row, i), e = std::abs(g - rr.gradient(row, i)) / n;
+        const double g = runs[m].r.responses[k].gradient(row, i),
+                     e = std::abs(g - rr.gradient(row, i)) / n;
         md << " " << fmt("%.1e", e) << " (" << fmt("%.1f", e > 0 ? -std::log10(e) : 16.0) << ") |";
         gcsv << "," << fmt("%.15e", g);
       }
@@ -157,21 +178,25 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     }
     md << "\n";
   }
-  const double e_fd = worst(ref, runs[3].r), e_semi = worst(runs[2].r, ref), e_def = worst(defaults, runs[3].r);
-  verdict(e_fd < o.tol_fd, "direct-analytic vs fd-central: worst " + fmt("%.2e", e_fd) + " < " + fmt("%.0e", o.tol_fd));
-  verdict(e_def < o.tol_fd, "default sensitivity options vs fd-central: worst " + fmt("%.2e", e_def) + " < " +
-                                fmt("%.0e", o.tol_fd));
-  verdict(e_semi < o.tol_semi,
-          "semi-analytical-central vs direct-analytic: worst " + fmt("%.2e", e_semi) + " < " + fmt("%.0e", o.tol_semi));
+  const double e_fd = worst(ref, runs[3].r), e_semi = worst(runs[2].r, ref),
+               e_def = worst(defaults, runs[3].r);
+  verdict(e_fd < o.tol_fd, "direct-analytic vs fd-central: worst " + fmt("%.2e", e_fd) + " < " +
+                               fmt("%.0e", o.tol_fd));
+  verdict(e_def < o.tol_fd, "default sensitivity options vs fd-central: worst " +
+                                fmt("%.2e", e_def) + " < " + fmt("%.0e", o.tol_fd));
+  verdict(e_semi < o.tol_semi, "semi-analytical-central vs direct-analytic: worst " +
+                                   fmt("%.2e", e_semi) + " < " + fmt("%.0e", o.tol_semi));
 
   // ---- 2. cost table
   md << "## 2. Cost\n\nPrimal simulation alone: " << fmt("%.3f", primal)
-     << " s.\n\n| method | wall [s] | / primal | simulations | factorizations | back-solve rhs | residual evals "
+     << " s.\n\n| method | wall [s] | / primal | simulations | factorizations | back-solve rhs | "
+        "residual evals "
         "| pseudo-load residuals | element pseudo-loads |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : runs) {
     const auto& c = r.r.counts;
-    md << "| " << r.name << " | " << fmt("%.3f", c.wall_seconds) << " | " << fmt("%.2f", c.wall_seconds / primal) << " | "
-       << c.simulations << " | " << c.factorizations << " | " << c.back_solve_rhs << " | " << c.residual_evaluations << " | "
+    md << "| " << r.name << " | " << fmt("%.3f", c.wall_seconds) << " | "
+       << fmt("%.2f", c.wall_seconds / primal) << " | " << c.simulations << " | "
+       << c.factorizations << " | " << c.back_solve_rhs << " | " << c.residual_evaluations << " | "
        << c.pseudo_load_residuals << " | " << c.element_pseudo_loads << " |\n";
   }
   md << "\n";
@@ -181,7 +206,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     const auto exact = sens(Method::kDirectAnalytic, 1e-6, false, M::kRefined);
     std::ofstream c(o.out_dir + "/dp_study.csv");
     c << "delta,forward,central\n";
-    md << "## 3. Δp study\n\nError of the semi-analytical gradients against direct-analytic (same matrix, `refined`), "
+    md << "## 3. Δp study\n\nError of the semi-analytical gradients against direct-analytic (same "
+          "matrix, `refined`), "
           "relative Δp.\n\n| Δp | forward | central |\n|---|---|---|\n";
     std::vector<double> dl = {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11};
     std::vector<double> ef, ec;
@@ -189,7 +215,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       ef.push_back(worst(sens(Method::kSemiAnalytical, x, false, M::kRefined), exact));
       ec.push_back(worst(sens(Method::kSemiAnalyticalCentral, x, false, M::kRefined), exact));
       c << fmt("%.1e", x) << "," << fmt("%.6e", ef.back()) << "," << fmt("%.6e", ec.back()) << "\n";
-      md << "| " << fmt("%.0e", x) << " | " << fmt("%.2e", ef.back()) << " | " << fmt("%.2e", ec.back()) << " |\n";
+      md << "| " << fmt("%.0e", x) << " | " << fmt("%.2e", ef.back()) << " | "
+         << fmt("%.2e", ec.back()) << " |\n";
     }
     c.close();
     const double slope_f = std::log10(ef[3] / ef[4]), slope_c = std::log10(ec[2] / ec[3]);
@@ -199,25 +226,35 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     ps.xlabel = "relative delta p";
     ps.ylabel = "error vs direct-analytic";
     ps.logx = ps.logy = true;
-    ps.series = {{o.out_dir + "/dp_study.csv", 1, 2, "forward"}, {o.out_dir + "/dp_study.csv", 1, 3, "central"}};
-    ps.ymin = 0.1 * std::min(*std::min_element(ef.begin(), ef.end()), *std::min_element(ec.begin(), ec.end()));
-    ps.ymax = 10 * std::max(*std::max_element(ef.begin(), ef.end()), *std::max_element(ec.begin(), ec.end()));
+    ps.series = {{o.out_dir + "/dp_study.csv", 1, 2, "forward"},
+                 {o.out_dir + "/dp_study.csv", 1, 3, "central"}};
+    ps.ymin = 0.1 * std::min(*std::min_element(ef.begin(), ef.end()),
+                             *std::min_element(ec.begin(), ec.end()));
+    ps.ymax = 10 * std::max(*std::max_element(ef.begin(), ef.end()),
+                            *std::max_element(ec.begin(), ec.end()));
     ps.functions = {fmt("%.6e", ef[4] / 1e-6) + "*x with lines dt 2 title 'slope 1'",
                     fmt("%.6e", ec[3] / 1e-10) + "*x**2 with lines dt 3 title 'slope 2'"};
     const bool plotted = plot(ps);
-    md << "\n" << (plotted ? "![dp study](dp_study.png)\n\n" : "(gnuplot unavailable: see dp_study.csv)\n\n");
-    verdict(std::abs(slope_f - 1) < 0.2, "forward slope " + fmt("%.2f", slope_f) + " (1e-5 → 1e-6) within 1 ± 0.2");
+    md << "\n"
+       << (plotted ? "![dp study](dp_study.png)\n\n"
+                   : "(gnuplot unavailable: see dp_study.csv)\n\n");
+    verdict(std::abs(slope_f - 1) < 0.2,
+            "forward slope " + fmt("%.2f", slope_f) + " (1e-5 → 1e-6) within 1 ± 0.2");
     if (ec[2] < 1e-9 && ec[3] < 1e-9)
-      verdict(true, "central differences exact to round-off (" + fmt("%.1e", ec[2]) + ", " + fmt("%.1e", ec[3]) +
+      verdict(true, "central differences exact to round-off (" + fmt("%.1e", ec[2]) + ", " +
+                        fmt("%.1e", ec[3]) +
                         "): the residual is at most quadratic in the perturbation");
     else
-      verdict(std::abs(slope_c - 2) < 0.3, "central slope " + fmt("%.2f", slope_c) + " (1e-4 → 1e-5) within 2 ± 0.3");
+      verdict(std::abs(slope_c - 2) < 0.3,
+              "central slope " + fmt("%.2f", slope_c) + " (1e-4 → 1e-5) within 2 ± 0.3");
   }
 
   // ---- 4. h study against IDAS
   if (o.idas) {
-    md << "## 4. Time-step study against IDAS\n\nFor each h, generalized-α (direct-analytic, refined matrix) and IDAS "
-          "(reference tolerances) on the same output grid; largest relative difference over the scalar responses "
+    md << "## 4. Time-step study against IDAS\n\nFor each h, generalized-α (direct-analytic, "
+          "refined matrix) and IDAS "
+          "(reference tolerances) on the same output grid; largest relative difference over the "
+          "scalar responses "
           "and over their gradients.\n\n| h | response | gradient |\n|---|---|---|\n";
     std::ofstream c(o.out_dir + "/h_study.csv");
     c << "h,response,gradient\n";
@@ -227,7 +264,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     const double h0 = cs.simulation.h, span = cs.simulation.t_end - cs.initial.t;
     std::vector<double> steps;
     for (double f : {4.0, 2.0})
-      if (std::abs(span / (f * h0) - std::round(span / (f * h0))) < 1e-9 * span / h0 && span / (f * h0) >= 4)
+      if (std::abs(span / (f * h0) - std::round(span / (f * h0))) < 1e-9 * span / h0 &&
+          span / (f * h0) >= 4)
         steps.push_back(f * h0);
     steps.push_back(h0);
     steps.push_back(h0 / 2);
@@ -250,11 +288,15 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         er = std::max(er, std::abs(ra.responses[r].values[0] - rb.responses[r].values[0]) /
                               std::max(std::abs(rb.responses[r].values[0]), 1e-300));
         const double n = std::max(rb.responses[r].gradient.row(0).cwiseAbs().maxCoeff(), 1e-300);
-        eg = std::max(eg, (ra.responses[r].gradient.row(0) - rb.responses[r].gradient.row(0)).cwiseAbs().maxCoeff() / n);
+        eg = std::max(eg, (ra.responses[r].gradient.row(0) - rb.responses[r].gradient.row(0))
+                                  .cwiseAbs()
+                                  .maxCoeff() /
+                              n);
       }
       hs.push_back(h), dr.push_back(er), dg.push_back(eg);
       c << h << "," << er << "," << eg << "\n";
-      md << "| " << fmt("%.3e", h) << " | " << fmt("%.2e", er) << " | " << fmt("%.2e", eg) << " |\n";
+      md << "| " << fmt("%.3e", h) << " | " << fmt("%.2e", er) << " | " << fmt("%.2e", eg)
+         << " |\n";
     }
     c.close();
     // order from the finest halving whose two differences both stand 1000× above IDAS's rtol
@@ -270,13 +312,15 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     };
     double order_r = 0, order_g = 0, h_r = 0, h_g = 0;
     const bool fit_r = fit(dr, order_r, h_r), fit_g = fit(dg, order_g, h_g);
-    md << "\nOrders are fitted on the finest halving whose differences both exceed " << fmt("%.0e", fit_floor)
-       << " (1000 × IDAS's rtol " << fmt("%.0e", kIdasRtol)
+    md << "\nOrders are fitted on the finest halving whose differences both exceed "
+       << fmt("%.0e", fit_floor) << " (1000 × IDAS's rtol " << fmt("%.0e", kIdasRtol)
        << "): below that the differences are the reference's own error and carry no order.\n\n";
-    md << "Fitted order: responses " << (fit_r ? fmt("%.2f", order_r) + " (halving to h = " + fmt("%.3e", h_r) + ")"
-                                               : std::string("not fitted (at the reference's accuracy)"))
-       << ", gradients " << (fit_g ? fmt("%.2f", order_g) + " (halving to h = " + fmt("%.3e", h_g) + ")"
-                                   : std::string("not fitted (at the reference's accuracy)"))
+    md << "Fitted order: responses "
+       << (fit_r ? fmt("%.2f", order_r) + " (halving to h = " + fmt("%.3e", h_r) + ")"
+                 : std::string("not fitted (at the reference's accuracy)"))
+       << ", gradients "
+       << (fit_g ? fmt("%.2f", order_g) + " (halving to h = " + fmt("%.3e", h_g) + ")"
+                 : std::string("not fitted (at the reference's accuracy)"))
        << ".\n\n";
     PlotSpec ps;
     ps.png = o.out_dir + "/h_study.png";
@@ -284,16 +328,21 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     ps.xlabel = "h [s]";
     ps.ylabel = "relative difference";
     ps.logx = ps.logy = true;
-    ps.series = {{o.out_dir + "/h_study.csv", 1, 2, "responses"}, {o.out_dir + "/h_study.csv", 1, 3, "gradients"}};
+    ps.series = {{o.out_dir + "/h_study.csv", 1, 2, "responses"},
+                 {o.out_dir + "/h_study.csv", 1, 3, "gradients"}};
     md << (plot(ps) ? "![h study](h_study.png)\n\n" : "(gnuplot unavailable: see h_study.csv)\n\n");
     if (fit_r)
-      verdict(order_r > 1.8 && order_r < 2.2, "responses converge to IDAS at order " + fmt("%.2f", order_r) + " (1.8–2.2)");
+      verdict(order_r > 1.8 && order_r < 2.2,
+              "responses converge to IDAS at order " + fmt("%.2f", order_r) + " (1.8–2.2)");
     else
-      md << "Responses: every difference is within 1000 × IDAS's tolerance — agreement, no order to fit.\n\n";
+      md << "Responses: every difference is within 1000 × IDAS's tolerance — agreement, no order "
+            "to fit.\n\n";
     if (fit_g)
-      verdict(order_g > 1.8 && order_g < 2.2, "gradients converge to IDAS at order " + fmt("%.2f", order_g) + " (1.8–2.2)");
+      verdict(order_g > 1.8 && order_g < 2.2,
+              "gradients converge to IDAS at order " + fmt("%.2f", order_g) + " (1.8–2.2)");
     else
-      md << "Gradients: every difference is within 1000 × IDAS's tolerance — agreement, no order to fit.\n\n";
+      md << "Gradients: every difference is within 1000 × IDAS's tolerance — agreement, no order "
+            "to fit.\n\n";
   } else {
     md << "## 4. Time-step study against IDAS\n\nSkipped (`--no-idas`).\n\n";
   }
@@ -301,9 +350,11 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   // ---- 5. mesh study (rectangle meshes: element counts × 1/2, 1, 2)
   bool rect = o.mesh_study;
   for (const auto& b : base.at("bodies"))
-    if (b.value("type", "") == "flexible" && b.at("mesh").value("type", "") != "rectangle") rect = false;
+    if (b.value("type", "") == "flexible" && b.at("mesh").value("type", "") != "rectangle")
+      rect = false;
   if (rect && !cs.model->flexible_bodies().empty()) {
-    md << "## 5. Mesh study\n\nElement counts of every rectangle mesh scaled by 1/2, 1, 2; scalar responses and the "
+    md << "## 5. Mesh study\n\nElement counts of every rectangle mesh scaled by 1/2, 1, 2; scalar "
+          "responses and the "
           "largest gradient component (direct-analytic).\n\n| scale | elements | ";
     for (const auto& r : cs.responses)
       if (r.kind != ResponseSpec::Kind::kPerStep) md << r.name << " | max |grad| | ";
@@ -327,8 +378,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       md << "| " << f << " | " << ne << " | ";
       for (size_t k = 0; k < r.responses.size(); ++k)
         if (r.responses[k].times.empty())
-          md << fmt("%.6e", r.responses[k].values[0]) << " | " << fmt("%.4e", r.responses[k].gradient.cwiseAbs().maxCoeff())
-             << " | ";
+          md << fmt("%.6e", r.responses[k].values[0]) << " | "
+             << fmt("%.4e", r.responses[k].gradient.cwiseAbs().maxCoeff()) << " | ";
       md << "\n";
     }
     md << "\n";
@@ -344,8 +395,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   S["status"] = "complete";
   S["pass"] = vr.pass;
   S["verdicts"] = verdicts;
-  S["options"] = {{"idas", o.idas}, {"fd_delta", o.fd_delta}, {"fd_absolute", o.fd_absolute}, {"tol_fd", o.tol_fd},
-                  {"tol_semi", o.tol_semi}, {"mesh_study", rect}};
+  S["options"] = {{"idas", o.idas},     {"fd_delta", o.fd_delta}, {"fd_absolute", o.fd_absolute},
+                  {"tol_fd", o.tol_fd}, {"tol_semi", o.tol_semi}, {"mesh_study", rect}};
   S["wall_seconds"] = wall;
   S["responses"] = json::object();
   write_json_atomic(o.out_dir + "/summary.json", S);

@@ -1,28 +1,29 @@
 #pragma once
-// run_verify — the `lsmbs verify` job (verification layer, issue 6): for one case, every
+// run_verify — the `lsmbs verify` job (the verification layer): for one case, every
 // sensitivity method against the exact direct method, their costs, the Δp study of the
 // semi-analytical methods, the time-step study against IDAS, and a mesh study, written as
 // OUT/report.md with CSVs and PNG plots, ending with pass/fail lines against stated thresholds.
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace lsmbs {
 
 struct VerifyOptions {
   std::string out_dir;
-  bool idas = true;            ///< IDAS column and h study (too slow for long flexible runs)
-  bool mesh_study = true;      ///< rectangle meshes only
-  double fd_delta = 1e-5;      ///< fd-central step
+  bool idas = true;        ///< IDAS column and h study (too slow for long flexible runs)
+  bool mesh_study = true;  ///< rectangle meshes only
+  double fd_delta = 1e-5;  ///< fd-central step
   bool fd_absolute = false;
-  double tol_fd = 1e-5;        ///< direct-analytic vs fd-central
-  double tol_semi = 1e-6;      ///< semi-analytical-central vs direct-analytic
+  double tol_fd = 1e-5;    ///< direct-analytic vs fd-central
+  double tol_semi = 1e-6;  ///< semi-analytical-central vs direct-analytic
   std::string command_line;
   /// Design point as name=value overrides of the initial design (e.g. an interior point where
   /// a tiny start hole has negligible gradients).
   std::vector<std::pair<std::string, double>> design_overrides;
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 struct VerifyResult {

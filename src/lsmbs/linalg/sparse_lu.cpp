@@ -51,8 +51,10 @@ int nested_dissection_order(int n, int Ap[], int Ai[], int Perm[], klu_common*) 
   for (int j = 0; j < n; ++j)
     for (int p = Ap[j]; p < Ap[j + 1]; ++p) {
       const int i = Ai[p];
-      if (i < j) cols[j].push_back(i);
-      else if (i > j) cols[i].push_back(j);
+      if (i < j)
+        cols[j].push_back(i);
+      else if (i > j)
+        cols[i].push_back(j);
     }
   std::vector<int> sp(n + 1, 0), si;
   for (int j = 0; j < n; ++j) {
@@ -105,14 +107,17 @@ void SparseLU::analyze(const CscPattern& pattern) {
     m.common.user_order = nullptr;
   }
   klu_symbolic* sym = klu_analyze(m.n, m.Ap(), m.Ai(), &m.common);
-  if (!sym) throw std::runtime_error("KLU symbolic analysis failed (status " + std::to_string(m.common.status) + ")");
+  if (!sym)
+    throw std::runtime_error("KLU symbolic analysis failed (status " +
+                             std::to_string(m.common.status) + ")");
   m.symbolic.reset(sym, SymbolicDeleter{});
   ++counters_.symbolic;
 }
 
 void SparseLU::share_analysis(const SparseLU& other) {
   const auto& o = *other.impl_;
-  if (!o.symbolic) throw std::logic_error("SparseLU::share_analysis from an unanalyzed factorization");
+  if (!o.symbolic)
+    throw std::logic_error("SparseLU::share_analysis from an unanalyzed factorization");
   auto& m = *impl_;
   if (m.numeric) klu_free_numeric(&m.numeric, &m.common);
   m.common = o.common;  // same options (ordering, pivot tolerance)
@@ -171,7 +176,8 @@ std::optional<double> SparseLU::estimate_rcond() {
 std::optional<double> SparseLU::estimate_condition(std::span<const double> values) {
   auto& m = *impl_;
   auto* vals = const_cast<double*>(values.data());
-  if (!m.numeric || !klu_condest(m.Ap(), vals, m.symbolic.get(), m.numeric, &m.common)) return std::nullopt;
+  if (!m.numeric || !klu_condest(m.Ap(), vals, m.symbolic.get(), m.numeric, &m.common))
+    return std::nullopt;
   return m.common.condest;
 }
 

@@ -29,7 +29,9 @@ class SparseLU {
   void set_ordering(Ordering o) { ordering_ = o; }
   Ordering ordering() const { return ordering_; }
   static const char* ordering_name(Ordering o) {
-    return o == Ordering::kAmd ? "amd" : o == Ordering::kNestedDissection ? "nested_dissection" : "colamd";
+    return o == Ordering::kAmd                ? "amd"
+           : o == Ordering::kNestedDissection ? "nested_dissection"
+                                              : "colamd";
   }
   /// KLU's partial-pivoting threshold (Common.tol, default 0.001): a diagonal entry is kept as
   /// pivot down to this fraction of its column's largest entry; 1 is plain partial pivoting.
@@ -58,7 +60,9 @@ class SparseLU {
   void solve(std::span<double> b, int nrhs = 1) const;
   void solve(Vec& b) const { solve(std::span<double>(b.data(), b.size()), 1); }
   /// Solves for every column of B (n × nrhs, column-major) in one call.
-  void solve(Mat& b) const { solve(std::span<double>(b.data(), b.size()), static_cast<int>(b.cols())); }
+  void solve(Mat& b) const {
+    solve(std::span<double>(b.data(), b.size()), static_cast<int>(b.cols()));
+  }
   /// Solves Aᵀ X = B in place.
   void solve_transpose(std::span<double> b, int nrhs = 1) const;
 

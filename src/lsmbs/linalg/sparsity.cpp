@@ -41,7 +41,8 @@ SparsityBuilder::Result SparsityBuilder::finalize() const {
     p.col_ptr[c + 1] = p.col_ptr[c] + static_cast<int>(v.size());
   }
   p.row_ind.reserve(p.col_ptr[n_]);
-  for (int c = 0; c < n_; ++c) p.row_ind.insert(p.row_ind.end(), col_rows[c].begin(), col_rows[c].end());
+  for (int c = 0; c < n_; ++c)
+    p.row_ind.insert(p.row_ind.end(), col_rows[c].begin(), col_rows[c].end());
 
   for (size_t b = 0; b < rows_.size(); ++b) {
     res.slot_offset.push_back(static_cast<int>(res.slots.size()));
@@ -82,7 +83,8 @@ SpMat BlockAssembler::to_sparse(std::span<const double> values) const {
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(p.nnz());
   for (int c = 0; c < p.n; ++c)
-    for (int k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) t.emplace_back(p.row_ind[k], c, values[k]);
+    for (int k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k)
+      t.emplace_back(p.row_ind[k], c, values[k]);
   m.setFromTriplets(t.begin(), t.end());
   return m;
 }

@@ -3,7 +3,7 @@
 // the dense local blocks it will write once, when the model is built; the pattern is then
 // frozen in compressed-column (CSC) form and each block keeps the positions of its entries in
 // the value array. Assembly is a scatter through these maps: no triplets, no search, no
-// allocation per Newton iteration (DESIGN.md, issue 8 levers).
+// allocation per Newton iteration (DESIGN.md).
 #include <span>
 #include <vector>
 

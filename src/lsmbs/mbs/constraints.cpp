@@ -22,8 +22,10 @@ void PointCoincidence::hessian(double, const LocalVec& q, const LocalEqVec& w, L
   const int na = a_.num_dofs(), n = static_cast<int>(dofs_.size());
   H.setZero(n, n);
   const Vec2 w2(w[0], w[1]);
-  if (a_.kind == PointRef::Kind::kBody) H(2, 2) += PointKinematics::hess_thetatheta(a_, q.data(), w2);
-  if (b_.kind == PointRef::Kind::kBody) H(na + 2, na + 2) -= PointKinematics::hess_thetatheta(b_, q.data() + na, w2);
+  if (a_.kind == PointRef::Kind::kBody)
+    H(2, 2) += PointKinematics::hess_thetatheta(a_, q.data(), w2);
+  if (b_.kind == PointRef::Kind::kBody)
+    H(na + 2, na + 2) -= PointKinematics::hess_thetatheta(b_, q.data() + na, w2);
 }
 
 Prismatic::Prismatic(PointRef a, Vec2 x0, Vec2 u, bool lock_rotation, double theta0)
@@ -33,7 +35,8 @@ Prismatic::Prismatic(PointRef a, Vec2 x0, Vec2 u, bool lock_rotation, double the
   a_.append_dofs(dofs_);
 }
 
-void Prismatic::evaluate(double, const LocalVec& q, const ModelParams&, LocalEqVec& phi, LocalJac* J) const {
+void Prismatic::evaluate(double, const LocalVec& q, const ModelParams&, LocalEqVec& phi,
+                         LocalJac* J) const {
   phi.resize(size());
   phi[0] = n_.dot(PointKinematics::position(a_, q.data()) - x0_);
   if (lock_) phi[1] = q[2] - theta0_;
@@ -49,7 +52,8 @@ void Prismatic::evaluate(double, const LocalVec& q, const ModelParams&, LocalEqV
 void Prismatic::hessian(double, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const {
   const int n = static_cast<int>(dofs_.size());
   H.setZero(n, n);
-  if (a_.kind == PointRef::Kind::kBody) H(2, 2) = PointKinematics::hess_thetatheta(a_, q.data(), w[0] * n_);
+  if (a_.kind == PointRef::Kind::kBody)
+    H(2, 2) = PointKinematics::hess_thetatheta(a_, q.data(), w[0] * n_);
 }
 
 AngleDriver::AngleDriver(int theta_a_dof, int theta_b_dof, std::shared_ptr<const TimeLaw> law)
@@ -58,7 +62,8 @@ AngleDriver::AngleDriver(int theta_a_dof, int theta_b_dof, std::shared_ptr<const
   dofs_.push_back(theta_b_dof);
 }
 
-void AngleDriver::evaluate(double t, const LocalVec& q, const ModelParams&, LocalEqVec& phi, LocalJac* J) const {
+void AngleDriver::evaluate(double t, const LocalVec& q, const ModelParams&, LocalEqVec& phi,
+                           LocalJac* J) const {
   phi.resize(1);
   const bool rel = dofs_.size() == 2;
   phi[0] = q[dofs_.size() - 1] - (rel ? q[0] : 0.0) - law_->value(t);
@@ -76,7 +81,8 @@ void AngleDriver::time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_
   phi_tt.setConstant(1, -sdd);
 }
 
-TranslationDriver::TranslationDriver(PointRef a, Vec2 x0, Vec2 u, std::shared_ptr<const TimeLaw> law)
+TranslationDriver::TranslationDriver(PointRef a, Vec2 x0, Vec2 u,
+                                     std::shared_ptr<const TimeLaw> law)
     : a_(a), x0_(x0), u_(u.normalized()), law_(std::move(law)) {
   a_.append_dofs(dofs_);
 }
@@ -96,7 +102,8 @@ void TranslationDriver::evaluate(double t, const LocalVec& q, const ModelParams&
 void TranslationDriver::hessian(double, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const {
   const int n = static_cast<int>(dofs_.size());
   H.setZero(n, n);
-  if (a_.kind == PointRef::Kind::kBody) H(2, 2) = PointKinematics::hess_thetatheta(a_, q.data(), w[0] * u_);
+  if (a_.kind == PointRef::Kind::kBody)
+    H(2, 2) = PointKinematics::hess_thetatheta(a_, q.data(), w[0] * u_);
 }
 
 void TranslationDriver::time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_tt) const {
@@ -108,9 +115,12 @@ void TranslationDriver::time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec
 
 Vec2 PointKinematics::position(const PointRef& p, const double* q) {
   switch (p.kind) {
-    case PointRef::Kind::kGround: return p.local;
-    case PointRef::Kind::kNode: return Vec2(q[0], q[1]);
-    case PointRef::Kind::kBody: return Vec2(q[0], q[1]) + rotation(q[2]) * p.local;
+    case PointRef::Kind::kGround:
+      return p.local;
+    case PointRef::Kind::kNode:
+      return Vec2(q[0], q[1]);
+    case PointRef::Kind::kBody:
+      return Vec2(q[0], q[1]) + rotation(q[2]) * p.local;
   }
   return Vec2::Zero();
 }

@@ -18,7 +18,8 @@ class PointCoincidence : public ConstraintElement {
   PointCoincidence(PointRef a, PointRef b);
   std::span<const int> dofs() const override { return dofs_; }
   int size() const override { return 2; }
-  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi, LocalJac* J) const override;
+  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi,
+                LocalJac* J) const override;
   void hessian(double t, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const override;
 
  private:
@@ -32,7 +33,8 @@ class Prismatic : public ConstraintElement {
   Prismatic(PointRef a, Vec2 x0, Vec2 u, bool lock_rotation, double theta0);
   std::span<const int> dofs() const override { return dofs_; }
   int size() const override { return lock_ ? 2 : 1; }
-  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi, LocalJac* J) const override;
+  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi,
+                LocalJac* J) const override;
   void hessian(double t, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const override;
 
  private:
@@ -49,14 +51,17 @@ class AngleDriver : public ConstraintElement {
   AngleDriver(int theta_a_dof, int theta_b_dof, std::shared_ptr<const TimeLaw> law);
   std::span<const int> dofs() const override { return dofs_; }
   int size() const override { return 1; }
-  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi, LocalJac* J) const override;
+  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi,
+                LocalJac* J) const override;
   void hessian(double, const LocalVec&, const LocalEqVec&, LocalMat& H) const override {
     const auto n = static_cast<Eigen::Index>(dofs_.size());
     H.setZero(n, n);  // sized: H is reused across constraints of different sizes
   }
   void time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_tt) const override;
   const TimeLaw& law() const { return *law_; }
-  void time_kinks(double t0, double t1, std::vector<double>& out) const override { law_->kinks(t0, t1, out); }
+  void time_kinks(double t0, double t1, std::vector<double>& out) const override {
+    law_->kinks(t0, t1, out);
+  }
 
  private:
   std::vector<int> dofs_;
@@ -68,11 +73,14 @@ class TranslationDriver : public ConstraintElement {
   TranslationDriver(PointRef a, Vec2 x0, Vec2 u, std::shared_ptr<const TimeLaw> law);
   std::span<const int> dofs() const override { return dofs_; }
   int size() const override { return 1; }
-  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi, LocalJac* J) const override;
+  void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi,
+                LocalJac* J) const override;
   void hessian(double t, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const override;
   void time_derivatives(double t, LocalEqVec& phi_t, LocalEqVec& phi_tt) const override;
   const TimeLaw& law() const { return *law_; }
-  void time_kinks(double t0, double t1, std::vector<double>& out) const override { law_->kinks(t0, t1, out); }
+  void time_kinks(double t0, double t1, std::vector<double>& out) const override {
+    law_->kinks(t0, t1, out);
+  }
 
  private:
   PointRef a_;

@@ -48,7 +48,8 @@ class ForceElement {
   /// Adds ∂r/∂p_j (local) at fixed state: the exact partial derivative of the element's residual
   /// (eq. 7 without the constraint term) with respect to scalar parameter j. Nothing is added
   /// when the element does not read p_j. Material fields μ_e are handled by the Model.
-  virtual void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const = 0;
+  virtual void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                                LocalVec& dr) const = 0;
   /// Whether ∂r/∂q̈ (the mass matrix) depends on q (rigid bodies with an offset centre of mass).
   virtual bool mass_depends_on_q() const { return false; }
   /// Whether r is linear in (q̇, q̈) at fixed q (then r(q̇ + δq̇, q̈ + δq̈) − r = M δq̈ + C δq̇
@@ -56,7 +57,8 @@ class ForceElement {
   virtual bool linear_in_rates() const { return true; }
   /// M = ∂r/∂q̈ and C = ∂r/∂q̇ (local). Default: two evaluate() calls; elements override it
   /// when their mass is cheap (quads: constant).
-  virtual void mass_damping(const LocalState& s, const ModelParams& p, LocalMat& M, LocalMat& C) const {
+  virtual void mass_damping(const LocalState& s, const ModelParams& p, LocalMat& M,
+                            LocalMat& C) const {
     const auto nd = static_cast<Eigen::Index>(dofs().size());
     LocalVec r = LocalVec::Zero(nd);
     M.setZero(nd, nd);
@@ -96,7 +98,7 @@ class ConstraintElement {
 /// at an offset d in its body frame. p = x_node, or p = x + R(θ) d.
 struct PointRef {
   enum class Kind { kGround, kNode, kBody } kind = Kind::kGround;
-  int dof0 = -1;  ///< first global DOF (x); body: x, y, θ at dof0..dof0+2
+  int dof0 = -1;              ///< first global DOF (x); body: x, y, θ at dof0..dof0+2
   Vec2 local = Vec2::Zero();  ///< ground: position; body: offset in body frame; node: unused
   int num_dofs() const { return kind == Kind::kGround ? 0 : kind == Kind::kNode ? 2 : 3; }
   void append_dofs(std::vector<int>& d) const {
@@ -110,7 +112,8 @@ struct PointKinematics {
   static Vec2 position(const PointRef& p, const double* q);
   /// Jacobian columns written to J(:, col .. col+nd) scaled by `sign`.
   template <class MatT>
-  static void jacobian(const PointRef& p, const double* q, MatT& J, int row, int col, double sign = 1) {
+  static void jacobian(const PointRef& p, const double* q, MatT& J, int row, int col,
+                       double sign = 1) {
     if (p.kind == PointRef::Kind::kGround) return;
     J(row, col) += sign;
     J(row + 1, col + 1) += sign;

@@ -21,8 +21,8 @@ std::string QuadForce::describe() const {
   return "body '" + body_->name + "', element " + std::to_string(e_);
 }
 
-void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
-                         LocalMat* S) const {
+void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r,
+                         const Coefficients* c, LocalMat* S) const {
   const QuadElement& el = body_->elements[e_];
   const double mu = p.fields[body_->field][e_];
   const double t = p.scalars[body_->thickness_param];
@@ -54,7 +54,8 @@ void QuadForce::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r,
       }
 }
 
-void QuadForce::param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const {
+void QuadForce::param_derivative(const LocalState& s, const ModelParams& p, int j,
+                                 LocalVec& dr) const {
   // r = μ ρ0 t (M0 q̈ − N0 g) + f_int(μ E0, ν, t), f_int linear in E and t.
   if (!uses_parameter(j)) return;
   const QuadElement& el = body_->elements[e_];
@@ -91,8 +92,10 @@ void QuadForce::param_derivative(const LocalState& s, const ModelParams& p, int 
   }
 }
 
-void QuadForce::mass_damping(const LocalState&, const ModelParams& p, LocalMat& M, LocalMat& C) const {
-  const double mt = p.fields[body_->field][e_] * p.scalars[body_->rho_param] * p.scalars[body_->thickness_param];
+void QuadForce::mass_damping(const LocalState&, const ModelParams& p, LocalMat& M,
+                             LocalMat& C) const {
+  const double mt =
+      p.fields[body_->field][e_] * p.scalars[body_->rho_param] * p.scalars[body_->thickness_param];
   const auto& M0 = body_->elements[e_].unit_mass();
   M.setZero(8, 8);
   C.setZero(8, 8);

@@ -40,12 +40,16 @@ class QuadForce : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override;
   bool uses_parameter(int j) const override {
-    return j == body_->E_param || j == body_->nu_param || j == body_->rho_param || j == body_->thickness_param;
+    return j == body_->E_param || j == body_->nu_param || j == body_->rho_param ||
+           j == body_->thickness_param;
   }
-  /// Exact: r is linear in E0, ρ0 and t; ν enters through D (QuadElement::internal_force_nu_derivative).
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  /// Exact: r is linear in E0, ρ0 and t; ν enters through D
+  /// (QuadElement::internal_force_nu_derivative).
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
   /// Constant consistent mass μ_e ρ0 t ∫ N_I N_J, no damping.
-  void mass_damping(const LocalState& s, const ModelParams& p, LocalMat& M, LocalMat& C) const override;
+  void mass_damping(const LocalState& s, const ModelParams& p, LocalMat& M,
+                    LocalMat& C) const override;
 
  private:
   const FlexibleBody* body_;

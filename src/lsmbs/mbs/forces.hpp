@@ -25,7 +25,8 @@ class RigidInertia : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == m_ || j == J_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
   bool mass_depends_on_q() const override { return c_.squaredNorm() > 0; }
   bool linear_in_rates() const override { return false; }
 
@@ -39,13 +40,15 @@ class RigidInertia : public ForceElement {
 /// Point mass on a node (constant diagonal mass and weight).
 class NodeMass : public ForceElement {
  public:
-  NodeMass(int dof0, int mass_param, std::string what) : dofs_{dof0, dof0 + 1}, m_(mass_param), what_(std::move(what)) {}
+  NodeMass(int dof0, int mass_param, std::string what)
+      : dofs_{dof0, dof0 + 1}, m_(mass_param), what_(std::move(what)) {}
   std::span<const int> dofs() const override { return dofs_; }
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == m_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
 
  private:
   std::array<int, 2> dofs_;
@@ -62,7 +65,8 @@ class SpringDamper : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == k_ || j == c_ || j == l0_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
 
  private:
   PointRef a_, b_;
@@ -82,7 +86,8 @@ class PointForce : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == scale_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
 
  private:
   PointRef a_;
@@ -104,7 +109,8 @@ class PressureForce : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == area_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
   /// Pressure at the given state (for outputs).
   double pressure(double t, double angle) const;
 
@@ -130,7 +136,8 @@ class Torque : public ForceElement {
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == scale_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
 
  private:
   std::array<int, 1> dofs_;
@@ -146,13 +153,15 @@ class Torque : public ForceElement {
 class RotationalSpringDamper : public ForceElement {
  public:
   /// theta_b < 0: b is the ground.
-  RotationalSpringDamper(int theta_a, int theta_b, int k_param, int c_param, int free_angle_param, std::string what);
+  RotationalSpringDamper(int theta_a, int theta_b, int k_param, int c_param, int free_angle_param,
+                         std::string what);
   std::span<const int> dofs() const override { return dofs_; }
   void evaluate(const LocalState& s, const ModelParams& p, LocalVec& r, const Coefficients* c,
                 LocalMat* S) const override;
   std::string describe() const override { return what_; }
   bool uses_parameter(int j) const override { return j == k_ || j == c_ || j == th0_; }
-  void param_derivative(const LocalState& s, const ModelParams& p, int j, LocalVec& dr) const override;
+  void param_derivative(const LocalState& s, const ModelParams& p, int j,
+                        LocalVec& dr) const override;
 
  private:
   std::vector<int> dofs_;  // θa [, θb]

@@ -46,17 +46,20 @@ RigidBody& Model::add_rigid_body(RigidBody b) {
 FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
   auto body = std::make_unique<FlexibleBody>(std::move(b));
   body->dof0 = add_dofs(2 * body->mesh.num_nodes(), "flexible body '" + body->name + "'");
-  for (int i = 0; i < body->mesh.num_nodes(); ++i) q_init_.segment<2>(body->node_dof(i)) = body->placed(i);
+  for (int i = 0; i < body->mesh.num_nodes(); ++i)
+    q_init_.segment<2>(body->node_dof(i)) = body->placed(i);
   body->elements.clear();
   body->elements.reserve(body->mesh.num_elements());
   for (int e = 0; e < body->mesh.num_elements(); ++e) {
     const auto& q = body->mesh.quads[e];
     try {
-      body->elements.emplace_back(std::array<Vec2, 4>{body->mesh.nodes[q[0]], body->mesh.nodes[q[1]],
-                                                      body->mesh.nodes[q[2]], body->mesh.nodes[q[3]]},
-                                  body->integration);
+      body->elements.emplace_back(
+          std::array<Vec2, 4>{body->mesh.nodes[q[0]], body->mesh.nodes[q[1]],
+                              body->mesh.nodes[q[2]], body->mesh.nodes[q[3]]},
+          body->integration);
     } catch (const Error& err) {
-      throw Error("flexible body '" + body->name + "', element " + std::to_string(e) + ": " + err.what());
+      throw Error("flexible body '" + body->name + "', element " + std::to_string(e) + ": " +
+                  err.what());
     }
   }
   if (body->field < 0) body->field = add_field(Vec::Ones(body->mesh.num_elements()));
@@ -70,7 +73,8 @@ FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
 
 void Model::add_force(std::unique_ptr<ForceElement> f) {
   if (finalized_) throw std::logic_error("Model::add_force after finalize");
-  if (f->dofs().size() > static_cast<size_t>(kMaxLocalDofs)) throw std::logic_error("force element too large");
+  if (f->dofs().size() > static_cast<size_t>(kMaxLocalDofs))
+    throw std::logic_error("force element too large");
   forces_.push_back(std::move(f));
 }
 
@@ -142,13 +146,18 @@ std::string Model::describe_unknown(int i) const {
       }
     for (const auto& b : rigid_)
       if (i >= b.dof0 && i < b.dof0 + 3)
-        return "rigid body '" + b.name + "' (" + std::string(i - b.dof0 == 0 ? "x" : i - b.dof0 == 1 ? "y" : "θ") + ")";
+        return "rigid body '" + b.name + "' (" +
+               std::string(i - b.dof0 == 0   ? "x"
+                           : i - b.dof0 == 1 ? "y"
+                                             : "θ") +
+               ")";
     return dof_owner_[i];
   }
   const int row = i - nq_;
   for (size_t c = 0; c < cons_.size(); ++c)
     if (row >= eq_offset_[c] && row < eq_offset_[c] + cons_[c]->size())
-      return "constraint '" + cons_[c]->name() + "' (equation " + std::to_string(row - eq_offset_[c]) + ")";
+      return "constraint '" + cons_[c]->name() + "' (equation " +
+             std::to_string(row - eq_offset_[c]) + ")";
   return "constraint row " + std::to_string(row);
 }
 
@@ -269,8 +278,8 @@ SpMat Model::constraint_jacobian(double t, const Vec& q, const ModelParams& p) c
   return m;
 }
 
-void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& /*p*/, Vec& phi_t,
-                                  Vec& gamma) const {
+void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& /*p*/,
+                                  Vec& phi_t, Vec& gamma) const {
   phi_t.setZero(nc_);
   gamma.setZero(nc_);
   LocalEqVec pt, ptt, w;
@@ -357,10 +366,12 @@ double Model::kinetic_energy(const State& s, const ModelParams& p) const {
 double Model::strain_energy(const Vec& q, const ModelParams& p) const {
   double W = 0;
   for (const auto& b : flex_) {
-    const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param], E0 = p.scalars[b->E_param];
+    const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param],
+                 E0 = p.scalars[b->E_param];
     for (int e = 0; e < b->mesh.num_elements(); ++e) {
       QuadElement::Vec8 x;
-      for (int i = 0; i < 4; ++i) x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
+      for (int i = 0; i < 4; ++i)
+        x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
       W += b->elements[e].strain_energy(x, p.fields[b->field][e] * E0, nu, t);
     }
   }
@@ -387,7 +398,8 @@ void Model::element_residual(int e, const State& s, const ModelParams& p, LocalV
   forces_[e]->evaluate(ls, p, r, nullptr, nullptr);
 }
 
-void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd, const Mat& Vd, Mat& out) const {
+void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd,
+                                 const Mat& Vd, Mat& out) const {
   const int nc = static_cast<int>(Qdd.cols());
   out.setZero(nq_, nc);
   LocalState ls;
@@ -410,8 +422,8 @@ void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat
   }
 }
 
-void Model::element_mass_damping_product(int e, const State& s, const ModelParams& p, const Vec& qdd, const Vec& vd,
-                                         LocalVec& out) const {
+void Model::element_mass_damping_product(int e, const State& s, const ModelParams& p,
+                                         const Vec& qdd, const Vec& vd, LocalVec& out) const {
   const auto d = forces_[e]->dofs();
   const auto nd = static_cast<Eigen::Index>(d.size());
   LocalState ls;
@@ -467,8 +479,8 @@ std::vector<int> Model::forces_touched_by(const ParamDirection& dir) const {
   return out;
 }
 
-void Model::residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& dir,
-                                      Vec& out) const {
+void Model::residual_param_derivative(const State& s, const ModelParams& p,
+                                      const ParamDirection& dir, Vec& out) const {
   out.setZero(n());
   LocalVec r;
   // material fields: r_e linear in μ_e

@@ -113,12 +113,14 @@ class Model {
                              Vec& gamma) const;
   /// out = M Qdd + C Vd (nq × ncols): M = ∂r/∂q̈, C = ∂r/∂q̇ applied to blocks of vectors, one
   /// element at a time (pseudo-loads of the direct method, eq. 28).
-  void mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd, const Mat& Vd, Mat& out) const;
+  void mass_damping_product(const State& s, const ModelParams& p, const Mat& Qdd, const Mat& Vd,
+                            Mat& out) const;
   /// ∂R/∂p along a parameter direction at fixed state (size n; the constraint rows are zero:
   /// constraints do not depend on design parameters). Only elements the direction touches are
   /// evaluated. Exact: material fields through the linearity of an element's residual in μ_e
   /// (eq. 3: ∂r_e/∂μ_e = r_e/μ_e), scalar parameters through ForceElement::param_derivative.
-  void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d, Vec& out) const;
+  void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d,
+                                 Vec& out) const;
   /// Residual contribution of one force element (local vector over its dofs()).
   void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
   /// Ṁ w = Σ_e [∂(M_e(q) w_e)/∂q_e] q̇_e (size nq): the rate of the mass matrix along the motion
@@ -127,8 +129,8 @@ class Model {
   /// q̈ = 0 (r is linear in q̈). The adjoint of M(q) v̇ needs it (d/dt(Mᵀξ), idas_ggl.cpp).
   void mass_rate_product(const State& s, const ModelParams& p, const Vec& w, Vec& out) const;
   /// M_e q̈ + C_e q̇ of one force element for global vectors qdd, vd (local result).
-  void element_mass_damping_product(int force, const State& s, const ModelParams& p, const Vec& qdd, const Vec& vd,
-                                    LocalVec& out) const;
+  void element_mass_damping_product(int force, const State& s, const ModelParams& p, const Vec& qdd,
+                                    const Vec& vd, LocalVec& out) const;
   /// Force elements a parameter direction touches (sorted).
   std::vector<int> forces_touched_by(const ParamDirection& dir) const;
   /// The times in (t0, t1), sorted and distinct, where a driver's prescribed acceleration jumps

@@ -20,19 +20,24 @@ void ModelBuilder::fail(const Entity& e, const std::string& field, const std::st
 }
 
 void ModelBuilder::check_not_built() const {
-  if (built_) throw std::logic_error("ModelBuilder: the model was built already (nothing can be added)");
+  if (built_)
+    throw std::logic_error("ModelBuilder: the model was built already (nothing can be added)");
   if (broken_)
-    throw std::logic_error("ModelBuilder: a flexible body's mesh was refused and the model holds part of it; "
-                           "start a new builder");
+    throw std::logic_error(
+        "ModelBuilder: a flexible body's mesh was refused and the model holds part of it; "
+        "start a new builder");
 }
 
 void ModelBuilder::check_name(const Entity& e, bool body) const {
   if (names_.count(e.name))
-    fail(e, "name", "duplicate name '" + e.name + "' (bodies, joints and forces need unique names)");
+    fail(e, "name",
+         "duplicate name '" + e.name + "' (bodies, joints and forces need unique names)");
   if (body && e.name == "ground") fail(e, "name", "'ground' is reserved");
 }
 
-void ModelBuilder::check_name(const std::string& name, bool body) const { check_name({"", name}, body); }
+void ModelBuilder::check_name(const std::string& name, bool body) const {
+  check_name({"", name}, body);
+}
 
 ModelBuilder::Mark ModelBuilder::begin(const Entity& e) const {
   check_not_built();
@@ -68,10 +73,12 @@ ModelBuilder::BodyKind ModelBuilder::body_kind(const std::string& name) const {
   return BodyKind::kNone;
 }
 
-const RigidBody& ModelBuilder::rigid(const Entity& e, const std::string& field, const std::string& name) const {
+const RigidBody& ModelBuilder::rigid(const Entity& e, const std::string& field,
+                                     const std::string& name) const {
   const RigidBody* b = m_->find_rigid(name);
   if (!b) {
-    if (m_->find_flexible(name)) fail(e, field, "'" + name + "' is a flexible body; a rigid body is expected here");
+    if (m_->find_flexible(name))
+      fail(e, field, "'" + name + "' is a flexible body; a rigid body is expected here");
     fail(e, field, "unknown rigid body '" + name + "'");
   }
   return *b;
@@ -85,16 +92,22 @@ const FlexibleBody& ModelBuilder::flexible(const Entity& e, const std::string& f
 }
 
 const RigidBody& ModelBuilder::rigid(const std::string& name) const { return rigid({}, "", name); }
-const FlexibleBody& ModelBuilder::flexible(const std::string& name) const { return flexible({}, "", name); }
-int ModelBuilder::angle_dof(const std::string& rigid_body) const { return rigid(rigid_body).dof0 + 2; }
+const FlexibleBody& ModelBuilder::flexible(const std::string& name) const {
+  return flexible({}, "", name);
+}
+int ModelBuilder::angle_dof(const std::string& rigid_body) const {
+  return rigid(rigid_body).dof0 + 2;
+}
 
-const std::vector<int>& ModelBuilder::node_set(const Entity& e, const std::string& field, const FlexibleBody& b,
+const std::vector<int>& ModelBuilder::node_set(const Entity& e, const std::string& field,
+                                               const FlexibleBody& b,
                                                const std::string& set) const {
   auto it = b.mesh.node_sets.find(set);
   if (it == b.mesh.node_sets.end()) {
     std::string avail;
     for (const auto& [k, v] : b.mesh.node_sets) avail += (avail.empty() ? "" : ", ") + k;
-    fail(e, field, "body '" + b.name + "' has no node set '" + set + "' (available: " + avail + ")");
+    fail(e, field,
+         "body '" + b.name + "' has no node set '" + set + "' (available: " + avail + ")");
   }
   return it->second;
 }
@@ -118,20 +131,24 @@ PointRef ModelBuilder::resolve(const Entity& e, const std::string& field, const 
     r.kind = PointRef::Kind::kBody;
     r.dof0 = rb->dof0;
     // a point given by its position at t = 0 keeps that position's offset in the body frame
-    if (p.kind == Point::Kind::kGlobal) r.local = rotation(rb->angle0).transpose() * (p.x - rb->position0);
-    else r.local = p.x;
+    if (p.kind == Point::Kind::kGlobal)
+      r.local = rotation(rb->angle0).transpose() * (p.x - rb->position0);
+    else
+      r.local = p.x;
   } else if (const FlexibleBody* fb = m_->find_flexible(p.body)) {
     int node = -1;
     if (p.kind == Point::Kind::kNode) {
       node = p.index;
       if (node < 0 || node >= fb->mesh.num_nodes())
-        fail(e, at + "node", "node index " + std::to_string(node) + " out of range (body '" + p.body + "' has " +
-                                 std::to_string(fb->mesh.num_nodes()) + " nodes)");
+        fail(e, at + "node",
+             "node index " + std::to_string(node) + " out of range (body '" + p.body + "' has " +
+                 std::to_string(fb->mesh.num_nodes()) + " nodes)");
     } else if (p.kind == Point::Kind::kNearest) {
       node = fb->mesh.nearest_node(p.x);
     } else {
       fail(e, at + "body",
-           "'" + p.body + "' is a flexible body; a point on it is a node (Point::node or Point::nearest)");
+           "'" + p.body +
+               "' is a flexible body; a point on it is a node (Point::node or Point::nearest)");
     }
     r.kind = PointRef::Kind::kNode;
     r.dof0 = fb->node_dof(node);
@@ -152,8 +169,8 @@ Vec2 ModelBuilder::initial_position(const PointRef& p) const {
 
 // ---------------------------------------------------------------- bodies
 
-void ModelBuilder::given_velocity(const std::string& body, int first, int rotation_dof, bool translation,
-                                  bool rotation, const std::string& field) {
+void ModelBuilder::given_velocity(const std::string& body, int first, int rotation_dof,
+                                  bool translation, bool rotation, const std::string& field) {
   const int end = m_->nq();
   held_v_.resize(end, 0);
   for (int i = first; i < end; ++i) held_v_[i] = i < rotation_dof ? translation : rotation;
@@ -174,8 +191,8 @@ void ModelBuilder::rigid_body(const std::string& name, const RigidBodyOptions& o
   b.inertia_param = param(e, "inertia", o.inertia);
   const RigidBody& rb = m_->add_rigid_body(b);
   // inertia of the body about its reference point: mass at the body-frame offset c, J_c about it
-  m_->add_force(std::make_unique<RigidInertia>(rb.dof0, rb.mass_param, rb.inertia_param, rb.com_offset,
-                                               "rigid body '" + name + "'"));
+  m_->add_force(std::make_unique<RigidInertia>(rb.dof0, rb.mass_param, rb.inertia_param,
+                                               rb.com_offset, "rigid body '" + name + "'"));
   const Vec2 v0 = o.velocity.value_or(Vec2::Zero());
   init_v_.conservativeResize(m_->nq());
   init_v_.segment<3>(rb.dof0) << v0.x(), v0.y(), o.angular_velocity.value_or(0.0);
@@ -184,7 +201,8 @@ void ModelBuilder::rigid_body(const std::string& name, const RigidBodyOptions& o
   commit(e, mark);
 }
 
-void ModelBuilder::flexible_body(const std::string& name, Mesh2D mesh, const FlexibleBodyOptions& o) {
+void ModelBuilder::flexible_body(const std::string& name, Mesh2D mesh,
+                                 const FlexibleBodyOptions& o) {
   const Entity e{"flexible body", name};
   const Mark mark = begin(e);
   if (!(o.E > 0)) fail(e, "material/E", "expected a positive Young's modulus");
@@ -195,8 +213,9 @@ void ModelBuilder::flexible_body(const std::string& name, Mesh2D mesh, const Fle
     if (nodes.empty()) fail(e, "node_sets/" + set, "node set '" + set + "' is empty");
     for (int n : nodes)
       if (n < 0 || n >= mesh.num_nodes())
-        fail(e, "node_sets/" + set, "node set '" + set + "' holds node index " + std::to_string(n) + " (the mesh has " +
-                                        std::to_string(mesh.num_nodes()) + " nodes)");
+        fail(e, "node_sets/" + set,
+             "node set '" + set + "' holds node index " + std::to_string(n) + " (the mesh has " +
+                 std::to_string(mesh.num_nodes()) + " nodes)");
   }
   FlexibleBody b;
   b.name = name;
@@ -225,20 +244,25 @@ void ModelBuilder::flexible_body(const std::string& name, Mesh2D mesh, const Fle
     init_v_.segment<2>(fb.node_dof(i)) = v0 + w0 * Vec2(-x.y(), x.x());
   }
   const bool given = o.velocity || o.angular_velocity;  // the whole rigid field
-  given_velocity(name, fb.node_dof(0), m_->nq(), given, given, o.velocity ? "velocity" : "angular_velocity");
+  given_velocity(name, fb.node_dof(0), m_->nq(), given, given,
+                 o.velocity ? "velocity" : "angular_velocity");
   commit(e, mark);
 }
 
 // ---------------------------------------------------------------- joints and drivers
 
-void ModelBuilder::revolute(const std::string& name, const Point& a, const std::optional<Point>& b) {
+void ModelBuilder::revolute(const std::string& name, const Point& a,
+                            const std::optional<Point>& b) {
   const Entity e{"joint", name};
   const Mark mark = begin(e);
   const PointRef pa = resolve(e, "a", a);
   PointRef pb;
-  if (b) pb = resolve(e, "b", *b);
-  else pb = {PointRef::Kind::kGround, -1, initial_position(pa)};  // the pin where a is at t = 0
-  if (pa.kind == PointRef::Kind::kGround && pb.kind == PointRef::Kind::kGround) fail(e, "", "both points are ground");
+  if (b)
+    pb = resolve(e, "b", *b);
+  else
+    pb = {PointRef::Kind::kGround, -1, initial_position(pa)};  // the pin where a is at t = 0
+  if (pa.kind == PointRef::Kind::kGround && pb.kind == PointRef::Kind::kGround)
+    fail(e, "", "both points are ground");
   add_constraint(e, std::make_unique<PointCoincidence>(pa, pb));
   commit(e, mark);
 }
@@ -267,24 +291,28 @@ void ModelBuilder::rigid_connection(const std::string& name, const std::string& 
   for (int nd : node_set(e, "node_set", fb, set)) {
     // the node's initial offset in the rigid body's frame: d = R(θ0)ᵀ (x_node − x0)
     const Vec2 off = rotation(rb.angle0).transpose() * (fb.placed(nd) - rb.position0);
-    add_constraint(e, std::make_unique<PointCoincidence>(PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
-                                                         PointRef{PointRef::Kind::kBody, rb.dof0, off}));
+    add_constraint(e, std::make_unique<PointCoincidence>(
+                          PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
+                          PointRef{PointRef::Kind::kBody, rb.dof0, off}));
   }
   commit(e, mark);
 }
 
-void ModelBuilder::clamp(const std::string& name, const std::string& flexible_body, const std::string& set) {
+void ModelBuilder::clamp(const std::string& name, const std::string& flexible_body,
+                         const std::string& set) {
   const Entity e{"joint", name};
   const Mark mark = begin(e);
   const FlexibleBody& fb = flexible(e, "flexible", flexible_body);
   for (int nd : node_set(e, "node_set", fb, set))
-    add_constraint(e, std::make_unique<PointCoincidence>(PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
-                                                         PointRef{PointRef::Kind::kGround, -1, fb.placed(nd)}));
+    add_constraint(e, std::make_unique<PointCoincidence>(
+                          PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
+                          PointRef{PointRef::Kind::kGround, -1, fb.placed(nd)}));
   commit(e, mark);
 }
 
 void ModelBuilder::rotation_driver(const std::string& name, const std::string& body,
-                                   std::shared_ptr<const TimeLaw> law, const std::string& relative_to) {
+                                   std::shared_ptr<const TimeLaw> law,
+                                   const std::string& relative_to) {
   const Entity e{"joint", name};
   const Mark mark = begin(e);
   const RigidBody& b = rigid(e, "body", body);
@@ -301,8 +329,9 @@ void ModelBuilder::rotation_driver(const std::string& name, const std::string& b
   commit(e, mark);
 }
 
-void ModelBuilder::translation_driver(const std::string& name, const Point& point, const Vec2& direction,
-                                      std::shared_ptr<const TimeLaw> law, const std::optional<Vec2>& through) {
+void ModelBuilder::translation_driver(const std::string& name, const Point& point,
+                                      const Vec2& direction, std::shared_ptr<const TimeLaw> law,
+                                      const std::optional<Vec2>& through) {
   const Entity e{"joint", name};
   const Mark mark = begin(e);
   const PointRef p = resolve(e, "point", point);
@@ -327,12 +356,14 @@ void ModelBuilder::point_mass(const std::string& name, const Point& point, doubl
   if (p.kind == PointRef::Kind::kNode)
     m_->add_force(std::make_unique<NodeMass>(p.dof0, mp, "point mass '" + name + "'"));
   else
-    m_->add_force(std::make_unique<RigidInertia>(p.dof0, mp, -1, p.local, "point mass '" + name + "'"));
+    m_->add_force(
+        std::make_unique<RigidInertia>(p.dof0, mp, -1, p.local, "point mass '" + name + "'"));
   commit(e, mark);
 }
 
-void ModelBuilder::point_force(const std::string& name, const Point& point, std::shared_ptr<const TimeLaw> fx,
-                               std::shared_ptr<const TimeLaw> fy, double scale) {
+void ModelBuilder::point_force(const std::string& name, const Point& point,
+                               std::shared_ptr<const TimeLaw> fx, std::shared_ptr<const TimeLaw> fy,
+                               double scale) {
   const Entity e{"force", name};
   const Mark mark = begin(e);
   const PointRef p = resolve(e, "point", point);
@@ -340,16 +371,19 @@ void ModelBuilder::point_force(const std::string& name, const Point& point, std:
   if (!fx) fx = std::make_shared<ConstantLaw>(0.0);
   if (!fy) fy = std::make_shared<ConstantLaw>(0.0);
   const int sp = param(e, "scale", scale);
-  m_->add_force(std::make_unique<PointForce>(p, std::move(fx), std::move(fy), sp, "force '" + name + "'"));
+  m_->add_force(
+      std::make_unique<PointForce>(p, std::move(fx), std::move(fy), sp, "force '" + name + "'"));
   commit(e, mark);
 }
 
-void ModelBuilder::point_force(const std::string& name, const Point& point, const Vec2& force, double scale) {
-  point_force(name, point, std::make_shared<ConstantLaw>(force.x()), std::make_shared<ConstantLaw>(force.y()),
-              scale);
+void ModelBuilder::point_force(const std::string& name, const Point& point, const Vec2& force,
+                               double scale) {
+  point_force(name, point, std::make_shared<ConstantLaw>(force.x()),
+              std::make_shared<ConstantLaw>(force.y()), scale);
 }
 
-void ModelBuilder::spring_damper(const std::string& name, const Point& a, const Point& b, const SpringOptions& o) {
+void ModelBuilder::spring_damper(const std::string& name, const Point& a, const Point& b,
+                                 const SpringOptions& o) {
   const Entity e{"spring", name};
   const Mark mark = begin(e);
   const PointRef pa = resolve(e, "a", a), pb = resolve(e, "b", b);
@@ -357,8 +391,10 @@ void ModelBuilder::spring_damper(const std::string& name, const Point& a, const 
   if (!(o.damping >= 0)) fail(e, "damping", "expected a non-negative damping");
   // the free length defaults to the initial distance: the spring is unloaded at t = 0
   const double l_init = (initial_position(pb) - initial_position(pa)).norm();
-  if (o.free_length && !(*o.free_length >= 0)) fail(e, "free_length", "expected a non-negative free length");
-  if (!(l_init > 0)) fail(e, "", "the spring's end points coincide initially (direction undefined)");
+  if (o.free_length && !(*o.free_length >= 0))
+    fail(e, "free_length", "expected a non-negative free length");
+  if (!(l_init > 0))
+    fail(e, "", "the spring's end points coincide initially (direction undefined)");
   const int kp = param(e, "stiffness", o.stiffness);
   const int cp = param(e, "damping", o.damping);
   const int lp = param(e, "free_length", o.free_length.value_or(l_init));
@@ -366,8 +402,8 @@ void ModelBuilder::spring_damper(const std::string& name, const Point& a, const 
   commit(e, mark);
 }
 
-void ModelBuilder::torque(const std::string& name, const std::string& body, std::shared_ptr<const TimeLaw> law,
-                          double scale) {
+void ModelBuilder::torque(const std::string& name, const std::string& body,
+                          std::shared_ptr<const TimeLaw> law, double scale) {
   const Entity e{"torque", name};
   const Mark mark = begin(e);
   const RigidBody& b = rigid(e, "body", body);
@@ -377,11 +413,13 @@ void ModelBuilder::torque(const std::string& name, const std::string& body, std:
   commit(e, mark);
 }
 
-void ModelBuilder::torque(const std::string& name, const std::string& body, double torque, double scale) {
+void ModelBuilder::torque(const std::string& name, const std::string& body, double torque,
+                          double scale) {
   this->torque(name, body, std::make_shared<ConstantLaw>(torque), scale);
 }
 
-void ModelBuilder::rotational_spring_damper(const std::string& name, const std::string& a, const std::string& b,
+void ModelBuilder::rotational_spring_damper(const std::string& name, const std::string& a,
+                                            const std::string& b,
                                             const RotationalSpringOptions& o) {
   const Entity e{"rotational spring", name};
   const Mark mark = begin(e);
@@ -405,8 +443,8 @@ void ModelBuilder::rotational_spring_damper(const std::string& name, const std::
   commit(e, mark);
 }
 
-void ModelBuilder::pressure(const std::string& name, const Point& point, const Vec2& direction, double area,
-                            Table1D table, const PressureArgument& argument) {
+void ModelBuilder::pressure(const std::string& name, const Point& point, const Vec2& direction,
+                            double area, Table1D table, const PressureArgument& argument) {
   const Entity e{"pressure", name};
   const Mark mark = begin(e);
   const PointRef p = resolve(e, "point", point);
@@ -414,10 +452,11 @@ void ModelBuilder::pressure(const std::string& name, const Point& point, const V
   if (!(direction.norm() > 0)) fail(e, "direction", "expected a non-zero direction");
   if (!(area > 0)) fail(e, "area", "expected a positive area");
   // the table's argument: the time, or the angle θ of a rigid body (the load then enters K_t)
-  const int angle_dof = argument.angle_of.empty() ? -1 : rigid(e, "argument/angle_of", argument.angle_of).dof0 + 2;
+  const int angle_dof =
+      argument.angle_of.empty() ? -1 : rigid(e, "argument/angle_of", argument.angle_of).dof0 + 2;
   const int ap = param(e, "area", area);
-  m_->add_force(std::make_unique<PressureForce>(p, direction, ap, std::move(table), angle_dof, argument.offset,
-                                                "pressure '" + name + "'"));
+  m_->add_force(std::make_unique<PressureForce>(p, direction, ap, std::move(table), angle_dof,
+                                                argument.offset, "pressure '" + name + "'"));
   commit(e, mark);
 }
 
@@ -453,7 +492,8 @@ void ModelBuilder::check_determined() const {
   for (const auto& c : m_->constraints())
     for (int d : c->dofs()) touched[d] = 1;
   for (const auto& b : m_->rigid_bodies()) {
-    const double mass = m_->params().scalars[b.mass_param], J = m_->params().scalars[b.inertia_param];
+    const double mass = m_->params().scalars[b.mass_param],
+                 J = m_->params().scalars[b.inertia_param];
     const bool constrained = touched[b.dof0] || touched[b.dof0 + 1] || touched[b.dof0 + 2];
     if (!constrained && mass == 0 && J == 0)
       fail({"rigid body", b.name}, "",

@@ -64,20 +64,24 @@ struct Point {
   static Point at(std::string body, const Vec2& offset = Vec2::Zero()) {
     return {Kind::kBodyFrame, std::move(body), offset, -1};
   }
-  static Point at_global(std::string body, const Vec2& x) { return {Kind::kGlobal, std::move(body), x, -1}; }
-  static Point node(std::string body, int index) { return {Kind::kNode, std::move(body), Vec2::Zero(), index}; }
+  static Point at_global(std::string body, const Vec2& x) {
+    return {Kind::kGlobal, std::move(body), x, -1};
+  }
+  static Point node(std::string body, int index) {
+    return {Kind::kNode, std::move(body), Vec2::Zero(), index};
+  }
   static Point nearest(std::string body, const Vec2& x_mesh) {
     return {Kind::kNearest, std::move(body), x_mesh, -1};
   }
 };
 
 struct RigidBodyOptions {
-  double mass = 0;                         ///< m ≥ 0 (parameter "<body>.mass")
-  double inertia = 0;                      ///< J_c ≥ 0 about the centre of mass ("<body>.inertia")
-  Vec2 position = Vec2::Zero();            ///< reference point at t = 0
-  double angle = 0;                        ///< θ at t = 0
-  Vec2 com = Vec2::Zero();                 ///< centre of mass in the body frame
-  std::optional<Vec2> velocity;            ///< of the reference point at t = 0 (given: kept)
+  double mass = 0;               ///< m ≥ 0 (parameter "<body>.mass")
+  double inertia = 0;            ///< J_c ≥ 0 about the centre of mass ("<body>.inertia")
+  Vec2 position = Vec2::Zero();  ///< reference point at t = 0
+  double angle = 0;              ///< θ at t = 0
+  Vec2 com = Vec2::Zero();       ///< centre of mass in the body frame
+  std::optional<Vec2> velocity;  ///< of the reference point at t = 0 (given: kept)
   std::optional<double> angular_velocity;  ///< θ̇ at t = 0 (given: kept)
 };
 
@@ -142,34 +146,40 @@ class ModelBuilder {
   // ------------------------------------------------------------ bodies
   void rigid_body(const std::string& name, const RigidBodyOptions& o);
   /// The mesh is in the body's own (design) frame; its node sets (Mesh2D::node_sets: a rectangle's
-  /// sides, Gmsh physical groups, or sets added with the Mesh2D selectors) are the sets joints refer
-  /// to, each non-empty.
+  /// sides, Gmsh physical groups, or sets added with the Mesh2D selectors) are the sets joints
+  /// refer to, each non-empty.
   void flexible_body(const std::string& name, Mesh2D mesh, const FlexibleBodyOptions& o);
 
   // ------------------------------------------------------------ joints and drivers
   /// p_a = p_b; b defaults to the ground point at the initial position of a.
-  void revolute(const std::string& name, const Point& a, const std::optional<Point>& b = std::nullopt);
+  void revolute(const std::string& name, const Point& a,
+                const std::optional<Point>& b = std::nullopt);
   /// Point a (on a body) slides on a line of the given direction.
-  void prismatic(const std::string& name, const Point& a, const Vec2& direction, const PrismaticOptions& o = {});
+  void prismatic(const std::string& name, const Point& a, const Vec2& direction,
+                 const PrismaticOptions& o = {});
   /// Every node of the node set keeps its initial offset in the rigid body's frame.
-  void rigid_connection(const std::string& name, const std::string& rigid, const std::string& flexible,
-                        const std::string& node_set);
+  void rigid_connection(const std::string& name, const std::string& rigid,
+                        const std::string& flexible, const std::string& node_set);
   /// Every node of the node set stays at its initial position.
   void clamp(const std::string& name, const std::string& flexible, const std::string& node_set);
   /// θ_body − θ_relative_to − s(t) = 0 (relative_to "ground": θ_ground = 0).
-  void rotation_driver(const std::string& name, const std::string& body, std::shared_ptr<const TimeLaw> law,
+  void rotation_driver(const std::string& name, const std::string& body,
+                       std::shared_ptr<const TimeLaw> law,
                        const std::string& relative_to = "ground");
   /// u·(p − x0) − s(t) = 0, x0 = through (default: the initial position of the point).
   void translation_driver(const std::string& name, const Point& point, const Vec2& direction,
-                          std::shared_ptr<const TimeLaw> law, const std::optional<Vec2>& through = std::nullopt);
+                          std::shared_ptr<const TimeLaw> law,
+                          const std::optional<Vec2>& through = std::nullopt);
 
   // ------------------------------------------------------------ forces
   void point_mass(const std::string& name, const Point& point, double mass);
   /// F(t) = scale · (fx(t), fy(t)) in the inertial frame; a null law is zero.
   void point_force(const std::string& name, const Point& point, std::shared_ptr<const TimeLaw> fx,
                    std::shared_ptr<const TimeLaw> fy, double scale = 1);
-  void point_force(const std::string& name, const Point& point, const Vec2& force, double scale = 1);
-  void spring_damper(const std::string& name, const Point& a, const Point& b, const SpringOptions& o);
+  void point_force(const std::string& name, const Point& point, const Vec2& force,
+                   double scale = 1);
+  void spring_damper(const std::string& name, const Point& a, const Point& b,
+                     const SpringOptions& o);
   /// Moment scale · T(t) on a rigid body's angle.
   void torque(const std::string& name, const std::string& body, std::shared_ptr<const TimeLaw> law,
               double scale = 1);
@@ -178,8 +188,8 @@ class ModelBuilder {
   void rotational_spring_damper(const std::string& name, const std::string& a, const std::string& b,
                                 const RotationalSpringOptions& o);
   /// Pressure P(s) × area along a fixed direction at a point (s: the time or a body's angle).
-  void pressure(const std::string& name, const Point& point, const Vec2& direction, double area, Table1D table,
-                const PressureArgument& argument = {});
+  void pressure(const std::string& name, const Point& point, const Vec2& direction, double area,
+                Table1D table, const PressureArgument& argument = {});
 
   // ------------------------------------------------------------ queries by name
   /// Throws the ModelError (field "name") that adding an entity of that name would meet: the name
@@ -241,12 +251,13 @@ class ModelBuilder {
   void add_constraint(const Entity& e, std::unique_ptr<ConstraintElement> c);
   PointRef resolve(const Entity& e, const std::string& field, const Point& p) const;
   const RigidBody& rigid(const Entity& e, const std::string& field, const std::string& name) const;
-  const FlexibleBody& flexible(const Entity& e, const std::string& field, const std::string& name) const;
+  const FlexibleBody& flexible(const Entity& e, const std::string& field,
+                               const std::string& name) const;
   const std::vector<int>& node_set(const Entity& e, const std::string& field, const FlexibleBody& b,
                                    const std::string& set) const;
   int param(const Entity& e, const std::string& property, double value);
-  void given_velocity(const std::string& body, int first, int rotation_dof, bool translation, bool rotation,
-                      const std::string& field);
+  void given_velocity(const std::string& body, int first, int rotation_dof, bool translation,
+                      bool rotation, const std::string& field);
   void check_not_built() const;
   void check_determined() const;
 
@@ -255,8 +266,8 @@ class ModelBuilder {
   bool built_ = false;
   bool broken_ = false;  // a flexible body's mesh was refused after its unknowns were allocated
   std::set<std::string> names_;
-  std::vector<std::pair<size_t, std::string>> force_owners_;            // first force element, entity
-  std::map<std::string, std::pair<size_t, size_t>> joint_elements_;     // constraint elements [b, e)
+  std::vector<std::pair<size_t, std::string>> force_owners_;         // first force element, entity
+  std::map<std::string, std::pair<size_t, size_t>> joint_elements_;  // constraint elements [b, e)
   std::map<std::string, std::vector<int>> joint_rows_;
   std::map<std::string, DriverInfo> drivers_;
   std::map<std::string, std::vector<int>> entity_params_;

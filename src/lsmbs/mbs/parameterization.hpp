@@ -19,7 +19,8 @@ class Parameterization {
   /// Writes the parameters at p into `params` (the entries p does not act on are left as they are).
   virtual void apply(const Vec& p, ModelParams& params) const = 0;
   /// apply() plus one direction ∂(ModelParams)/∂p_i per variable.
-  virtual std::vector<ParamDirection> apply_with_directions(const Vec& p, ModelParams& params) const = 0;
+  virtual std::vector<ParamDirection> apply_with_directions(const Vec& p,
+                                                            ModelParams& params) const = 0;
 };
 
 }  // namespace lsmbs

@@ -15,7 +15,8 @@ namespace {
 
 // Solves the tridiagonal system (sub-diagonal a, diagonal b, super-diagonal c) in place of d
 // (Thomas algorithm; a[0] and c[n−1] are not read).
-void thomas(const std::vector<double>& a, std::vector<double> b, const std::vector<double>& c, std::vector<double>& d) {
+void thomas(const std::vector<double>& a, std::vector<double> b, const std::vector<double>& c,
+            std::vector<double>& d) {
   const size_t n = b.size();
   for (size_t i = 1; i < n; ++i) {
     const double w = a[i] / b[i - 1];
@@ -91,7 +92,8 @@ std::vector<double> periodic_spline(const std::vector<double>& x, const std::vec
 Table1D::Table1D(std::vector<double> x, std::vector<double> y, Interp interp, double period)
     : x_(std::move(x)), y_(std::move(y)), interp_(interp), period_(period) {
   const size_t n = x_.size();
-  if (n < 2 || y_.size() != n) throw Error("table: expected at least two (x, y) points of equal count");
+  if (n < 2 || y_.size() != n)
+    throw Error("table: expected at least two (x, y) points of equal count");
   for (size_t i = 0; i + 1 < n; ++i)
     if (!(x_[i + 1] > x_[i])) throw Error("table: x values must be strictly increasing");
   for (size_t i = 0; i < n; ++i)
@@ -103,14 +105,16 @@ Table1D::Table1D(std::vector<double> x, std::vector<double> y, Interp interp, do
     for (double v : y_) y_max = std::max(y_max, std::abs(v));
     char buf[200];
     if (x_.back() > x_end + tol_x) {
-      std::snprintf(buf, sizeof buf, "table: the points span %.17g, more than the period %.17g (x0 = %.17g)",
+      std::snprintf(buf, sizeof buf,
+                    "table: the points span %.17g, more than the period %.17g (x0 = %.17g)",
                     x_.back() - x_.front(), period_, x_.front());
       throw Error(buf);
     }
     if (x_.back() >= x_end - tol_x) {
       if (std::abs(y_.back() - y_.front()) > 1e-9 * y_max) {
         std::snprintf(buf, sizeof buf,
-                      "table: a periodic table must end with its first value: s(x0) = %.17g but s(x0 + period) = "
+                      "table: a periodic table must end with its first value: s(x0) = %.17g but "
+                      "s(x0 + period) = "
                       "%.17g",
                       y_.front(), y_.back());
         throw Error(buf);
@@ -123,12 +127,16 @@ Table1D::Table1D(std::vector<double> x, std::vector<double> y, Interp interp, do
       y_.push_back(y_.front());
     }
   }
-  if (interp_ == Interp::kCubic) m_ = period_ > 0 ? periodic_spline(x_, y_) : natural_spline(x_, y_);
-  else m_.assign(x_.size(), 0.0);
+  if (interp_ == Interp::kCubic)
+    m_ = period_ > 0 ? periodic_spline(x_, y_) : natural_spline(x_, y_);
+  else
+    m_.assign(x_.size(), 0.0);
 }
 
-Table1D Table1D::read_csv(const std::string& path, Interp interp, double period, double xs, double ys) {
-  if (const auto why = unreadable_file_reason(path); !why.empty()) throw Error(path, "", "table file: " + why);
+Table1D Table1D::read_csv(const std::string& path, Interp interp, double period, double xs,
+                          double ys) {
+  if (const auto why = unreadable_file_reason(path); !why.empty())
+    throw Error(path, "", "table file: " + why);
   std::ifstream f(path);
   if (!f) throw Error(path, "", "cannot open table file");
   std::vector<double> x, y;
@@ -142,7 +150,8 @@ Table1D Table1D::read_csv(const std::string& path, Interp interp, double period,
     std::istringstream is(line);
     double a, b;
     if (!(is >> a)) {
-      if (line.find_first_not_of(" \r") == std::string::npos || (x.empty() && ln == 1)) continue;  // blank/header
+      if (line.find_first_not_of(" \r") == std::string::npos || (x.empty() && ln == 1))
+        continue;  // blank/header
       throw Error(path, "line " + std::to_string(ln), "expected two numbers");
     }
     if (!(is >> b)) throw Error(path, "line " + std::to_string(ln), "expected two numbers");
@@ -157,7 +166,8 @@ Table1D Table1D::read_csv(const std::string& path, Interp interp, double period,
 }
 
 void Table1D::eval(double x, double& v, double& d1, double& d2) const {
-  if (period_ > 0) x = x_.front() + std::fmod(std::fmod(x - x_.front(), period_) + period_, period_);
+  if (period_ > 0)
+    x = x_.front() + std::fmod(std::fmod(x - x_.front(), period_) + period_, period_);
   if (x <= x_.front() || x >= x_.back()) {
     v = x <= x_.front() ? y_.front() : y_.back();
     d1 = d2 = 0;
@@ -172,23 +182,28 @@ void Table1D::eval(double x, double& v, double& d1, double& d2) const {
     d2 = 0;
     return;
   }
-  v = A * y_[i] + B * y_[i + 1] + ((A * A * A - A) * m_[i] + (B * B * B - B) * m_[i + 1]) * h * h / 6;
-  d1 = (y_[i + 1] - y_[i]) / h - (3 * A * A - 1) / 6 * h * m_[i] + (3 * B * B - 1) / 6 * h * m_[i + 1];
+  v = A * y_[i] + B * y_[i + 1] +
+      ((A * A * A - A) * m_[i] + (B * B * B - B) * m_[i + 1]) * h * h / 6;
+  d1 = (y_[i + 1] - y_[i]) / h - (3 * A * A - 1) / 6 * h * m_[i] +
+       (3 * B * B - 1) / 6 * h * m_[i + 1];
   d2 = A * m_[i] + B * m_[i + 1];
 }
 
 void Table1D::kinks(double a, double b, std::vector<double>& out) const {
   if (x_.empty() || !(b > a)) return;
   std::vector<double> base;
-  if (interp_ == Interp::kLinear) base = x_;
-  else if (period_ <= 0) base = {x_.front(), x_.back()};
+  if (interp_ == Interp::kLinear)
+    base = x_;
+  else if (period_ <= 0)
+    base = {x_.front(), x_.back()};
   if (period_ <= 0) {
     for (double x : base)
       if (x > a && x < b) out.push_back(x);
     return;
   }
   // periodic: x_k + j·period for every j that lands in (a, b)
-  const double j0 = std::floor((a - x_.back()) / period_), j1 = std::ceil((b - x_.front()) / period_);
+  const double j0 = std::floor((a - x_.back()) / period_),
+               j1 = std::ceil((b - x_.front()) / period_);
   for (double j = j0; j <= j1; ++j)
     for (double x : base)
       if (const double xj = x + j * period_; xj > a && xj < b) out.push_back(xj);

@@ -17,12 +17,17 @@ class Table1D {
   /// points must then lie within one period; the last point may be x0 + period (within 1e-9 of
   /// the period), in which case its value must equal y0 (within 1e-9 of the largest |y|),
   /// otherwise the point (x0 + period, y0) is appended. Violations throw Error.
-  Table1D(std::vector<double> x, std::vector<double> y, Interp interp = Interp::kCubic, double period = 0);
+  Table1D(std::vector<double> x, std::vector<double> y, Interp interp = Interp::kCubic,
+          double period = 0);
   /// Reads two columns (x, y) from a CSV file; '#' starts a comment; an optional header line.
-  static Table1D read_csv(const std::string& path, Interp interp = Interp::kCubic, double period = 0,
-                          double x_scale = 1, double y_scale = 1);
+  static Table1D read_csv(const std::string& path, Interp interp = Interp::kCubic,
+                          double period = 0, double x_scale = 1, double y_scale = 1);
 
-  double value(double x) const { double v, d1, d2; eval(x, v, d1, d2); return v; }
+  double value(double x) const {
+    double v, d1, d2;
+    eval(x, v, d1, d2);
+    return v;
+  }
   /// Beyond the ends (without period) the value is held constant and derivatives are zero.
   void eval(double x, double& v, double& d1, double& d2) const;
   bool empty() const { return x_.empty(); }

@@ -8,7 +8,8 @@ namespace lsmbs {
 
 TrapezoidLaw::TrapezoidLaw(double s0, double s1, double accel, double speed, double t_start)
     : s0_(s0), dir_(s1 >= s0 ? 1.0 : -1.0), a_(accel), v_(speed), t_start_(t_start) {
-  if (!(accel > 0) || !(speed > 0)) throw Error("trapezoid law: acceleration and speed must be positive");
+  if (!(accel > 0) || !(speed > 0))
+    throw Error("trapezoid law: acceleration and speed must be positive");
   const double dist = std::abs(s1 - s0);
   ta_ = v_ / a_;
   if (a_ * ta_ * ta_ > dist) {  // triangular profile

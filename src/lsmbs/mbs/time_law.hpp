@@ -28,7 +28,11 @@ class TimeLaw {
       for (double t : {p.t0, p.t1})
         if (t > t0 && t < t1) out.push_back(t);
   }
-  double value(double t) const { double s, sd, sdd; eval(t, s, sd, sdd); return s; }
+  double value(double t) const {
+    double s, sd, sdd;
+    eval(t, s, sd, sdd);
+    return s;
+  }
 };
 
 /// From s0 to s1 with |acceleration| = accel and cruise speed = speed, starting at t_start.
@@ -58,8 +62,12 @@ class RampLaw : public TimeLaw {
 class TabulatedLaw : public TimeLaw {
  public:
   explicit TabulatedLaw(Table1D table) : table_(std::move(table)) {}
-  void eval(double t, double& s, double& sd, double& sdd) const override { table_.eval(t, s, sd, sdd); }
-  void kinks(double t0, double t1, std::vector<double>& out) const override { table_.kinks(t0, t1, out); }
+  void eval(double t, double& s, double& sd, double& sdd) const override {
+    table_.eval(t, s, sd, sdd);
+  }
+  void kinks(double t0, double t1, std::vector<double>& out) const override {
+    table_.kinks(t0, t1, out);
+  }
 
  private:
   Table1D table_;
@@ -68,7 +76,10 @@ class TabulatedLaw : public TimeLaw {
 class ConstantLaw : public TimeLaw {
  public:
   explicit ConstantLaw(double s0) : s0_(s0) {}
-  void eval(double, double& s, double& sd, double& sdd) const override { s = s0_; sd = sdd = 0; }
+  void eval(double, double& s, double& sd, double& sdd) const override {
+    s = s0_;
+    sd = sdd = 0;
+  }
 
  private:
   double s0_;

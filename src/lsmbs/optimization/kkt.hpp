@@ -12,12 +12,13 @@ namespace lsmbs {
 
 struct KktReport {
   int active_constraints = 0, free_variables = 0, at_lower = 0, at_upper = 0;
-  std::vector<double> multipliers;      ///< of the active constraints (scaled problem)
-  double stationarity = 0;              ///< ‖∇f + Σλ∇g‖∞ on free variables / ‖∇f‖∞
-  double bound_sign_violation = 0;      ///< worst wrong-signed reduced gradient at a bound / ‖∇f‖∞
+  std::vector<double> multipliers;  ///< of the active constraints (scaled problem)
+  double stationarity = 0;          ///< ‖∇f + Σλ∇g‖∞ on free variables / ‖∇f‖∞
+  double bound_sign_violation = 0;  ///< worst wrong-signed reduced gradient at a bound / ‖∇f‖∞
   nlohmann::json to_json() const;
 };
 
-KktReport kkt_report(const DesignProblem& prob, const Evaluation& e, double tol_active = 1e-2, double tol_bound = 1e-6);
+KktReport kkt_report(const DesignProblem& prob, const Evaluation& e, double tol_active = 1e-2,
+                     double tol_bound = 1e-6);
 
 }  // namespace lsmbs

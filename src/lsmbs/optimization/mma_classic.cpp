@@ -21,7 +21,8 @@ Vec kkt_residual(const MmaSubproblem& sp, const PdState& w, double epsi) {
   const Vec ux1 = sp.upp - w.x, xl1 = w.x - sp.low;
   const Vec plam = sp.p0 + sp.P.transpose() * w.lam, qlam = sp.q0 + sp.Q.transpose() * w.lam;
   const Vec gvec = sp.P * ux1.cwiseInverse() + sp.Q * xl1.cwiseInverse();
-  const Vec dpsidx = plam.cwiseQuotient(ux1.cwiseProduct(ux1)) - qlam.cwiseQuotient(xl1.cwiseProduct(xl1));
+  const Vec dpsidx =
+      plam.cwiseQuotient(ux1.cwiseProduct(ux1)) - qlam.cwiseQuotient(xl1.cwiseProduct(xl1));
   Vec r(3 * n + 4 * m + 2);
   Eigen::Index k = 0;
   r.segment(k, n) = dpsidx - w.xsi + w.eta, k += n;
@@ -59,15 +60,16 @@ MmaSubSolution solve_mma_subproblem(const MmaSubproblem& sp, double epsimin) {
       const Vec ux3 = ux1.cwiseProduct(ux2), xl3 = xl1.cwiseProduct(xl2);
       const Vec plam = sp.p0 + sp.P.transpose() * w.lam, qlam = sp.q0 + sp.Q.transpose() * w.lam;
       const Vec gvec = sp.P * ux1.cwiseInverse() + sp.Q * xl1.cwiseInverse();
-      const Mat GG = sp.P * ux2.cwiseInverse().asDiagonal() - sp.Q * xl2.cwiseInverse().asDiagonal();
+      const Mat GG =
+          sp.P * ux2.cwiseInverse().asDiagonal() - sp.Q * xl2.cwiseInverse().asDiagonal();
       const Vec dpsidx = plam.cwiseQuotient(ux2) - qlam.cwiseQuotient(xl2);
       const Vec xa = w.x - sp.alpha, bx_ = sp.beta - w.x;
       const Vec delx = dpsidx - epsi * xa.cwiseInverse() + epsi * bx_.cwiseInverse();
       const Vec dely = sp.c + sp.d.cwiseProduct(w.y) - w.lam - epsi * w.y.cwiseInverse();
       const double delz = sp.a0 - sp.a.dot(w.lam) - epsi / w.z;
       const Vec dellam = gvec - sp.a * w.z - w.y - sp.b + epsi * w.lam.cwiseInverse();
-      const Vec diagx = 2 * (plam.cwiseQuotient(ux3) + qlam.cwiseQuotient(xl3)) + w.xsi.cwiseQuotient(xa) +
-                        w.eta.cwiseQuotient(bx_);
+      const Vec diagx = 2 * (plam.cwiseQuotient(ux3) + qlam.cwiseQuotient(xl3)) +
+                        w.xsi.cwiseQuotient(xa) + w.eta.cwiseQuotient(bx_);
       const Vec diagy = sp.d + w.mu.cwiseQuotient(w.y);
       const Vec diaglamyi = w.s.cwiseQuotient(w.lam) + diagy.cwiseInverse();
       Vec dx, dlam;
@@ -102,27 +104,33 @@ MmaSubSolution solve_mma_subproblem(const MmaSubproblem& sp, double epsimin) {
         const Vec sol = A.partialPivLu().solve(bb);
         dx = sol.head(n);
         dz = sol[n];
-        dlam = (GG * dx).cwiseProduct(dli) - dz * sp.a.cwiseProduct(dli) + dellamyi.cwiseProduct(dli);
+        dlam =
+            (GG * dx).cwiseProduct(dli) - dz * sp.a.cwiseProduct(dli) + dellamyi.cwiseProduct(dli);
       }
       const Vec dy = -dely.cwiseQuotient(diagy) + dlam.cwiseQuotient(diagy);
       const Vec dxsi = -w.xsi + epsi * xa.cwiseInverse() - w.xsi.cwiseProduct(dx).cwiseQuotient(xa);
-      const Vec deta = -w.eta + epsi * bx_.cwiseInverse() + w.eta.cwiseProduct(dx).cwiseQuotient(bx_);
+      const Vec deta =
+          -w.eta + epsi * bx_.cwiseInverse() + w.eta.cwiseProduct(dx).cwiseQuotient(bx_);
       const Vec dmu = -w.mu + epsi * w.y.cwiseInverse() - w.mu.cwiseProduct(dy).cwiseQuotient(w.y);
       const double dzet = -w.zet + epsi / w.z - w.zet * dz / w.z;
-      const Vec ds = -w.s + epsi * w.lam.cwiseInverse() - w.s.cwiseProduct(dlam).cwiseQuotient(w.lam);
+      const Vec ds =
+          -w.s + epsi * w.lam.cwiseInverse() - w.s.cwiseProduct(dlam).cwiseQuotient(w.lam);
       // largest step keeping every positive quantity positive (fraction 1/1.01 of the boundary)
       double stm = 1;
       auto limit = [&stm](const Vec& v, const Vec& dv) {
         for (Eigen::Index i = 0; i < v.size(); ++i) stm = std::max(stm, -1.01 * dv[i] / v[i]);
       };
-      limit(w.y, dy), limit(w.lam, dlam), limit(w.xsi, dxsi), limit(w.eta, deta), limit(w.mu, dmu), limit(w.s, ds);
+      limit(w.y, dy), limit(w.lam, dlam), limit(w.xsi, dxsi), limit(w.eta, deta), limit(w.mu, dmu),
+          limit(w.s, ds);
       stm = std::max({stm, -1.01 * dz / w.z, -1.01 * dzet / w.zet});
-      for (Eigen::Index j = 0; j < n; ++j) stm = std::max({stm, -1.01 * dx[j] / xa[j], 1.01 * dx[j] / bx_[j]});
+      for (Eigen::Index j = 0; j < n; ++j)
+        stm = std::max({stm, -1.01 * dx[j] / xa[j], 1.01 * dx[j] / bx_[j]});
       double steg = 1 / stm;
       const PdState old = w;
       double resnew = 2 * resnorm;
       for (int itto = 0; resnew > resnorm && itto < 50; ++itto) {
-        w.x = old.x + steg * dx, w.y = old.y + steg * dy, w.z = old.z + steg * dz, w.lam = old.lam + steg * dlam;
+        w.x = old.x + steg * dx, w.y = old.y + steg * dy, w.z = old.z + steg * dz,
+        w.lam = old.lam + steg * dlam;
         w.xsi = old.xsi + steg * dxsi, w.eta = old.eta + steg * deta, w.mu = old.mu + steg * dmu;
         w.zet = old.zet + steg * dzet, w.s = old.s + steg * ds;
         res = kkt_residual(sp, w, epsi);
@@ -133,12 +141,26 @@ MmaSubSolution solve_mma_subproblem(const MmaSubproblem& sp, double epsimin) {
       resmax = res.cwiseAbs().maxCoeff();
     }
   }
-  if (!w.x.allFinite()) throw NumericalFailure("MMA subproblem: the interior-point iteration produced NaN or Inf");
+  if (!w.x.allFinite())
+    throw NumericalFailure("MMA subproblem: the interior-point iteration produced NaN or Inf");
   return {w.x, w.y, w.lam, w.z, itera};
+}
+
+std::string MmaOptions::validate() const {
+  if (!(asyinit > 0 && asyinit <= 1))
+    return "asyinit: expected a fraction of the variable range in (0, 1]";
+  if (!(asyincr >= 1)) return "asyincr: expected a factor >= 1";
+  if (!(asydecr > 0 && asydecr <= 1)) return "asydecr: expected a factor in (0, 1]";
+  if (!(move > 0 && move <= 1)) return "move: expected a fraction of the variable range in (0, 1]";
+  if (!(albefa > 0 && albefa < 1)) return "albefa: expected a value in (0, 1)";
+  if (!(c > 0) || !std::isfinite(c)) return "c: expected a positive finite penalty";
+  if (!(raa0 > 0) || !std::isfinite(raa0)) return "raa0: expected a positive finite regularization";
+  return {};
 }
 
 MmaClassic::MmaClassic(Vec xmin, Vec xmax, int m, MmaOptions o)
     : xmin_(std::move(xmin)), xmax_(std::move(xmax)), m_(m), o_(o), lam_(Vec::Zero(m)) {
+  if (auto msg = o_.validate(); !msg.empty()) throw Error("MMA option " + msg);
   if (xmin_.size() != xmax_.size() || !((xmax_ - xmin_).array() > 0).all())
     throw Error("MMA: every variable needs xmin < xmax");
 }
@@ -168,9 +190,12 @@ Vec MmaClassic::step(const Vec& x, const Vec& df0, const Vec& f, const Mat& df) 
   sp.alpha.resize(n), sp.beta.resize(n), sp.p0.resize(n), sp.q0.resize(n);
   sp.P.resize(m_, n), sp.Q.resize(m_, n);
   for (Eigen::Index j = 0; j < n; ++j) {
-    sp.alpha[j] = std::max({low_[j] + o_.albefa * (x[j] - low_[j]), x[j] - o_.move * range[j], xmin_[j]});
-    sp.beta[j] = std::min({upp_[j] - o_.albefa * (upp_[j] - x[j]), x[j] + o_.move * range[j], xmax_[j]});
-    const double ux2 = (upp_[j] - x[j]) * (upp_[j] - x[j]), xl2 = (x[j] - low_[j]) * (x[j] - low_[j]);
+    sp.alpha[j] =
+        std::max({low_[j] + o_.albefa * (x[j] - low_[j]), x[j] - o_.move * range[j], xmin_[j]});
+    sp.beta[j] =
+        std::min({upp_[j] - o_.albefa * (upp_[j] - x[j]), x[j] + o_.move * range[j], xmax_[j]});
+    const double ux2 = (upp_[j] - x[j]) * (upp_[j] - x[j]),
+                 xl2 = (x[j] - low_[j]) * (x[j] - low_[j]);
     const double reg = o_.raa0 / std::max(range[j], 1e-5);
     auto pq = [&](double g, double& p, double& q) {
       const double pp = std::max(g, 0.0), qq = std::max(-g, 0.0), r = 0.001 * (pp + qq) + reg;

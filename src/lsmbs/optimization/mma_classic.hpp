@@ -16,13 +16,16 @@
 namespace lsmbs {
 
 struct MmaOptions {
-  double asyinit = 0.5;   ///< initial asymptote distance, fraction of xmax − xmin
-  double asyincr = 1.2;   ///< asymptote widening when a variable keeps its direction
-  double asydecr = 0.7;   ///< narrowing when it oscillates
-  double move = 0.5;      ///< move limit per iteration, fraction of xmax − xmin
-  double albefa = 0.1;    ///< distance of the subproblem bounds from the asymptotes
-  double c = 1000;        ///< penalty on the artificial variables y_i
-  double raa0 = 1e-5;     ///< regularization of the approximations
+  double asyinit = 0.5;  ///< initial asymptote distance, fraction of xmax − xmin
+  double asyincr = 1.2;  ///< asymptote widening when a variable keeps its direction
+  double asydecr = 0.7;  ///< narrowing when it oscillates
+  double move = 0.5;     ///< move limit per iteration, fraction of xmax − xmin
+  double albefa = 0.1;   ///< distance of the subproblem bounds from the asymptotes
+  double c = 1000;       ///< penalty on the artificial variables y_i
+  double raa0 = 1e-5;    ///< regularization of the approximations
+
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 class MmaClassic {

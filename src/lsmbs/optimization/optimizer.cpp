@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -17,7 +18,6 @@ namespace lsmbs {
 
 namespace {
 
-
 struct Context {
   Context(DesignProblem& p, const OptimizeOptions& opt) : prob(p), o(opt) {}
   DesignProblem& prob;
@@ -25,11 +25,12 @@ struct Context {
   nlopt_opt opt = nullptr;
   Vec lower, range;
   double f0 = 1;
-  std::vector<Evaluation> history;  ///< every distinct point of this optimization, replayed ones too
+  std::vector<Evaluation>
+      history;  ///< every distinct point of this optimization, replayed ones too
   std::set<std::vector<double>> seen;
   long new_sims = 0;
   bool interrupted = false;
-  bool stop = false;  ///< set when the run must end (interrupted, failed simulation)
+  bool stop = false;    ///< set when the run must end (interrupted, failed simulation)
   std::string failure;  ///< the first failed evaluation (OptimizeResult::failure)
   std::string case_sha, spec_json;
 
@@ -46,7 +47,8 @@ struct Context {
     // checkpoint: the history of a resumed run is the uninterrupted run's, from evaluation 1.
     const bool known = !seen.insert(key).second;
     const Evaluation& e = prob.evaluate(p);
-    if (e.interrupted) {  // the evaluation in progress is dropped; the checkpoint has the ones before
+    if (e.interrupted) {  // the evaluation in progress is dropped; the checkpoint has the ones
+                          // before
       interrupted = true;
       request_stop();
       return e;
@@ -97,7 +99,8 @@ struct Context {
     if (o.out_dir.empty()) return;
     nlohmann::json ev = nlohmann::json::array();
     for (const auto& h : history) ev.push_back(evaluation_to_json(h));
-    write_json_atomic(o.out_dir + "/checkpoint.json", {{"case_sha256", case_sha}, {"spec", spec_json}, {"evaluations", ev}});
+    write_json_atomic(o.out_dir + "/checkpoint.json",
+                      {{"case_sha256", case_sha}, {"spec", spec_json}, {"evaluations", ev}});
     write_history(o.out_dir + "/history.csv", prob, history);
   }
 };
@@ -109,7 +112,8 @@ double objective_cb(unsigned n, const double* x, double* grad, void* data) {
   return e.objective / c.f0;
 }
 
-void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
+void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad,
+                    void* data) {
   auto& c = *static_cast<Context*>(data);
   const Evaluation& e = c.eval(x);
   Vec g;
@@ -123,18 +127,30 @@ void constraints_cb(unsigned m, double* result, unsigned n, const double* x, dou
 
 const char* status_text(nlopt_result r) {
   switch (r) {
-    case NLOPT_SUCCESS: return "success";
-    case NLOPT_STOPVAL_REACHED: return "stopval reached";
-    case NLOPT_FTOL_REACHED: return "relative objective change below tol_objective";
-    case NLOPT_XTOL_REACHED: return "relative design change below tolerance";
-    case NLOPT_MAXEVAL_REACHED: return "maximum number of evaluations reached";
-    case NLOPT_MAXTIME_REACHED: return "maximum time reached";
-    case NLOPT_FAILURE: return "NLopt failure";
-    case NLOPT_INVALID_ARGS: return "invalid arguments";
-    case NLOPT_OUT_OF_MEMORY: return "out of memory";
-    case NLOPT_ROUNDOFF_LIMITED: return "round-off limited";
-    case NLOPT_FORCED_STOP: return "stopped";
-    default: return "unknown";
+    case NLOPT_SUCCESS:
+      return "success";
+    case NLOPT_STOPVAL_REACHED:
+      return "stopval reached";
+    case NLOPT_FTOL_REACHED:
+      return "relative objective change below tol_objective";
+    case NLOPT_XTOL_REACHED:
+      return "relative design change below tolerance";
+    case NLOPT_MAXEVAL_REACHED:
+      return "maximum number of evaluations reached";
+    case NLOPT_MAXTIME_REACHED:
+      return "maximum time reached";
+    case NLOPT_FAILURE:
+      return "NLopt failure";
+    case NLOPT_INVALID_ARGS:
+      return "invalid arguments";
+    case NLOPT_OUT_OF_MEMORY:
+      return "out of memory";
+    case NLOPT_ROUNDOFF_LIMITED:
+      return "round-off limited";
+    case NLOPT_FORCED_STOP:
+      return "stopped";
+    default:
+      return "unknown";
   }
 }
 
@@ -156,18 +172,21 @@ nlopt_result run_mma_classic(Context& c, std::vector<double>& xs, const Evaluati
     const Vec xn = mma.step(x, c.scaled_objective_gradient(cur), g, dg).cwiseMax(0.0).cwiseMin(1.0);
     const Evaluation& e = c.eval(xn.data());
     if (c.stop) return NLOPT_FORCED_STOP;
-    const double change = std::abs(e.objective - cur.objective) / std::max(std::abs(cur.objective), 1e-300);
+    const double change =
+        std::abs(e.objective - cur.objective) / std::max(std::abs(cur.objective), 1e-300);
     x = xn;
     cur = e;
     std::copy(x.data(), x.data() + n, xs.begin());
-    if (change < spec.tol_objective && e.max_violation <= spec.tol_constraint) return NLOPT_FTOL_REACHED;
+    if (change < spec.tol_objective && e.max_violation <= spec.tol_constraint)
+      return NLOPT_FTOL_REACHED;
   }
   return NLOPT_MAXEVAL_REACHED;
 }
 
 }  // namespace
 
-void write_history(const std::string& path, const DesignProblem& problem, const std::vector<Evaluation>& h) {
+void write_history(const std::string& path, const DesignProblem& problem,
+                   const std::vector<Evaluation>& h) {
   const auto& d = *problem.study().design;
   std::ostringstream os;
   os.precision(12);
@@ -183,7 +202,15 @@ void write_history(const std::string& path, const DesignProblem& problem, const 
   write_file_atomic(path, os.str());
 }
 
+std::string OptimizeOptions::validate() const {
+  if (stop_after != -1 && stop_after < 1)
+    return "stop_after: expected -1 (never) or a positive number of simulations";
+  if (resume && out_dir.empty()) return "resume: needs out_dir (the folder of the checkpoint)";
+  return {};
+}
+
 OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
+  if (auto msg = o.validate(); !msg.empty()) throw Error("optimize option " + msg);
   const auto t0 = std::chrono::steady_clock::now();
   Study& cs = prob.study();
   const Design& d = *cs.design;
@@ -207,13 +234,18 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
     } catch (const std::exception& e) {
       throw Error(path, "", std::string("cannot resume: damaged checkpoint (") + e.what() + ")");
     }
-    if (!j.is_object()) throw Error(path, "/", "cannot resume: damaged checkpoint (expected an object)");
+    if (!j.is_object())
+      throw Error(path, "/", "cannot resume: damaged checkpoint (expected an object)");
     if (!j.contains("case_sha256") || j["case_sha256"] != o.input_sha256)
-      throw Error(path, "/case_sha256", "cannot resume: the case file changed since the checkpoint was written");
+      throw Error(path, "/case_sha256",
+                  "cannot resume: the case file changed since the checkpoint was written");
     if (!j.contains("spec") || j["spec"] != c.spec_json)
-      throw Error(path, "/spec", "cannot resume: the optimization options changed since the checkpoint was written");
+      throw Error(
+          path, "/spec",
+          "cannot resume: the optimization options changed since the checkpoint was written");
     if (!j.contains("evaluations") || !j["evaluations"].is_array())
-      throw Error(path, "/evaluations", "cannot resume: damaged checkpoint (expected an array of evaluations)");
+      throw Error(path, "/evaluations",
+                  "cannot resume: damaged checkpoint (expected an array of evaluations)");
     // every evaluation must fit this case (a hand-edited or damaged file could index out of range)
     const Eigen::Index nc = prob.num_constraints();
     for (size_t k = 0; k < j["evaluations"].size(); ++k) {
@@ -221,23 +253,27 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
       try {
         e = evaluation_from_json(j["evaluations"][k]);
       } catch (const std::exception& ex) {
-        throw Error(path, "/evaluations/" + std::to_string(k), std::string("cannot resume: damaged checkpoint (") + ex.what() + ")");
+        throw Error(path, "/evaluations/" + std::to_string(k),
+                    std::string("cannot resume: damaged checkpoint (") + ex.what() + ")");
       }
       const bool sizes = e.p.size() == n && e.objective_gradient.size() == n &&
-                         e.constraint_gradient.rows() == nc && e.constraint_gradient.cols() == (nc ? n : e.constraint_gradient.cols()) &&
-                         static_cast<Eigen::Index>(e.upper.size()) == static_cast<Eigen::Index>(e.constraints.size()) &&
+                         e.constraint_gradient.rows() == nc &&
+                         e.constraint_gradient.cols() == (nc ? n : e.constraint_gradient.cols()) &&
+                         static_cast<Eigen::Index>(e.upper.size()) ==
+                             static_cast<Eigen::Index>(e.constraints.size()) &&
                          static_cast<Eigen::Index>(e.constraints.size()) <= nc;
       if (!sizes)
-        throw Error(path, "/evaluations/" + std::to_string(k),
-                    "cannot resume: damaged checkpoint (the evaluation's sizes do not match the case)");
+        throw Error(
+            path, "/evaluations/" + std::to_string(k),
+            "cannot resume: damaged checkpoint (the evaluation's sizes do not match the case)");
       prob.seed(e);
     }
   }
 
   const bool classic = prob.spec().optimizer == "mma-svanberg";
-  nlopt_algorithm alg = prob.spec().optimizer == "ccsaq" ? NLOPT_LD_CCSAQ
-                      : prob.spec().optimizer == "slsqp" ? NLOPT_LD_SLSQP
-                                                         : NLOPT_LD_MMA;
+  nlopt_algorithm alg = prob.spec().optimizer == "ccsaq"   ? NLOPT_LD_CCSAQ
+                        : prob.spec().optimizer == "slsqp" ? NLOPT_LD_SLSQP
+                                                           : NLOPT_LD_MMA;
   std::vector<double> lb(n, 0.0), ub(n, 1.0), x(n);
   const Vec p0 = d.initial();
   for (int i = 0; i < n; ++i) x[i] = (p0[i] - c.lower[i]) / c.range[i];
@@ -246,7 +282,8 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   OptimizeResult res;
   c.f0 = std::max(std::abs(e0.objective), 1e-300);
   nlopt_result r;
-  if (!e0.ok && !e0.interrupted) {  // the initial design cannot be simulated: nothing to optimize (c.failure says why)
+  if (!e0.ok && !e0.interrupted) {  // the initial design cannot be simulated: nothing to optimize
+                                    // (c.failure says why)
     c.failure = "the initial design could not be simulated: " + c.failure;
     r = NLOPT_FORCED_STOP;
   } else if (classic) {
@@ -284,7 +321,8 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
       best = static_cast<int>(k);
   if (best >= 0) {
     res.final = c.history[best];
-  } else if (c.interrupted && lsmbs::interrupted()) {  // no simulation after Ctrl-C: NLopt's last point, unevaluated
+  } else if (c.interrupted &&
+             lsmbs::interrupted()) {  // no simulation after Ctrl-C: NLopt's last point, unevaluated
     res.final.p = c.to_p(x.data());
     res.final.ok = false;
     res.final.interrupted = true;
@@ -299,6 +337,22 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   if (!o.out_dir.empty()) write_history(o.out_dir + "/history.csv", prob, c.history);
   res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
+}
+
+RunStatus OptimizeResult::status() const {
+  if (!failure.empty()) return RunStatus::kFailed;
+  return interrupted ? RunStatus::kInterrupted : RunStatus::kComplete;
+}
+
+std::string OptimizeResult::report() const {
+  char b[320];
+  std::snprintf(
+      b, sizeof b,
+      "optimization: %s (%s): %ld evaluations, %ld simulations in this run, objective %.9g, max "
+      "constraint violation %.3e, %s, %.1f s",
+      run_status_name(status()), nlopt_status.c_str(), evaluations, simulations, final.objective,
+      final.max_violation, converged ? "converged" : "not converged", wall_seconds);
+  return failure.empty() ? std::string(b) : std::string(b) + "\n  " + failure;
 }
 
 }  // namespace lsmbs

@@ -8,44 +8,50 @@
 // retraces the same path through the cache) and continues: an interrupted run ends at the same
 // design as an uninterrupted one.
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "lsmbs/core/status.hpp"
 #include "lsmbs/optimization/problem.hpp"
 
 namespace lsmbs {
 
 struct OptimizeOptions {
-  std::string out_dir;       ///< history.csv, checkpoint.json (empty: nothing written)
-  bool resume = false;       ///< seed from out_dir/checkpoint.json
+  std::string out_dir;  ///< history.csv, checkpoint.json (empty: nothing written)
+  bool resume = false;  ///< seed from out_dir/checkpoint.json
   /// Hash of the input the problem was built from (a case file's SHA-256): a checkpoint of another
   /// input is refused on resume.
   std::string input_sha256;
-  std::function<void(int, const Evaluation&)> on_evaluation;  ///< progress (evaluation index, result)
-  long stop_after = -1;      ///< testing: stop (as if killed) after this many new simulations
+  std::function<void(int, const Evaluation&)>
+      on_evaluation;     ///< progress (evaluation index, result)
+  long stop_after = -1;  ///< testing: stop (as if killed) after this many new simulations
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 struct OptimizeResult {
-  Vec p;                     ///< final design (best feasible evaluation, else NLopt's last point)
+  Vec p;  ///< final design (best feasible evaluation, else NLopt's last point)
   Evaluation final;
   int nlopt_code = 0;
   std::string nlopt_status;
-  long evaluations = 0;      ///< distinct design points evaluated (incl. replayed ones)
-  long simulations = 0;      ///< simulations run in this process
-  bool converged = false;    ///< NLopt stopped on its tolerance with a feasible design
+  long evaluations = 0;    ///< distinct design points evaluated (incl. replayed ones)
+  long simulations = 0;    ///< simulations run in this process
+  bool converged = false;  ///< NLopt stopped on its tolerance with a feasible design
   bool interrupted = false;
   /// Non-empty when an evaluation's simulation failed (the run stops there): which evaluation,
   /// at which design, and the integrator's message (when and why).
   std::string failure;
   std::vector<Evaluation> history;  ///< every distinct evaluation in order
   double wall_seconds = 0;
+  RunStatus status() const;
+  std::string report() const;  ///< outcome and counts, one paragraph
 };
 
 OptimizeResult optimize(DesignProblem& problem, const OptimizeOptions& o);
 
 /// Writes history.csv from evaluations (atomic).
-void write_history(const std::string& path, const DesignProblem& problem, const std::vector<Evaluation>& h);
+void write_history(const std::string& path, const DesignProblem& problem,
+                   const std::vector<Evaluation>& h);
 
 }  // namespace lsmbs

@@ -6,27 +6,36 @@
 #include <cstring>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/records/json.hpp"
 
 namespace lsmbs {
 
 nlohmann::json OptimizationSpec::to_json() const {
   nlohmann::json c = nlohmann::json::array();
   for (const auto& k : constraints) c.push_back({{"response", k.response}, {"upper", k.upper}});
-  return {{"objective", objective}, {"constraints", c}, {"optimizer", optimizer},
-          {"sensitivity", sensitivity.to_json()}, {"tol_objective", tol_objective},
-          {"tol_constraint", tol_constraint}, {"max_evaluations", max_evaluations},
-          {"inner_max_evaluations", inner_max_evaluations}, {"move_limit", move_limit}};
+  return {{"objective", objective},
+          {"constraints", c},
+          {"optimizer", optimizer},
+          {"sensitivity", nlohmann::json(sensitivity)},
+          {"tol_objective", tol_objective},
+          {"tol_constraint", tol_constraint},
+          {"max_evaluations", max_evaluations},
+          {"inner_max_evaluations", inner_max_evaluations},
+          {"move_limit", move_limit}};
 }
 
 DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {
   auto find = [&](const std::string& n) { return cs_.response_index(n); };
   objective_index_ = find(spec_.objective);
-  if (objective_index_ < 0) throw SetupError("optimization.objective", "unknown response '" + spec_.objective + "'");
+  if (objective_index_ < 0)
+    throw SetupError("optimization.objective", "unknown response '" + spec_.objective + "'");
   if (cs_.responses[objective_index_].kind == ResponseSpec::Kind::kPerStep)
-    throw SetupError("optimization.objective", "the objective must be a scalar response (not per_step)");
+    throw SetupError("optimization.objective",
+                     "the objective must be a scalar response (not per_step)");
   for (const auto& c : spec_.constraints) {
     const int k = find(c.response);
-    if (k < 0) throw SetupError("optimization.constraints", "unknown response '" + c.response + "'");
+    if (k < 0)
+      throw SetupError("optimization.constraints", "unknown response '" + c.response + "'");
     constraint_index_.push_back(k);
   }
   // per-step constraints: count the steps of the window on the time grid
@@ -66,7 +75,8 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
   e.message = res.message;
   const auto& obj = res.responses[objective_index_];
   e.objective = obj.values.empty() ? NAN : obj.values[0];
-  e.objective_gradient = obj.gradient.rows() ? Vec(obj.gradient.row(0).transpose()) : Vec::Zero(p.size());
+  e.objective_gradient =
+      obj.gradient.rows() ? Vec(obj.gradient.row(0).transpose()) : Vec::Zero(p.size());
   e.constraint_gradient.resize(num_constraints_, p.size());
   int row = 0;
   e.max_violation = -INFINITY;
@@ -77,7 +87,8 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
       e.constraints.push_back(r.values[k]);
       e.upper.push_back(ub);
       e.constraint_gradient.row(row) = r.gradient.row(static_cast<Eigen::Index>(k));
-      e.max_violation = std::max(e.max_violation, (r.values[k] - ub) / std::max(std::abs(ub), 1e-300));
+      e.max_violation =
+          std::max(e.max_violation, (r.values[k] - ub) / std::max(std::abs(ub), 1e-300));
     }
   }
   if (row != num_constraints_ && res.ok) {  // a failed run's own message says when and why
@@ -149,9 +160,10 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
   const auto cg = unhexv(j.at("constraint_gradient"));
   const Eigen::Index rows = j.at("rows").get<Eigen::Index>();
   if (rows < 0 || (rows > 0 && static_cast<Eigen::Index>(cg.size()) % rows != 0))
-    throw std::invalid_argument("constraint gradient of " + std::to_string(cg.size()) + " values in " +
-                                std::to_string(rows) + " rows");
-  e.constraint_gradient = Eigen::Map<const Mat>(cg.data(), rows, rows ? static_cast<Eigen::Index>(cg.size()) / rows : 0);
+    throw std::invalid_argument("constraint gradient of " + std::to_string(cg.size()) +
+                                " values in " + std::to_string(rows) + " rows");
+  e.constraint_gradient = Eigen::Map<const Mat>(
+      cg.data(), rows, rows ? static_cast<Eigen::Index>(cg.size()) / rows : 0);
   e.max_violation = unhex(j.at("max_violation"));
   e.wall_seconds = j.at("wall_seconds").get<double>();
   e.ok = j.at("ok").get<bool>();

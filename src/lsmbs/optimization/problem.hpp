@@ -6,13 +6,12 @@
 // and caches the result by p: NLopt asks for the objective and the constraints separately at
 // the same point, and a resumed run replays its earlier evaluations from the cache.
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "lsmbs/sensitivity/study.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
 
@@ -24,12 +23,13 @@ struct OptimizationSpec {
   };
   std::vector<Constraint> constraints;
   std::string optimizer = "mma";  ///< mma | ccsaq | slsqp (NLopt) | mma-svanberg (classic MMA)
-  double move_limit = 0.5;        ///< mma-svanberg: largest step per iteration, fraction of the range
+  double move_limit = 0.5;  ///< mma-svanberg: largest step per iteration, fraction of the range
   SensitivityOptions sensitivity;
   double tol_objective = 1e-4;     ///< relative objective change between accepted iterates
   double tol_constraint = 2.5e-3;  ///< relative constraint violation allowed at convergence
   int max_evaluations = 100;
-  int inner_max_evaluations = 0;   ///< NLopt CCSA inner iterations per outer one (0: NLopt's default)
+  int inner_max_evaluations =
+      0;  ///< NLopt CCSA inner iterations per outer one (0: NLopt's default)
   nlohmann::json to_json() const;
 };
 
@@ -37,11 +37,11 @@ struct OptimizationSpec {
 struct Evaluation {
   Vec p;
   double objective = 0;
-  std::vector<double> constraints;   ///< g_j (raw, each ≤ upper_j)
-  std::vector<double> upper;         ///< bounds
-  Vec objective_gradient;            ///< ∂f/∂p
-  Mat constraint_gradient;           ///< m × n_v
-  double max_violation = 0;          ///< max_j (g_j − ū_j)/|ū_j|  (≤ 0: feasible)
+  std::vector<double> constraints;  ///< g_j (raw, each ≤ upper_j)
+  std::vector<double> upper;        ///< bounds
+  Vec objective_gradient;           ///< ∂f/∂p
+  Mat constraint_gradient;          ///< m × n_v
+  double max_violation = 0;         ///< max_j (g_j − ū_j)/|ū_j|  (≤ 0: feasible)
   double wall_seconds = 0;
   bool ok = true;
   /// Stopped by an interrupt before the simulation ended: not a result of p (never cached).

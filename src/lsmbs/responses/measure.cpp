@@ -11,7 +11,8 @@ Vec2 point_position(const PointRef& p, const Vec& q) {
 }
 }  // namespace
 
-void PositionMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+void PositionMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                               double* out) const {
   const Vec2 x = point_position(pt_, s.q);
   out[0] = x.x();
   out[1] = x.y();
@@ -19,19 +20,23 @@ void PositionMeasure::evaluate(const Model&, const State& s, const ModelParams&,
 
 namespace {
 // ∂p/∂q of a point, row `row` (0: x, 1: y) → sparse entries scaled by w.
-void point_row(const PointRef& p, const Vec& q, const Vec2& w, std::vector<std::pair<int, double>>& out) {
+void point_row(const PointRef& p, const Vec& q, const Vec2& w,
+               std::vector<std::pair<int, double>>& out) {
   if (p.kind == PointRef::Kind::kGround) return;
   out.emplace_back(p.dof0, w.x());
   out.emplace_back(p.dof0 + 1, w.y());
-  if (p.kind == PointRef::Kind::kBody) out.emplace_back(p.dof0 + 2, w.dot(rotation_derivative(q[p.dof0 + 2]) * p.local));
+  if (p.kind == PointRef::Kind::kBody)
+    out.emplace_back(p.dof0 + 2, w.dot(rotation_derivative(q[p.dof0 + 2]) * p.local));
 }
 }  // namespace
 
-void PositionMeasure::gradient(const Model&, const State& s, const ModelParams&, int c, MeasureGradient& g) const {
+void PositionMeasure::gradient(const Model&, const State& s, const ModelParams&, int c,
+                               MeasureGradient& g) const {
   point_row(pt_, s.q, c == 0 ? Vec2(1, 0) : Vec2(0, 1), g.dq);
 }
 
-void VelocityMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+void VelocityMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                               double* out) const {
   Vec2 v = Vec2::Zero();
   if (pt_.kind != PointRef::Kind::kGround) v = s.v.segment<2>(pt_.dof0);
   if (pt_.kind == PointRef::Kind::kBody)
@@ -40,7 +45,8 @@ void VelocityMeasure::evaluate(const Model&, const State& s, const ModelParams&,
   out[1] = v.y();
 }
 
-void VelocityMeasure::gradient(const Model&, const State& s, const ModelParams&, int c, MeasureGradient& g) const {
+void VelocityMeasure::gradient(const Model&, const State& s, const ModelParams&, int c,
+                               MeasureGradient& g) const {
   const Vec2 w = c == 0 ? Vec2(1, 0) : Vec2(0, 1);
   point_row(pt_, s.q, w, g.dv);  // ∂ṗ/∂q̇ = ∂p/∂q
   if (pt_.kind == PointRef::Kind::kBody) {
@@ -49,7 +55,8 @@ void VelocityMeasure::gradient(const Model&, const State& s, const ModelParams&,
   }
 }
 
-void DistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int, MeasureGradient& g) const {
+void DistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int,
+                               MeasureGradient& g) const {
   const Vec2 d = point_position(b_, s.q) - point_position(a_, s.q);
   const double l = d.norm();
   if (!(l > 0)) return;
@@ -58,14 +65,16 @@ void DistanceMeasure::gradient(const Model&, const State& s, const ModelParams&,
   point_row(a_, s.q, -n, g.dq);
 }
 
-void PathDeviationMeasure::gradient(const Model&, const State& s, const ModelParams&, int, MeasureGradient& g) const {
+void PathDeviationMeasure::gradient(const Model&, const State& s, const ModelParams&, int,
+                                    MeasureGradient& g) const {
   const Vec2 e = path_.at(s.t) - point_position(pt_, s.q);
   const double f = e.norm();
   if (!(f > 0)) return;  // not differentiable at zero deviation; take the zero subgradient
   point_row(pt_, s.q, -e / f, g.dq);
 }
 
-void KineticEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int, MeasureGradient& g) const {
+void KineticEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int,
+                                    MeasureGradient& g) const {
   // ∂T/∂q̇ = M q̇; ∂T/∂q = ½ q̇ᵀ (∂M/∂q) q̇, non-zero only where M depends on q (rigid bodies
   // with an offset centre of mass: by central differences on the element's few DOFs).
   Mat v(m.nq(), 1), z = Mat::Zero(m.nq(), 1), Mv;
@@ -99,13 +108,16 @@ void KineticEnergyMeasure::gradient(const Model& m, const State& s, const ModelP
   }
 }
 
-void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int, MeasureGradient& g) const {
+void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int,
+                                   MeasureGradient& g) const {
   // ∂W/∂q = f_int of the flexible bodies
   for (const auto& b : m.flexible_bodies()) {
-    const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param], E0 = p.scalars[b->E_param];
+    const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param],
+                 E0 = p.scalars[b->E_param];
     for (int e = 0; e < b->mesh.num_elements(); ++e) {
       QuadElement::Vec8 x, f;
-      for (int i = 0; i < 4; ++i) x.segment<2>(2 * i) = s.q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
+      for (int i = 0; i < 4; ++i)
+        x.segment<2>(2 * i) = s.q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
       b->elements[e].internal_force(x, p.fields[b->field][e] * E0, nu, t, f, nullptr);
       for (int i = 0; i < 4; ++i) {
         g.dq.emplace_back(b->node_dof(b->mesh.quads[e][i]), f[2 * i]);
@@ -115,7 +127,8 @@ void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelPa
   }
 }
 
-void DistanceMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+void DistanceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                               double* out) const {
   *out = (point_position(b_, s.q) - point_position(a_, s.q)).norm() - ref_;
 }
 
@@ -129,7 +142,8 @@ Vec2 ChainPath::at(double t) const {
   return x;
 }
 
-void PathDeviationMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+void PathDeviationMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                    double* out) const {
   *out = (path_.at(s.t) - point_position(pt_, s.q)).norm();
 }
 
@@ -139,7 +153,8 @@ std::vector<std::string> ConstraintForceMeasure::components() const {
   return c;
 }
 
-void ConstraintForceMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+void ConstraintForceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                      double* out) const {
   for (size_t i = 0; i < rows_.size(); ++i) out[i] = k_ * s.lambda[rows_[i]];
 }
 

@@ -28,9 +28,11 @@ class Measure {
   const std::string& name() const { return name_; }
   /// Column names of the components (e.g. "tip.x", "tip.y"); a scalar measure has one.
   virtual std::vector<std::string> components() const { return {name_}; }
-  virtual void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const = 0;
+  virtual void evaluate(const Model& m, const State& s, const ModelParams& p,
+                        double* out) const = 0;
   /// Partial derivatives of component c with respect to the state (eq. 24).
-  virtual void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const = 0;
+  virtual void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                        MeasureGradient& g) const = 0;
   /// Whether the measure depends on model parameters explicitly (∂f/∂p of eq. 24).
   virtual bool depends_on_params() const { return false; }
 
@@ -44,7 +46,8 @@ class PositionMeasure : public Measure {
   PositionMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
   std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
-  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
 
  private:
   PointRef pt_;
@@ -54,8 +57,11 @@ class PositionMeasure : public Measure {
 class AngleMeasure : public Measure {
  public:
   AngleMeasure(std::string name, int theta_dof) : Measure(std::move(name)), dof_(theta_dof) {}
-  void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override { *out = s.q[dof_]; }
-  void gradient(const Model&, const State&, const ModelParams&, int, MeasureGradient& g) const override {
+  void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override {
+    *out = s.q[dof_];
+  }
+  void gradient(const Model&, const State&, const ModelParams&, int,
+                MeasureGradient& g) const override {
     g.dq.emplace_back(dof_, 1.0);
   }
 
@@ -66,9 +72,13 @@ class AngleMeasure : public Measure {
 /// Angular velocity θ̇ of a rigid body.
 class AngularVelocityMeasure : public Measure {
  public:
-  AngularVelocityMeasure(std::string name, int theta_dof) : Measure(std::move(name)), dof_(theta_dof) {}
-  void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override { *out = s.v[dof_]; }
-  void gradient(const Model&, const State&, const ModelParams&, int, MeasureGradient& g) const override {
+  AngularVelocityMeasure(std::string name, int theta_dof)
+      : Measure(std::move(name)), dof_(theta_dof) {}
+  void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override {
+    *out = s.v[dof_];
+  }
+  void gradient(const Model&, const State&, const ModelParams&, int,
+                MeasureGradient& g) const override {
     g.dv.emplace_back(dof_, 1.0);
   }
 
@@ -83,7 +93,8 @@ class VelocityMeasure : public Measure {
   VelocityMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
   std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
-  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
 
  private:
   PointRef pt_;
@@ -96,7 +107,8 @@ class DistanceMeasure : public Measure {
   DistanceMeasure(std::string name, PointRef a, PointRef b, double reference)
       : Measure(std::move(name)), a_(a), b_(b), ref_(reference) {}
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
-  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
 
  private:
   PointRef a_, b_;
@@ -123,7 +135,8 @@ class PathDeviationMeasure : public Measure {
   PathDeviationMeasure(std::string name, PointRef pt, ChainPath path)
       : Measure(std::move(name)), pt_(pt), path_(std::move(path)) {}
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
-  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
 
  private:
   PointRef pt_;
@@ -134,10 +147,13 @@ class PathDeviationMeasure : public Measure {
 class ConstraintForceMeasure : public Measure {
  public:
   ConstraintForceMeasure(std::string name, std::vector<int> rows, double k_unused = 0)
-      : Measure(std::move(name)), rows_(std::move(rows)) { (void)k_unused; }
+      : Measure(std::move(name)), rows_(std::move(rows)) {
+    (void)k_unused;
+  }
   std::vector<std::string> components() const override;
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
-  void gradient(const Model&, const State&, const ModelParams&, int c, MeasureGradient& g) const override {
+  void gradient(const Model&, const State&, const ModelParams&, int c,
+                MeasureGradient& g) const override {
     g.dl.emplace_back(rows_[c], k_);
   }
   /// The scaling k of the run (set by the integrator's observer before evaluation).
@@ -154,7 +170,8 @@ class KineticEnergyMeasure : public Measure {
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
     *out = m.kinetic_energy(s, p);
   }
-  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
   bool depends_on_params() const override { return true; }
 };
 
@@ -164,17 +181,20 @@ class StrainEnergyMeasure : public Measure {
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
     *out = m.strain_energy(s.q, p);
   }
-  void gradient(const Model& m, const State& s, const ModelParams& p, int c, MeasureGradient& g) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
   bool depends_on_params() const override { return true; }
 };
 
 class FlexibleMassMeasure : public Measure {
  public:
-  FlexibleMassMeasure(std::string name, const FlexibleBody* b) : Measure(std::move(name)), body_(b) {}
+  FlexibleMassMeasure(std::string name, const FlexibleBody* b)
+      : Measure(std::move(name)), body_(b) {}
   void evaluate(const Model&, const State&, const ModelParams& p, double* out) const override {
     *out = body_->mass(p);
   }
-  void gradient(const Model&, const State&, const ModelParams&, int, MeasureGradient&) const override {}
+  void gradient(const Model&, const State&, const ModelParams&, int,
+                MeasureGradient&) const override {}
   bool depends_on_params() const override { return true; }
 
  private:

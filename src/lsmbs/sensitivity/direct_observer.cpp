@@ -7,11 +7,12 @@
 
 namespace lsmbs {
 
-AnalyticPseudoLoad::AnalyticPseudoLoad(const Model& m, const ModelParams& p, std::vector<ParamDirection> dirs)
+AnalyticPseudoLoad::AnalyticPseudoLoad(const Model& m, const ModelParams& p,
+                                       std::vector<ParamDirection> dirs)
     : m_(m), p_(p), dirs_(std::move(dirs)) {}
 
-void AnalyticPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double, double, Mat& B,
-                                 SensitivityCounts& counts) {
+void AnalyticPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double,
+                                 double, Mat& B, SensitivityCounts& counts) {
   const int nq = m_.nq(), nv = static_cast<int>(dirs_.size());
   B.setZero(m_.n(), nv);
   if (!dv_star.isZero(0.0) || !dqdd_star.isZero(0.0)) {
@@ -23,14 +24,23 @@ void AnalyticPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& 
     if (dirs_[i].empty()) continue;
     m_.residual_param_derivative(s, p_, dirs_[i], col_);
     B.col(i) += col_;
-    counts.element_pseudo_loads += static_cast<long>(dirs_[i].fields.size() + dirs_[i].scalars.size());
+    counts.element_pseudo_loads +=
+        static_cast<long>(dirs_[i].fields.size() + dirs_[i].scalars.size());
   }
 }
 
-SemiAnalyticalPseudoLoad::SemiAnalyticalPseudoLoad(const Model& m, const ModelParams& p, std::vector<ModelParams> plus,
-                                                   std::vector<ModelParams> minus, std::vector<double> delta, bool central,
-                                                   const std::vector<ParamDirection>& dirs, bool full_residual)
-    : m_(m), p_(p), plus_(std::move(plus)), minus_(std::move(minus)), delta_(std::move(delta)), central_(central),
+SemiAnalyticalPseudoLoad::SemiAnalyticalPseudoLoad(const Model& m, const ModelParams& p,
+                                                   std::vector<ModelParams> plus,
+                                                   std::vector<ModelParams> minus,
+                                                   std::vector<double> delta, bool central,
+                                                   const std::vector<ParamDirection>& dirs,
+                                                   bool full_residual)
+    : m_(m),
+      p_(p),
+      plus_(std::move(plus)),
+      minus_(std::move(minus)),
+      delta_(std::move(delta)),
+      central_(central),
       full_(full_residual) {
   std::vector<int> nonlinear;
   for (size_t e = 0; e < m.forces().size(); ++e)
@@ -44,8 +54,8 @@ SemiAnalyticalPseudoLoad::SemiAnalyticalPseudoLoad(const Model& m, const ModelPa
   }
 }
 
-void SemiAnalyticalPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta,
-                                       Mat& B, SensitivityCounts& counts) {
+void SemiAnalyticalPseudoLoad::compute(const State& s, const Mat& dv_star, const Mat& dqdd_star,
+                                       double k, double zeta, Mat& B, SensitivityCounts& counts) {
   const int nv = static_cast<int>(delta_.size());
   B.setZero(m_.n(), nv);
   if (full_) {
@@ -107,13 +117,23 @@ void SemiAnalyticalPseudoLoad::compute(const State& s, const Mat& dv_star, const
   }
 }
 
-DirectSensitivityObserver::DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv, PseudoLoad& load,
-                                                     ResponseTracker& tracker, SensitivityCounts& counts,
-                                                     BackSolveOptions back_solve)
-    : m_(m), p_(p), nv_(nv), load_(load), tracker_(tracker), counts_(counts), bs_(back_solve) {}
+std::string BackSolveOptions::validate() const {
+  if (max_refinement < 0) return "max_refinement: expected a non-negative number of iterations";
+  if (!(accept > 0 && accept < 1)) return "accept: expected a relative correction in (0, 1)";
+  if (!(round_off > 0 && round_off < 1)) return "round_off: expected a relative level in (0, 1)";
+  return {};
+}
 
-void DirectSensitivityObserver::on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double zeta,
-                                         const SparseLU* start_factor) {
+DirectSensitivityObserver::DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv,
+                                                     PseudoLoad& load, ResponseTracker& tracker,
+                                                     SensitivityCounts& counts,
+                                                     BackSolveOptions back_solve)
+    : m_(m), p_(p), nv_(nv), load_(load), tracker_(tracker), counts_(counts), bs_(back_solve) {
+  if (auto msg = bs_.validate(); !msg.empty()) throw Error("back-solve option " + msg);
+}
+
+void DirectSensitivityObserver::on_start(const State& s0, const Vec&, const AlphaCoefficients&,
+                                         double k, double zeta, const SparseLU* start_factor) {
   const int nq = m_.nq(), nc = m_.nc();
   tracker_.set_scaling(k);
   // q0 and q̇0 do not depend on p (constraints carry no design parameter)
@@ -186,7 +206,8 @@ double relative_correction(const Mat& D, const Mat& X) {
 void DirectSensitivityObserver::exact_solve(const StepInfo& info) {
   const auto& c = info.coef;
   rhs_ = B_;
-  m_.iteration_matrix(*info.state, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, info.k, info.zeta, svals_);
+  m_.iteration_matrix(*info.state, p_, Coefficients{c.beta_p, c.gamma_p, 1.0}, info.k, info.zeta,
+                      svals_);
   ++counts_.sensitivity_matrix_assemblies;
   const SparseLU* lu = info.factor;
   bool accepted = false;
@@ -218,8 +239,9 @@ void DirectSensitivityObserver::exact_solve(const StepInfo& info) {
     own_lu_shares_ = true;
   }
   if (!own_lu_.factor(svals_).ok())
-    throw NumericalFailure("t = " + std::to_string(info.state->t) +
-                           ": the iteration matrix at the converged state is singular (sensitivity back-solve)");
+    throw NumericalFailure(
+        "t = " + std::to_string(info.state->t) +
+        ": the iteration matrix at the converged state is singular (sensitivity back-solve)");
   ++counts_.sensitivity_factorizations;
   B_ = rhs_;
   own_lu_.solve(B_);

@@ -24,16 +24,17 @@ class PseudoLoad {
   virtual ~PseudoLoad() = default;
   /// dv_star, dqdd_star: predictors (nq × n_v). For the consistent start (is_start), the
   /// predictors are zero and the system is the start system [M kΦ_qᵀ; kΦ_q 0].
-  virtual void compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta,
-                       Mat& B, SensitivityCounts& counts) = 0;
+  virtual void compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k,
+                       double zeta, Mat& B, SensitivityCounts& counts) = 0;
 };
 
-/// Exact: b_i = [∂r/∂p_i (element-local, exact in μ and the scalar parameters) + M q̈*_i + C q̇*_i ; 0].
+/// Exact: b_i = [∂r/∂p_i (element-local, exact in μ and the scalar parameters) + M q̈*_i + C q̇*_i ;
+/// 0].
 class AnalyticPseudoLoad : public PseudoLoad {
  public:
   AnalyticPseudoLoad(const Model& m, const ModelParams& p, std::vector<ParamDirection> dirs);
-  void compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta, Mat& B,
-               SensitivityCounts& counts) override;
+  void compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta,
+               Mat& B, SensitivityCounts& counts) override;
 
  private:
   const Model& m_;
@@ -56,8 +57,8 @@ class SemiAnalyticalPseudoLoad : public PseudoLoad {
   SemiAnalyticalPseudoLoad(const Model& m, const ModelParams& p, std::vector<ModelParams> plus,
                            std::vector<ModelParams> minus, std::vector<double> delta, bool central,
                            const std::vector<ParamDirection>& dirs, bool full_residual);
-  void compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta, Mat& B,
-               SensitivityCounts& counts) override;
+  void compute(const State& s, const Mat& dv_star, const Mat& dqdd_star, double k, double zeta,
+               Mat& B, SensitivityCounts& counts) override;
 
  private:
   const Model& m_;
@@ -79,15 +80,19 @@ class SemiAnalyticalPseudoLoad : public PseudoLoad {
 /// is factorized anew into the observer's own numeric factorization of the shared analysis.
 struct BackSolveOptions {
   enum class Mode { kStepFactor, kExact } mode = Mode::kExact;
-  int max_refinement = 6;        ///< refinement iterations before falling back to a factorization
-  double accept = 1e-13;         ///< correction/solution (max over columns, ∞-norms) accepted as converged
-  double round_off = 1e-9;       ///< stagnation below this level is accepted as round-off
+  int max_refinement = 6;  ///< refinement iterations before falling back to a factorization
+  double accept = 1e-13;  ///< correction/solution (max over columns, ∞-norms) accepted as converged
+  double round_off = 1e-9;  ///< stagnation below this level is accepted as round-off
+
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 class DirectSensitivityObserver : public StepObserver {
  public:
-  DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv, PseudoLoad& load, ResponseTracker& tracker,
-                            SensitivityCounts& counts, BackSolveOptions back_solve = {});
+  DirectSensitivityObserver(const Model& m, const ModelParams& p, int nv, PseudoLoad& load,
+                            ResponseTracker& tracker, SensitivityCounts& counts,
+                            BackSolveOptions back_solve = {});
   void on_start(const State& s0, const Vec& a0, const AlphaCoefficients& c, double k, double zeta,
                 const SparseLU* start_factor) override;
   bool on_step(const StepInfo& info) override;

@@ -7,8 +7,12 @@
 
 namespace lsmbs {
 
-nlohmann::json GradientCheckOptions::to_json() const {
-  return {{"delta", delta}, {"seed", seed}, {"warn_above", warn}, {"fail_above", fail}};
+std::string GradientCheckOptions::validate() const {
+  if (!(delta > 0 && delta < 1)) return "delta: expected a relative step in (0, 1)";
+  if (!(warn > 0) || !std::isfinite(warn)) return "warn: expected a positive relative disagreement";
+  if (!(fail >= warn) || !std::isfinite(fail))
+    return "fail: expected a finite relative disagreement >= warn";
+  return {};
 }
 
 std::string GradientCheckResult::verdict(const GradientCheckOptions& o) const {
@@ -16,26 +20,50 @@ std::string GradientCheckResult::verdict(const GradientCheckOptions& o) const {
   return worst > o.warn ? "warn" : "pass";
 }
 
-nlohmann::json GradientCheckResult::to_json(const GradientCheckOptions& o) const {
-  nlohmann::json rs = nlohmann::json::object();
-  for (const auto& e : entries)
-    rs[e.response] = {{"finite_difference", e.finite_difference}, {"method", e.method},
-                      {"relative_error", e.relative_error}};
-  return {{"options", o.to_json()},
-          {"direction", std::vector<double>(direction.data(), direction.data() + direction.size())},
-          {"step", std::vector<double>(step.data(), step.data() + step.size())},
-          {"responses", rs},
-          {"worst", worst},
-          {"worst_response", worst_response},
-          {"simulations", simulations},
-          {"ok", ok},
-          {"message", message},
-          {"verdict", verdict(o)}};
+GradientDifference compare_gradients(const std::vector<ResponseSensitivity>& a,
+                                     const std::vector<ResponseSensitivity>& reference,
+                                     GradientNorm norm) {
+  GradientDifference d;
+  auto note = [&](double e, const std::string& where) {
+    if (e > d.worst) {
+      d.worst = e;
+      d.where = where;
+    }
+  };
+  if (a.size() != reference.size()) {
+    d.worst = INFINITY;
+    d.where = std::to_string(a.size()) + " responses against " + std::to_string(reference.size());
+    return d;
+  }
+  for (size_t r = 0; r < reference.size(); ++r) {
+    const Mat& A = a[r].gradient;
+    const Mat& B = reference[r].gradient;
+    const std::string& name = reference[r].name;
+    if (A.rows() != B.rows() || A.cols() != B.cols()) {
+      d.worst = INFINITY;
+      d.where = name + " (gradients of different shapes)";
+      return d;
+    }
+    if (B.size() == 0) continue;
+    if (norm == GradientNorm::kPerResponse) {
+      const double n = B.cwiseAbs().maxCoeff();
+      if (n > 0) note((A - B).cwiseAbs().maxCoeff() / n, name);
+      continue;
+    }
+    for (Eigen::Index i = 0; i < B.rows(); ++i) {
+      const double n = B.row(i).cwiseAbs().maxCoeff();
+      if (n > 0)
+        note((A.row(i) - B.row(i)).cwiseAbs().maxCoeff() / n, name + "[" + std::to_string(i) + "]");
+    }
+  }
+  return d;
 }
 
-GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<ResponseSensitivity>& gradients,
+GradientCheckResult check_gradients(Study& cs, const Vec& p,
+                                    const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o) {
   if (!cs.design) throw SetupError("design", "a gradient check needs design variables");
+  if (auto msg = o.validate(); !msg.empty()) throw Error("gradient check option " + msg);
   const Design& d = *cs.design;
   const int nv = d.size();
   GradientCheckResult res;
@@ -69,7 +97,8 @@ GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<R
   const Vec sd = scale.cwiseProduct(res.direction);
   // `gradients` may be any subset of the case's responses (optimize checks the objective and the
   // constraints only): the perturbed runs' responses are matched by name, not by position
-  auto by_name = [](const std::vector<ResponseSensitivity>& all, const std::string& name) -> const ResponseSensitivity* {
+  auto by_name = [](const std::vector<ResponseSensitivity>& all,
+                    const std::string& name) -> const ResponseSensitivity* {
     for (const auto& x : all)
       if (x.name == name) return &x;
     return nullptr;
@@ -82,9 +111,11 @@ GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<R
     const auto nk = static_cast<Eigen::Index>(g.values.size());
     const ResponseSensitivity* gp = by_name(plus, g.name);
     const ResponseSensitivity* gm = by_name(minus, g.name);
-    if (!gp || !gm || gp->values.size() != g.values.size() || gm->values.size() != g.values.size()) {
+    if (!gp || !gm || gp->values.size() != g.values.size() ||
+        gm->values.size() != g.values.size()) {
       res.ok = false;
-      res.message = "response '" + g.name + "' changed its number of steps under the check's perturbation";
+      res.message =
+          "response '" + g.name + "' changed its number of steps under the check's perturbation";
       return res;
     }
     // A per-step response is judged against its largest directional derivative over the steps (as
@@ -118,6 +149,27 @@ GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<R
     res.entries.push_back(e);
   }
   return res;
+}
+
+RunStatus GradientCheckResult::status() const {
+  return ok ? RunStatus::kComplete : RunStatus::kFailed;
+}
+
+std::string GradientCheckResult::report() const {
+  char b[256];
+  std::snprintf(b, sizeof b,
+                "gradient check (central differences along a random direction, %ld simulations): "
+                "%s, worst relative "
+                "disagreement %.2e",
+                simulations, run_status_name(status()), worst);
+  std::string r = b;
+  if (!ok) return r + "\n  " + message;
+  for (const auto& e : entries) {
+    std::snprintf(b, sizeof b, "\n  %-24s fd %+.6e  method %+.6e  relative disagreement %.2e",
+                  e.response.c_str(), e.finite_difference, e.method, e.relative_error);
+    r += b;
+  }
+  return r;
 }
 
 }  // namespace lsmbs

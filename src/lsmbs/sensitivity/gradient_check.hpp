@@ -8,18 +8,18 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "lsmbs/core/status.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
 
 struct GradientCheckOptions {
-  double delta = 1e-5;      ///< relative step δ along the scaled direction
-  unsigned seed = 20261122; ///< seed of the random direction (recorded; same seed, same direction)
-  double warn = 1e-3;       ///< relative disagreement above which the check warns
-  double fail = 5e-2;       ///< … and above which `optimize` refuses to start
-  nlohmann::json to_json() const;
+  double delta = 1e-5;       ///< relative step δ along the scaled direction
+  unsigned seed = 20261122;  ///< seed of the random direction (recorded; same seed, same direction)
+  double warn = 1e-3;        ///< relative disagreement above which the check warns
+  double fail = 5e-2;        ///< … and above which `optimize` refuses to start
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
 };
 
 struct GradientCheckResult {
@@ -27,7 +27,8 @@ struct GradientCheckResult {
     std::string response;
     double finite_difference = 0;  ///< largest |D_k| over the response's values
     double method = 0;             ///< largest |∇r_k · (s ∘ d)|
-    double relative_error = 0;     ///< max_k |D_k − ∇r_k·(s∘d)| / max(|D_k|, |∇r_k·(s∘d)|, 1e-3 ‖∇r_k ∘ s‖₂)
+    double relative_error =
+        0;  ///< max_k |D_k − ∇r_k·(s∘d)| / max(|D_k|, |∇r_k·(s∘d)|, 1e-3 ‖∇r_k ∘ s‖₂)
   };
   Vec direction;  ///< unit direction d (scaled variables)
   Vec step;       ///< the variable step δ (s ∘ d)
@@ -38,12 +39,36 @@ struct GradientCheckResult {
   bool ok = true;  ///< both simulations succeeded
   std::string message;
   std::string verdict(const GradientCheckOptions& o) const;  ///< "pass", "warn" or "fail"
-  nlohmann::json to_json(const GradientCheckOptions& o) const;
+  RunStatus status() const;
+  std::string report() const;  ///< outcome, and per response the two directional derivatives
 };
+
+/// How compare_gradients normalizes a gradient difference.
+enum class GradientNorm {
+  /// per response value (each step of a per-step response on its own):
+  /// ‖g − g_ref‖∞ over the variables / ‖g_ref‖∞ of that value
+  kPerValue,
+  /// per response: max over values and variables of |g − g_ref| / max |g_ref| of the response.
+  /// A step where a per-step response is still at rest has gradients at round-off level, and
+  /// relative errors there say nothing.
+  kPerResponse,
+};
+
+struct GradientDifference {
+  double worst = 0;   ///< largest normalized difference (+inf when the shapes differ)
+  std::string where;  ///< the response (and "[value index]" with kPerValue) where it is
+};
+
+/// Largest normalized difference between two methods' gradients of the same responses (in the
+/// same order); references that are exactly zero are skipped.
+GradientDifference compare_gradients(const std::vector<ResponseSensitivity>& a,
+                                     const std::vector<ResponseSensitivity>& reference,
+                                     GradientNorm norm = GradientNorm::kPerValue);
 
 /// Checks `gradients` (as computed by compute_sensitivities at p) along one random direction.
 /// Responses without gradients (NaN, e.g. idas-adjoint's grid aggregates) are skipped.
-GradientCheckResult check_gradients(Study& cs, const Vec& p, const std::vector<ResponseSensitivity>& gradients,
+GradientCheckResult check_gradients(Study& cs, const Vec& p,
+                                    const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o = {});
 
 }  // namespace lsmbs

@@ -5,13 +5,19 @@
 
 namespace lsmbs {
 
-ResponseQuadrature::ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions, double t_start,
-                                       double t_end)
-    : cs_(cs), tracker_(cs, directions), t_start_(t_start), t_end_(t_end), nv_(static_cast<int>(directions.size())) {
+ResponseQuadrature::ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions,
+                                       double t_start, double t_end)
+    : cs_(cs),
+      tracker_(cs, directions),
+      t_start_(t_start),
+      t_end_(t_end),
+      nv_(static_cast<int>(directions.size())) {
   using K = ResponseSpec::Kind;
   for (size_t r = 0; r < cs.responses.size(); ++r) {
     const auto& rs = cs.responses[r];
-    if (rs.kind != K::kIntegral && rs.kind != K::kAverage && rs.kind != K::kAverageEq45 && rs.kind != K::kRms) continue;
+    if (rs.kind != K::kIntegral && rs.kind != K::kAverage && rs.kind != K::kAverageEq45 &&
+        rs.kind != K::kRms)
+      continue;
     const double a = std::max(rs.t0, t_start), b = std::min(rs.t1, t_end);
     if (!(b > a)) continue;  // empty window: no integral
     responses_.push_back({r, rs.kind == K::kRms, a, b});
@@ -26,27 +32,32 @@ std::vector<double> ResponseQuadrature::breakpoints() const {
 
 void ResponseQuadrature::integrand(const State& s, const ModelParams& p, double* g) {
   for (size_t k = 0; k < responses_.size(); ++k) {
-    const double f = tracker_.response_measure(responses_[k].response, s, p, nullptr, nullptr, nullptr, nullptr, nullptr);
+    const double f = tracker_.response_measure(responses_[k].response, s, p, nullptr, nullptr,
+                                               nullptr, nullptr, nullptr);
     g[k] = responses_[k].square ? f * f : f;
   }
 }
 
-void ResponseQuadrature::integrand_sensitivity(const State& s, const ModelParams& p, const Mat& dq, const Mat& dv,
-                                               const Mat& da, const Mat& dl, Mat& dg) {
+void ResponseQuadrature::integrand_sensitivity(const State& s, const ModelParams& p, const Mat& dq,
+                                               const Mat& dv, const Mat& da, const Mat& dl,
+                                               Mat& dg) {
   dg.resize(size(), nv_);
   for (size_t k = 0; k < responses_.size(); ++k) {
-    const double f = tracker_.response_measure(responses_[k].response, s, p, &dq, &dv, &da, &dl, &row_);
+    const double f =
+        tracker_.response_measure(responses_[k].response, s, p, &dq, &dv, &da, &dl, &row_);
     dg.row(static_cast<Eigen::Index>(k)) = responses_[k].square ? (2 * f * row_).eval() : row_;
   }
 }
 
-bool ResponseQuadrature::integrand_gradient(int k, const State& s, const ModelParams& p, Vec& gq, Vec& gv,
-                                            Eigen::RowVectorXd& gp, std::string& why) {
+bool ResponseQuadrature::integrand_gradient(int k, const State& s, const ModelParams& p, Vec& gq,
+                                            Vec& gv, Eigen::RowVectorXd& gp, std::string& why) {
   const Item& it = responses_[static_cast<size_t>(k)];
   const double f = tracker_.response_partials(it.response, s, p, partials_, gp);
   if (!partials_.da.empty() || !partials_.dl.empty()) {
-    why = "response '" + cs_.responses[it.response].name + "' measures " + cs_.measure_columns()[cs_.responses[it.response].column] +
-          ", which depends on accelerations or constraint forces: the adjoint path supports integrands of "
+    why = "response '" + cs_.responses[it.response].name + "' measures " +
+          cs_.measure_columns()[cs_.responses[it.response].column] +
+          ", which depends on accelerations or constraint forces: the adjoint path supports "
+          "integrands of "
           "positions, velocities and parameters only";
     return false;
   }
@@ -61,7 +72,9 @@ bool ResponseQuadrature::integrand_gradient(int k, const State& s, const ModelPa
 
 bool ResponseQuadrature::needs_gradient(int k, double t) const {
   const Item& it = responses_[static_cast<size_t>(k)];
-  auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(a)); };
+  auto same = [](double a, double b) {
+    return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(a));
+  };
   return !same(t, t_start_) && (same(t, it.a) || same(t, it.b));
 }
 
@@ -70,9 +83,11 @@ void ResponseQuadrature::on_breakpoint(double t, const Vec& Q, const Mat* dQ) {
 }
 
 std::vector<QuadratureResponse> ResponseQuadrature::results() const {
-  // Q at time t: recorded at a breakpoint (exactly, or within round-off of the grid), 0 at the start
+  // Q at time t: recorded at a breakpoint (exactly, or within round-off of the grid), 0 at the
+  // start
   auto lookup = [&](double t, size_t k, bool grad) -> Eigen::RowVectorXd {
-    if (std::abs(t - t_start_) <= 1e-12 * std::max(1.0, std::abs(t))) return Eigen::RowVectorXd::Zero(grad ? nv_ : 1);
+    if (std::abs(t - t_start_) <= 1e-12 * std::max(1.0, std::abs(t)))
+      return Eigen::RowVectorXd::Zero(grad ? nv_ : 1);
     auto it = at_.lower_bound(t - 1e-9 * std::max(1.0, std::abs(t)));
     if (it == at_.end() || std::abs(it->first - t) > 1e-9 * std::max(1.0, std::abs(t)))
       return Eigen::RowVectorXd::Constant(grad ? nv_ : 1, NAN);  // not reached (failed run)
@@ -115,24 +130,6 @@ std::vector<QuadratureResponse> ResponseQuadrature::results() const {
     out.push_back(std::move(q));
   }
   return out;
-}
-
-nlohmann::json ResponseQuadrature::to_json(const std::vector<QuadratureResponse>& r,
-                                           const std::vector<std::string>& variables) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& q : r) {
-    nlohmann::json e = {{"value", std::isfinite(q.value) ? nlohmann::json(q.value) : nlohmann::json(nullptr)},
-                        {"definition", q.definition}, {"a", q.t0}, {"b", q.t1}};
-    if (q.gradient.size()) {
-      nlohmann::json g = nlohmann::json::object();
-      for (size_t i = 0; i < variables.size() && static_cast<Eigen::Index>(i) < q.gradient.size(); ++i)
-        g[variables[i]] = std::isfinite(q.gradient[static_cast<Eigen::Index>(i)]) ? nlohmann::json(q.gradient[static_cast<Eigen::Index>(i)])
-                                                                                    : nlohmann::json(nullptr);
-      e["gradient"] = g;
-    }
-    j[q.name] = e;
-  }
-  return j;
 }
 
 }  // namespace lsmbs

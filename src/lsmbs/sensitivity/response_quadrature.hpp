@@ -1,5 +1,5 @@
 #pragma once
-// ResponseQuadrature — the case's time-integral responses as IDAS quadratures (issue 5): for a
+// ResponseQuadrature — the case's time-integral responses as IDAS quadratures: for a
 // response of kind integral, average, average_eq45 or rms over the window [a, b] of measure f,
 //   Q(t) = ∫ f dt (f² for rms),  integral = Q(b) − Q(a),  average = (Q(b) − Q(a)) / (b − a),
 //   rms = sqrt((Q(b) − Q(a)) / (b − a)),
@@ -10,8 +10,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/sensitivity/response_tracker.hpp"
 
@@ -20,26 +18,26 @@ namespace lsmbs {
 class ResponseQuadrature : public IdasQuadrature {
  public:
   /// directions: ∂(ModelParams)/∂p_i (empty for values only). Run from t_start to t_end.
-  ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions, double t_start, double t_end);
+  ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions, double t_start,
+                     double t_end);
   /// Whether the case has any time-integral response.
   bool empty() const { return responses_.empty(); }
 
   int size() const override { return static_cast<int>(responses_.size()); }
   std::vector<double> breakpoints() const override;
   void integrand(const State& s, const ModelParams& p, double* g) override;
-  void integrand_sensitivity(const State& s, const ModelParams& p, const Mat& dq, const Mat& dv, const Mat& da,
-                             const Mat& dl, Mat& dg) override;
+  void integrand_sensitivity(const State& s, const ModelParams& p, const Mat& dq, const Mat& dv,
+                             const Mat& da, const Mat& dl, Mat& dg) override;
   void on_breakpoint(double t, const Vec& Q, const Mat* dQ) override;
   /// Adjoint path: ∂g/∂q, ∂g/∂q̇ (2 f ∂f for rms) and the explicit ∂g/∂p; refuses measures of
   /// accelerations or multipliers (constraint forces).
-  bool integrand_gradient(int k, const State& s, const ModelParams& p, Vec& gq, Vec& gv, Eigen::RowVectorXd& gp,
-                          std::string& why) override;
+  bool integrand_gradient(int k, const State& s, const ModelParams& p, Vec& gq, Vec& gv,
+                          Eigen::RowVectorXd& gp, std::string& why) override;
   /// dQ_k/dp at the window's ends (not at the run's start, where Q = 0).
   bool needs_gradient(int k, double t) const override;
 
   /// The responses from the recorded Q (call after the run).
   std::vector<QuadratureResponse> results() const;
-  static nlohmann::json to_json(const std::vector<QuadratureResponse>& r, const std::vector<std::string>& variables);
 
  private:
   struct Item {

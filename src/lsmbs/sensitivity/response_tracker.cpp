@@ -10,11 +10,13 @@ ResponseTracker::ResponseTracker(const Study& cs, std::vector<ParamDirection> di
   // flattened measure columns → (measure, component)
   std::vector<std::pair<const Measure*, int>> flat;
   for (const auto& m : cs.measures)
-    for (int c = 0; c < static_cast<int>(m->components().size()); ++c) flat.emplace_back(m.get(), c);
+    for (int c = 0; c < static_cast<int>(m->components().size()); ++c)
+      flat.emplace_back(m.get(), c);
   for (const auto& r : cs.responses) {
     int found = -1;
     for (size_t k = 0; k < cols_.size(); ++k)
-      if (cols_[k].measure == flat[r.column].first && cols_[k].component == flat[r.column].second) found = static_cast<int>(k);
+      if (cols_[k].measure == flat[r.column].first && cols_[k].component == flat[r.column].second)
+        found = static_cast<int>(k);
     if (found < 0) {
       cols_.push_back({flat[r.column].first, flat[r.column].second, {}, {}});
       found = static_cast<int>(cols_.size()) - 1;
@@ -28,8 +30,8 @@ void ResponseTracker::set_scaling(double k) {
     if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
 }
 
-void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
-                             const Mat* dl) {
+void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
+                             const Mat* da, const Mat* dl) {
   times_.push_back(s.t);
   const int nv = static_cast<int>(dirs_.size());
   for (auto& c : cols_) {
@@ -40,21 +42,23 @@ void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq
   }
 }
 
-double ResponseTracker::response_measure(size_t r, const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
-                                         const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad) {
+double ResponseTracker::response_measure(size_t r, const State& s, const ModelParams& p,
+                                         const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl,
+                                         Eigen::RowVectorXd* grad) {
   const auto& c = cols_[response_column_[r]];
   if (grad) grad->setZero(static_cast<Eigen::Index>(dirs_.size()));
   return evaluate(c.measure, c.component, s, p, dq, dv, da, dl, grad);
 }
 
-double ResponseTracker::response_partials(size_t r, const State& s, const ModelParams& p, MeasureGradient& g,
-                                          Eigen::RowVectorXd& gp) {
+double ResponseTracker::response_partials(size_t r, const State& s, const ModelParams& p,
+                                          MeasureGradient& g, Eigen::RowVectorXd& gp) {
   const auto& c = cols_[response_column_[r]];
   const auto nv = static_cast<Eigen::Index>(dirs_.size());
   double value;
   gp.setZero(nv);
   if (c.measure->depends_on_params()) {
-    if (zero_q_.rows() != s.q.size()) zero_q_.setZero(s.q.size(), nv), zero_l_.setZero(s.lambda.size(), nv);
+    if (zero_q_.rows() != s.q.size())
+      zero_q_.setZero(s.q.size(), nv), zero_l_.setZero(s.lambda.size(), nv);
     value = evaluate(c.measure, c.component, s, p, &zero_q_, &zero_q_, &zero_q_, &zero_l_, &gp);
   } else {
     value = evaluate(c.measure, c.component, s, p, nullptr, nullptr, nullptr, nullptr, nullptr);
@@ -64,8 +68,9 @@ double ResponseTracker::response_partials(size_t r, const State& s, const ModelP
   return value;
 }
 
-double ResponseTracker::evaluate(const Measure* measure, int component, const State& s, const ModelParams& p,
-                                 const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad) {
+double ResponseTracker::evaluate(const Measure* measure, int component, const State& s,
+                                 const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
+                                 const Mat* dl, Eigen::RowVectorXd* grad) {
   buf_.resize(measure->components().size());
   measure->evaluate(*cs_.model, s, p, buf_.data());
   const double value = buf_[component];
@@ -100,7 +105,8 @@ double ResponseTracker::evaluate(const Measure* measure, int component, const St
       measure->evaluate(*cs_.model, s, scratch_, buf_.data());
       const double fm = buf_[component];
       // restore the touched entries exactly (no copy of the whole parameter set per step)
-      for (const auto& f : d.fields) scratch_.fields[f.field][f.element] = p.fields[f.field][f.element];
+      for (const auto& f : d.fields)
+        scratch_.fields[f.field][f.element] = p.fields[f.field][f.element];
       for (const auto& [j, v] : d.scalars) scratch_.scalars[j] = p.scalars[j];
       row[i] += (fp - fm) / (2 * t);
     }

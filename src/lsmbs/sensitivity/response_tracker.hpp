@@ -5,8 +5,8 @@
 // then aggregates them into the responses' values and gradients.
 #include <vector>
 
-#include "lsmbs/sensitivity/study.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
 
@@ -15,17 +15,19 @@ class ResponseTracker {
   /// directions[i] = ∂(ModelParams)/∂p_i (for the explicit ∂f/∂p); empty for values only.
   ResponseTracker(const Study& cs, std::vector<ParamDirection> directions);
   /// Records the columns used by responses at a grid step; derivatives may be null.
-  void record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl);
+  void record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
+              const Mat* dl);
   std::vector<ResponseSensitivity> results() const;
   /// The run's constraint scaling k (constraint forces are kλ).
   void set_scaling(double k);
   /// Value of response r's measure component at s and, with the state derivatives, its total
   /// derivative (eq. 24) in `grad` (1 × n_v). Not recorded.
-  double response_measure(size_t r, const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
-                          const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad);
+  double response_measure(size_t r, const State& s, const ModelParams& p, const Mat* dq,
+                          const Mat* dv, const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad);
   /// Value of response r's measure component at s, its state partials in `g` and its explicit
   /// ∂f/∂p in `gp` (1 × n_v) — the pieces of an adjoint source term. Not recorded.
-  double response_partials(size_t r, const State& s, const ModelParams& p, MeasureGradient& g, Eigen::RowVectorXd& gp);
+  double response_partials(size_t r, const State& s, const ModelParams& p, MeasureGradient& g,
+                           Eigen::RowVectorXd& gp);
 
  private:
   const Study& cs_;
@@ -36,8 +38,9 @@ class ResponseTracker {
     std::vector<double> values;
     std::vector<Eigen::RowVectorXd> grads;
   };
-  double evaluate(const Measure* measure, int component, const State& s, const ModelParams& p, const Mat* dq,
-                  const Mat* dv, const Mat* da, const Mat* dl, Eigen::RowVectorXd* grad);
+  double evaluate(const Measure* measure, int component, const State& s, const ModelParams& p,
+                  const Mat* dq, const Mat* dv, const Mat* da, const Mat* dl,
+                  Eigen::RowVectorXd* grad);
   std::vector<Column> cols_;
   MeasureGradient grad_;
   std::vector<int> response_column_;

@@ -1,5 +1,6 @@
 #pragma once
-// Design sensitivities of the case's responses (§4.3), one interface, methods by name:
+// Design sensitivities of the study's responses (§4.3), methods by name (each a class behind
+// SensitivityMethod, method.hpp):
 //  semi-analytical          Algorithm 2 exactly: predictors (33)–(35), pseudo-load from the
 //                           perturbed residual (32) minus the actual residual at p (eq. 30),
 //                           back-solves with the step's last factorization, updates (38)–(40);
@@ -19,16 +20,23 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "lsmbs/core/progress.hpp"
+#include "lsmbs/core/status.hpp"
 #include "lsmbs/integrators/idas_ggl.hpp"
 #include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
 
 struct SensitivityOptions {
-  enum class Method { kSemiAnalytical, kSemiAnalyticalCentral, kDirectAnalytic, kFdForward, kFdCentral, kIdas, kIdasAdjoint };
+  enum class Method {
+    kSemiAnalytical,
+    kSemiAnalyticalCentral,
+    kDirectAnalytic,
+    kFdForward,
+    kFdCentral,
+    kIdas,
+    kIdasAdjoint
+  };
   bool is_idas() const { return method == Method::kIdas || method == Method::kIdasAdjoint; }
   Method method = Method::kDirectAnalytic;
   /// Δp of the semi-analytical methods and step of the finite differences:
@@ -58,8 +66,11 @@ struct SensitivityOptions {
   /// IDAS forward sensitivities (method idas): tolerances and options; output grid and final
   /// time are the case's generalized-α h and t_end.
   IdasOptions idas = IdasOptions::reference();
-  /// Progress line for the simulations (not an option of the method: not in to_json()).
-  ProgressLine* progress = nullptr;
+  /// Progress of the simulations (not an option of the method: not recorded).
+  ProgressCallback progress;
+  /// Empty string when valid, otherwise "field: what is expected". `delta` is checked for the
+  /// methods that use it; the IDAS options are the IDAS driver's to check (IdasOptions::validate).
+  std::string validate() const;
   static bool parse_matrix(const std::string& s, Matrix& m);
   static const char* matrix_name(Matrix m);
 
@@ -67,7 +78,6 @@ struct SensitivityOptions {
   static const char* name(Method m);
   static std::vector<std::string> names();
   double step(const Design& d, const Vec& p, int i) const;
-  nlohmann::json to_json() const;
 };
 
 struct ResponseSensitivity {
@@ -79,19 +89,19 @@ struct ResponseSensitivity {
 
 /// A time-integral response evaluated by IDAS quadratures (see response_quadrature.hpp).
 struct QuadratureResponse {
-  std::string name;             ///< the response's name
-  std::string definition;       ///< e.g. "(Q(b) - Q(a)) / (b - a), Q = integral of tip_deviation dt"
-  double t0 = 0, t1 = 0;        ///< window used (clipped to the run)
+  std::string name;        ///< the response's name
+  std::string definition;  ///< e.g. "(Q(b) - Q(a)) / (b - a), Q = integral of tip_deviation dt"
+  double t0 = 0, t1 = 0;   ///< window used (clipped to the run)
   double value = 0;
   Eigen::RowVectorXd gradient;  ///< 1 × n_v (empty without sensitivities)
 };
 
 struct SensitivityCounts {
   long simulations = 0, steps = 0, newton_iterations = 0, factorizations = 0;
-  long residual_evaluations = 0;       ///< primal (Newton) residual evaluations
-  long pseudo_load_residuals = 0;      ///< full perturbed residual evaluations (semi-analytical)
-  long element_pseudo_loads = 0;       ///< element-local ∂r/∂p evaluations (direct-analytic)
-  long mass_damping_products = 0;      ///< M q̈* + C q̇* block products (direct-analytic)
+  long residual_evaluations = 0;   ///< primal (Newton) residual evaluations
+  long pseudo_load_residuals = 0;  ///< full perturbed residual evaluations (semi-analytical)
+  long element_pseudo_loads = 0;   ///< element-local ∂r/∂p evaluations (direct-analytic)
+  long mass_damping_products = 0;  ///< M q̈* + C q̇* block products (direct-analytic)
   long back_solves = 0, back_solve_rhs = 0;
   long sensitivity_matrix_assemblies = 0;  ///< S_t at the converged state (refined)
   long refinement_solves = 0;              ///< refined: back-solves of the iterative refinement
@@ -100,7 +110,8 @@ struct SensitivityCounts {
   /// predictor's (what `--matrix last` back-solves with there)
   long predictor_matrix_steps = 0;
   double wall_seconds = 0, primal_wall_seconds = 0;
-  nlohmann::json to_json() const;
+  /// Adds one generalized-α run (a simulation, its steps, iterations, factorizations, residuals).
+  void add_run(const IntegratorSummary& s);
 };
 
 struct SensitivityResult {
@@ -119,16 +130,19 @@ struct SensitivityResult {
   /// their gradients (IDAQuadSensInit, or the backward problems), the continuous-time
   /// counterparts of the grid aggregates.
   std::vector<QuadratureResponse> quadratures;
+  RunStatus status() const;
+  std::string report() const;  ///< outcome and counts, one paragraph
 };
 
 /// Response values of one generalized-α simulation at design p (gradients empty); the case's
 /// model parameters are left at p. Throws NumericalFailure when the simulation fails.
-std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p, SensitivityCounts& counts,
-                                                    ProgressLine* line = nullptr);
+std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p,
+                                                    SensitivityCounts& counts,
+                                                    const ProgressCallback& progress = {});
 /// The same at the case's current parameters; `primal` receives the integrator summary.
-std::vector<ResponseSensitivity> simulate_responses_at_current_design(Study& cs, SensitivityCounts& counts,
-                                                                      IntegratorSummary* primal, ProgressLine* line,
-                                                                      long n_runs);
+std::vector<ResponseSensitivity> simulate_responses_at_current_design(
+    Study& cs, SensitivityCounts& counts, IntegratorSummary* primal,
+    const ProgressCallback& progress, long n_runs);
 
 /// Sensitivities at design p (the case's model parameters are left at p).
 SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o);

@@ -13,22 +13,28 @@ std::vector<std::string> Study::measure_columns() const {
 
 Measure& Study::add_measure(std::unique_ptr<Measure> m) {
   for (const auto& c : m->components())
-    if (measure_column(c) >= 0) throw SetupError("measures", "measure column '" + c + "' exists already");
+    if (measure_column(c) >= 0)
+      throw SetupError("measures", "measure column '" + c + "' exists already");
   measures.push_back(std::move(m));
   return *measures.back();
 }
 
-ResponseSpec& Study::add_response(const std::string& name, const std::string& measure, ResponseSpec::Kind kind,
-                                  double t0, double t1) {
-  if (response_index(name) >= 0) throw SetupError("responses", "response '" + name + "' exists already");
+ResponseSpec& Study::add_response(const std::string& name, const std::string& measure,
+                                  ResponseSpec::Kind kind, double t0, double t1) {
+  if (response_index(name) >= 0)
+    throw SetupError("responses", "response '" + name + "' exists already");
   ResponseSpec r;
   r.name = name;
   r.column = measure_column(measure);
-  if (r.column < 0) throw SetupError("responses", "response '" + name + "': unknown measure column '" + measure + "'");
+  if (r.column < 0)
+    throw SetupError("responses",
+                     "response '" + name + "': unknown measure column '" + measure + "'");
   r.kind = kind;
   r.t0 = t0;
   r.t1 = t1;
-  r.window_text = t0 > -1e299 || t1 < 1e299 ? "[" + std::to_string(t0) + ", " + std::to_string(t1) + "] s" : "whole run";
+  r.window_text = t0 > -1e299 || t1 < 1e299
+                      ? "[" + std::to_string(t0) + ", " + std::to_string(t1) + "] s"
+                      : "whole run";
   responses.push_back(r);
   return responses.back();
 }

@@ -33,8 +33,8 @@ struct Study {
   /// Adds a response of the measure column `measure` (a measure's name, or "name.x" / "name.y"
   /// for a point's components), aggregated over [t0, t1]; SetupError "responses" for an unknown
   /// column or a name in use.
-  ResponseSpec& add_response(const std::string& name, const std::string& measure, ResponseSpec::Kind kind,
-                             double t0 = -1e300, double t1 = 1e300);
+  ResponseSpec& add_response(const std::string& name, const std::string& measure,
+                             ResponseSpec::Kind kind, double t0 = -1e300, double t1 = 1e300);
   /// Sets the design variables and writes their initial values into the model's parameters.
   void set_design(std::unique_ptr<Design> d);
 

@@ -1,11 +1,12 @@
 // Mesh generation and the Gmsh v4 reader, against hand-computed geometry.
+#include "lsmbs/fem/mesh.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <fstream>
 
 #include "lsmbs/core/error.hpp"
-#include "lsmbs/fem/mesh.hpp"
 
 using namespace lsmbs;
 
@@ -90,8 +91,10 @@ $EndElements
 }
 
 TEST(Mesh2D, GmshTrianglesAreRejectedWithTheFileName) {
-  const std::string msh = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 0\n$EndNodes\n"
-                          "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
+  const std::string msh =
+      "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 "
+      "0\n$EndNodes\n"
+      "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
   const std::string p = write_temp("tri.msh", msh);
   try {
     Mesh2D::read_gmsh(p);

@@ -1,19 +1,22 @@
 // Plane-stress quad (total Lagrangian, St Venant–Kirchhoff): the internal force is the
 // gradient of the strain energy, the tangent is the derivative of the force (central finite
 // differences), a rigid rotation produces no force, and the patch test holds exactly.
+#include "lsmbs/fem/quad_element.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
 #include "lsmbs/core/error.hpp"
-#include "lsmbs/fem/quad_element.hpp"
 
 using namespace lsmbs;
 
 namespace {
 
-std::array<Vec2, 4> distorted_quad() { return {Vec2(0.0, 0.0), Vec2(0.012, 0.001), Vec2(0.010, 0.009), Vec2(-0.001, 0.007)}; }
+std::array<Vec2, 4> distorted_quad() {
+  return {Vec2(0.0, 0.0), Vec2(0.012, 0.001), Vec2(0.010, 0.009), Vec2(-0.001, 0.007)};
+}
 
 QuadElement::Vec8 deformed(const std::array<Vec2, 4>& X, unsigned seed, double amp) {
   std::mt19937 g(seed);
@@ -47,7 +50,8 @@ TEST_P(QuadElementTest, InternalForceIsTheGradientOfTheStrainEnergy) {
     xm[i] -= h;
     g[i] = (el.strain_energy(xp, E, nu, t) - el.strain_energy(xm, E, nu, t)) / (2 * h);
   }
-  EXPECT_LT((f - g).norm() / f.norm(), 1e-6) << "f = " << f.transpose() << "\ng = " << g.transpose();
+  EXPECT_LT((f - g).norm() / f.norm(), 1e-6)
+      << "f = " << f.transpose() << "\ng = " << g.transpose();
 }
 
 TEST_P(QuadElementTest, TangentIsTheDerivativeOfTheInternalForce) {
@@ -95,9 +99,11 @@ TEST_P(QuadElementTest, RigidRotationByNinetyDegreesProducesNoInternalForce) {
 // strain, so the exact solution is reproduced: the assembled internal force vanishes at the
 // interior nodes, and the boundary reactions equal the resultant tractions P·N on each edge.
 TEST_P(QuadElementTest, PatchTestIsPassedExactlyForAffineDeformations) {
-  const std::vector<Vec2> X = {{0, 0}, {0.24, 0}, {0.24, 0.12}, {0, 0.12},  // outer corners
-                               {0.04, 0.02}, {0.18, 0.03}, {0.16, 0.08}, {0.08, 0.08}};  // interior
-  const std::vector<std::array<int, 4>> quads = {{0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}, {4, 5, 6, 7}};
+  const std::vector<Vec2> X = {
+      {0, 0},       {0.24, 0},    {0.24, 0.12}, {0, 0.12},      // outer corners
+      {0.04, 0.02}, {0.18, 0.03}, {0.16, 0.08}, {0.08, 0.08}};  // interior
+  const std::vector<std::array<int, 4>> quads = {
+      {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}, {4, 5, 6, 7}};
   Mat2 F;
   F << 1.02, 0.05, -0.03, 0.97;
   const Vec2 c(0.5, -0.25);
@@ -118,15 +124,19 @@ TEST_P(QuadElementTest, PatchTestIsPassedExactlyForAffineDeformations) {
   S << d * (E11 + nu * E22), d * (1 - nu) * E12, d * (1 - nu) * E12, d * (E22 + nu * E11);
   const Mat2 P = F * S;
   double scale = (P * Vec2(0.12, 0) * t).norm();
-  for (int i = 4; i < 8; ++i) EXPECT_LT(fglob.segment<2>(2 * i).norm(), 1e-9 * scale) << "interior node " << i;
+  for (int i = 4; i < 8; ++i)
+    EXPECT_LT(fglob.segment<2>(2 * i).norm(), 1e-9 * scale) << "interior node " << i;
   // Corner 1 (x = 0.24, y = 0) carries half of the bottom edge and half of the right edge.
   const Vec2 expected = 0.5 * t * (P * Vec2(0, -1) * 0.24 + P * Vec2(1, 0) * 0.12);
   EXPECT_LT((fglob.segment<2>(2) - expected).norm(), 1e-9 * scale);
 }
 
 INSTANTIATE_TEST_SUITE_P(Integration, QuadElementTest,
-                         ::testing::Values(QuadIntegration::kFull, QuadIntegration::kSelectiveShear),
-                         [](const auto& info) { return info.param == QuadIntegration::kFull ? "Full" : "SelectiveShear"; });
+                         ::testing::Values(QuadIntegration::kFull,
+                                           QuadIntegration::kSelectiveShear),
+                         [](const auto& info) {
+                           return info.param == QuadIntegration::kFull ? "Full" : "SelectiveShear";
+                         });
 
 TEST(QuadElement, ConsistentMassIntegratesTheAreaExactly) {
   QuadElement el(distorted_quad(), QuadIntegration::kFull);
@@ -144,7 +154,8 @@ namespace {
 // x_η = c3 + c2 ξ (likewise y with d1, d2, d3), so det J = a0 + a1 ξ + a2 η exactly (the ξη
 // terms cancel), and with N_I = ¼(1 + ξ_I ξ)(1 + η_I η) the integral factorizes into
 //   ∫ (1 + ξ_I ξ)(1 + ξ_J ξ) dξ = 2 + ⅔ ξ_I ξ_J,   ∫ ξ (1 + ξ_I ξ)(1 + ξ_J ξ) dξ = ⅔ (ξ_I + ξ_J).
-Eigen::Matrix4d closed_form_unit_mass(const std::array<Vec2, 4>& X, Eigen::Vector4d* shape_integrals) {
+Eigen::Matrix4d closed_form_unit_mass(const std::array<Vec2, 4>& X,
+                                      Eigen::Vector4d* shape_integrals) {
   const double xi[4] = {-1, 1, 1, -1}, eta[4] = {-1, -1, 1, 1};
   Vec2 c1 = Vec2::Zero(), c2 = Vec2::Zero(), c3 = Vec2::Zero();
   for (int I = 0; I < 4; ++I) {
@@ -171,27 +182,34 @@ Eigen::Matrix4d closed_form_unit_mass(const std::array<Vec2, 4>& X, Eigen::Vecto
 TEST(QuadElement, ConsistentMassEqualsTheClosedForm) {
   // a general (non-parallelogram) quad, a rectangle (textbook: A/36 [4 2 1 2; 2 4 2 1; …]) and a
   // parallelogram; relative to the largest entry, round-off of ~20 operations
-  const std::array<Vec2, 4> rect = {Vec2(0.1, 0.2), Vec2(0.13, 0.2), Vec2(0.13, 0.21), Vec2(0.1, 0.21)};
-  const std::array<Vec2, 4> para = {Vec2(0, 0), Vec2(0.02, 0.003), Vec2(0.025, 0.013), Vec2(0.005, 0.01)};
+  const std::array<Vec2, 4> rect = {Vec2(0.1, 0.2), Vec2(0.13, 0.2), Vec2(0.13, 0.21),
+                                    Vec2(0.1, 0.21)};
+  const std::array<Vec2, 4> para = {Vec2(0, 0), Vec2(0.02, 0.003), Vec2(0.025, 0.013),
+                                    Vec2(0.005, 0.01)};
   for (const auto& X : {distorted_quad(), rect, para})
     for (QuadIntegration integ : {QuadIntegration::kFull, QuadIntegration::kSelectiveShear}) {
       QuadElement el(X, integ);
       Eigen::Vector4d s;
       const Eigen::Matrix4d ref = closed_form_unit_mass(X, &s);
       const double scale = ref.cwiseAbs().maxCoeff();
-      EXPECT_LT((el.unit_mass() - ref).cwiseAbs().maxCoeff(), 1e-14 * scale) << "unit mass\n" << el.unit_mass() << "\n"
-                                                                              << ref;
+      EXPECT_LT((el.unit_mass() - ref).cwiseAbs().maxCoeff(), 1e-14 * scale)
+          << "unit mass\n"
+          << el.unit_mass() << "\n"
+          << ref;
       EXPECT_LT((el.shape_integrals() - s).cwiseAbs().maxCoeff(), 1e-14 * s.cwiseAbs().maxCoeff());
     }
   Eigen::Vector4d s;
   Eigen::Matrix4d textbook;
   textbook << 4, 2, 1, 2, 2, 4, 2, 1, 1, 2, 4, 2, 2, 1, 2, 4;
   textbook *= 0.03 * 0.01 / 36;
-  EXPECT_LT((closed_form_unit_mass(rect, &s) - textbook).cwiseAbs().maxCoeff(), 1e-14 * textbook.maxCoeff());
-  EXPECT_LT((QuadElement(rect, QuadIntegration::kFull).unit_mass() - textbook).cwiseAbs().maxCoeff(),
+  EXPECT_LT((closed_form_unit_mass(rect, &s) - textbook).cwiseAbs().maxCoeff(),
             1e-14 * textbook.maxCoeff());
+  EXPECT_LT(
+      (QuadElement(rect, QuadIntegration::kFull).unit_mass() - textbook).cwiseAbs().maxCoeff(),
+      1e-14 * textbook.maxCoeff());
 }
 
 TEST(QuadElement, InvertedElementIsRejected) {
-  EXPECT_THROW(QuadElement({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)}, QuadIntegration::kFull), Error);
+  EXPECT_THROW(
+      QuadElement({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)}, QuadIntegration::kFull), Error);
 }

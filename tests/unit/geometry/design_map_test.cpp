@@ -1,12 +1,13 @@
 // Level-set features mapped onto a fixed mesh as element volume fractions (§2.3), against
 // closed-form areas, central finite differences of the mapping, and connectivity of the voids.
+#include "lsmbs/geometry/design_map.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <functional>
 
-#include "lsmbs/geometry/design_map.hpp"
 #include "support/convergence.hpp"
 
 using namespace lsmbs;
@@ -17,7 +18,8 @@ ParamBinding constant(double v) { return {v, 0, -1}; }
 ParamBinding var(int k, double scale = 1, double offset = 0) { return {offset, scale, k}; }
 
 double super_ellipse_area(double a, double b, double xi, double eta) {
-  return 4 * a * b * std::tgamma(1 + 1 / xi) * std::tgamma(1 + 1 / eta) / std::tgamma(1 + 1 / xi + 1 / eta);
+  return 4 * a * b * std::tgamma(1 + 1 / xi) * std::tgamma(1 + 1 / eta) /
+         std::tgamma(1 + 1 / xi + 1 / eta);
 }
 
 LevelSetNode and_of(int n, double ks = 0) {
@@ -35,7 +37,8 @@ LevelSetNode and_of(int n, double ks = 0) {
 // Void area Σ A_e (1 − μ_e)/(1 − μ_min).
 double void_area(const DesignMap& m, const Vec& mu) {
   double a = 0;
-  for (int e = 0; e < mu.size(); ++e) a += m.element_areas()[e] * (1 - mu[e]) / (1 - m.options().mu_min);
+  for (int e = 0; e < mu.size(); ++e)
+    a += m.element_areas()[e] * (1 - mu[e]) / (1 - m.options().mu_min);
   return a;
 }
 
@@ -65,7 +68,8 @@ int void_components(const Vec& mu, int nx, int ny) {
 
 // Robot-arm plate mesh in its design frame (x from the elbow joint), element size h.
 Mesh2D arm_mesh(double h) {
-  return Mesh2D::rectangle(0.2, -0.025, 0.6, 0.05, static_cast<int>(std::lround(0.6 / h)), static_cast<int>(std::lround(0.05 / h)));
+  return Mesh2D::rectangle(0.2, -0.025, 0.6, 0.05, static_cast<int>(std::lround(0.6 / h)),
+                           static_cast<int>(std::lround(0.05 / h)));
 }
 
 }  // namespace
@@ -73,24 +77,33 @@ Mesh2D arm_mesh(double h) {
 TEST(DesignMap, EllipseAndSuperEllipseHoleAreasMatchTheClosedFormsOnTheRobotArmMesh) {
   const Mesh2D mesh = arm_mesh(0.005);
   // eq. (41): semi-axes a·d and b·d; rotated by 0.3 rad to avoid mesh alignment
-  Feature ell("e", Feature::Type::kEllipse, {constant(0.45), constant(0.004), constant(1.0), constant(0.6), constant(0.02), constant(0.3)}, true);
+  Feature ell("e", Feature::Type::kEllipse,
+              {constant(0.45), constant(0.004), constant(1.0), constant(0.6), constant(0.02),
+               constant(0.3)},
+              true);
   DesignMap me(mesh, LevelSet({ell}, and_of(1), 0), {});
   Vec mu;
   me.map(Vec(), mu);
   const double Ae = void_area(me, mu), Ae_ref = M_PI * 0.02 * 0.012;
   // eq. (43) with ξ = η = 5, a = b = 0.015
-  Feature se("s", Feature::Type::kSuperEllipse, {constant(0.5), constant(0.0), constant(0.015), constant(0.015), constant(5), constant(5)}, true);
+  Feature se(
+      "s", Feature::Type::kSuperEllipse,
+      {constant(0.5), constant(0.0), constant(0.015), constant(0.015), constant(5), constant(5)},
+      true);
   DesignMap ms(mesh, LevelSet({se}, and_of(1), 0), {});
   ms.map(Vec(), mu);
   const double As = void_area(ms, mu), As_ref = super_ellipse_area(0.015, 0.015, 5, 5);
-  std::printf("ellipse: %.6e vs %.6e (%+.3f %%); super-ellipse: %.6e vs %.6e (%+.3f %%)\n", Ae, Ae_ref,
-              100 * (Ae / Ae_ref - 1), As, As_ref, 100 * (As / As_ref - 1));
+  std::printf("ellipse: %.6e vs %.6e (%+.3f %%); super-ellipse: %.6e vs %.6e (%+.3f %%)\n", Ae,
+              Ae_ref, 100 * (Ae / Ae_ref - 1), As, As_ref, 100 * (As / As_ref - 1));
   EXPECT_NEAR(Ae / Ae_ref, 1, 0.005);
   EXPECT_NEAR(As / As_ref, 1, 0.005);
 }
 
 TEST(DesignMap, AreaErrorDecreasesAtSecondOrderUnderMeshAndSubgridRefinement) {
-  Feature se("s", Feature::Type::kSuperEllipse, {constant(0.5), constant(0.0), constant(0.015), constant(0.015), constant(5), constant(5)}, true);
+  Feature se(
+      "s", Feature::Type::kSuperEllipse,
+      {constant(0.5), constant(0.0), constant(0.015), constant(0.015), constant(5), constant(5)},
+      true);
   const double ref = super_ellipse_area(0.015, 0.015, 5, 5);
   auto err = [&](double h, int sub) {
     const Mesh2D mesh = arm_mesh(h);
@@ -103,8 +116,10 @@ TEST(DesignMap, AreaErrorDecreasesAtSecondOrderUnderMeshAndSubgridRefinement) {
   };
   // the area error is the logistic band's π³ε²/3 (ε ∝ h / subgrid; CaseLoader tests) plus a
   // sub-cell quadrature error of higher order: second order in ε (measured 2.10, 2.01)
-  test::expect_order({err(0.01, 8), err(0.005, 8), err(0.0025, 8)}, 2.0, 0.15, "mesh h = 10, 5, 2.5 mm (subgrid 8)");
-  test::expect_order({err(0.005, 4), err(0.005, 8), err(0.005, 16)}, 2.0, 0.15, "subgrid 4, 8, 16 (h = 5 mm)");
+  test::expect_order({err(0.01, 8), err(0.005, 8), err(0.0025, 8)}, 2.0, 0.15,
+                     "mesh h = 10, 5, 2.5 mm (subgrid 8)");
+  test::expect_order({err(0.005, 4), err(0.005, 8), err(0.005, 16)}, 2.0, 0.15,
+                     "subgrid 4, 8, 16 (h = 5 mm)");
 }
 
 namespace {
@@ -112,8 +127,8 @@ namespace {
 // Central differences of μ(p) and m(p) against the analytic ∂μ/∂p.
 // Steps in natural units: 1e-7 m for lengths (round-off and truncation balanced for a band of
 // ~0.3 mm), 1e-5 for exponents and angles unless given.
-void check_derivatives(const Mesh2D& mesh, std::vector<Feature> feats, LevelSetNode root, const Vec& p, const char* what,
-                       std::vector<double> steps = {}) {
+void check_derivatives(const Mesh2D& mesh, std::vector<Feature> feats, LevelSetNode root,
+                       const Vec& p, const char* what, std::vector<double> steps = {}) {
   const int nv = static_cast<int>(p.size());
   DesignMap m(mesh, LevelSet(std::move(feats), std::move(root), nv), {});
   Vec mu;
@@ -137,9 +152,11 @@ void check_derivatives(const Mesh2D& mesh, std::vector<Feature> feats, LevelSetN
     const Vec fd = (4 * central(h / 2) - central(h)) / 3;
     int checked = 0;
     for (int e = 0; e < mu.size(); ++e) {
-      if (std::abs(fd[e]) < 1e-3 * scale && std::abs(Jd(e, k)) < 1e-3 * scale) continue;  // negligible
+      if (std::abs(fd[e]) < 1e-3 * scale && std::abs(Jd(e, k)) < 1e-3 * scale)
+        continue;  // negligible
       ++checked;
-      EXPECT_NEAR(Jd(e, k), fd[e], 1e-6 * std::abs(fd[e]) + 1e-9 * scale) << what << ": element " << e << ", variable " << k;
+      EXPECT_NEAR(Jd(e, k), fd[e], 1e-6 * std::abs(fd[e]) + 1e-9 * scale)
+          << what << ": element " << e << ", variable " << k;
     }
     EXPECT_GT(checked, 0) << what << ": variable " << k << " moves no element";
     // mass: m = Σ A_e μ_e (ρ t = 1)
@@ -167,10 +184,12 @@ TEST(DesignMapDerivatives, EllipseEveryParameterIncludingRotation) {
 
 TEST(DesignMapDerivatives, SuperEllipseEveryParameterIncludingExponents) {
   const Mesh2D mesh = arm_mesh(0.005);
-  Feature f("s", Feature::Type::kSuperEllipse, {var(0), var(1), var(2), var(3), var(4), var(5), var(6)}, true);
+  Feature f("s", Feature::Type::kSuperEllipse,
+            {var(0), var(1), var(2), var(3), var(4), var(5), var(6)}, true);
   Vec p(7);
   p << 0.41, 0.003, 0.02, 0.012, 5, 4, 0.1;
-  check_derivatives(mesh, {f}, and_of(1), p, "super-ellipse", {1e-7, 1e-7, 1e-7, 1e-7, 1e-3, 1e-3, 1e-6});
+  check_derivatives(mesh, {f}, and_of(1), p, "super-ellipse",
+                    {1e-7, 1e-7, 1e-7, 1e-7, 1e-3, 1e-3, 1e-6});
 }
 
 TEST(DesignMapDerivatives, CircleInclusionThroughNotAndOr) {
@@ -196,9 +215,12 @@ TEST(DesignMapDerivatives, LinkedSymmetricParametersOfTable2) {
   // axis (b) lies along the rod axis x (rotation π/2).
   const Mesh2D mesh = Mesh2D::rectangle(0, -0.012, 0.1356, 0.024, 136, 24);
   const double rot = M_PI / 2;
-  Feature l1("LS1", Feature::Type::kEllipse, {var(2), constant(0), constant(0.06), constant(0.3), var(0), constant(rot)}, true);
-  Feature l2("LS2", Feature::Type::kEllipse, {var(4), var(3, -1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
-  Feature l3("LS3", Feature::Type::kEllipse, {var(4), var(3, 1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
+  Feature l1("LS1", Feature::Type::kEllipse,
+             {var(2), constant(0), constant(0.06), constant(0.3), var(0), constant(rot)}, true);
+  Feature l2("LS2", Feature::Type::kEllipse,
+             {var(4), var(3, -1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
+  Feature l3("LS3", Feature::Type::kEllipse,
+             {var(4), var(3, 1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
   Vec p(5);
   p << 0.03, 0.04, 0.0875, 0.003, 0.0493;
   check_derivatives(mesh, {l1, l2, l3}, and_of(3), p, "Table 2 (exact min)");
@@ -211,12 +233,15 @@ TEST(DesignMap, ThreeHolesOfTable2MergeIntoOneWithAContinuousMass) {
   const int nx = 136, ny = 24;
   const Mesh2D mesh = Mesh2D::rectangle(0, -0.012, 0.1356, 0.024, nx, ny);
   const double rot = M_PI / 2;
-  Feature l1("LS1", Feature::Type::kEllipse, {var(2), constant(0), constant(0.06), constant(0.3), var(0), constant(rot)}, true);
-  Feature l2("LS2", Feature::Type::kEllipse, {var(4), var(3, -1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
-  Feature l3("LS3", Feature::Type::kEllipse, {var(4), var(3, 1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
+  Feature l1("LS1", Feature::Type::kEllipse,
+             {var(2), constant(0), constant(0.06), constant(0.3), var(0), constant(rot)}, true);
+  Feature l2("LS2", Feature::Type::kEllipse,
+             {var(4), var(3, -1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
+  Feature l3("LS3", Feature::Type::kEllipse,
+             {var(4), var(3, 1), constant(0.045), constant(0.28), var(1), constant(rot)}, true);
   DesignMap m(mesh, LevelSet({l1, l2, l3}, and_of(3), 5), {});
   Vec p0(5), p1(5);
-  p0 << 0.04, 0.05, 0.0875, 0.004, 0.045;         // three separate holes
+  p0 << 0.04, 0.05, 0.0875, 0.004, 0.045;           // three separate holes
   p1 << 0.0573, 0.0761, 0.06906, 0.000973, 0.0430;  // Table 3, optimum
   auto mass = [&](const Vec& p, Vec* grad) {
     Vec mu;
@@ -227,7 +252,8 @@ TEST(DesignMap, ThreeHolesOfTable2MergeIntoOneWithAContinuousMass) {
     if (grad) {
       grad->setZero(5);
       for (int k = 0; k < J.outerSize(); ++k)
-        for (SpMat::InnerIterator it(J, k); it; ++it) (*grad)[it.col()] += m.element_areas()[it.row()] * it.value();
+        for (SpMat::InnerIterator it(J, k); it; ++it)
+          (*grad)[it.col()] += m.element_areas()[it.row()] * it.value();
     }
     return s;
   };
@@ -245,7 +271,9 @@ TEST(DesignMap, ThreeHolesOfTable2MergeIntoOneWithAContinuousMass) {
     largest = std::max(largest, std::abs(cur - prev));
     prev = cur;
   }
-  std::printf("largest misprediction of a mass increment along the merge: %.2e of the largest increment\n", worst / largest);
+  std::printf(
+      "largest misprediction of a mass increment along the merge: %.2e of the largest increment\n",
+      worst / largest);
   EXPECT_LT(worst, 0.1 * largest);
   Vec mu0, mu1;
   m.map(p0, mu0);
@@ -258,14 +286,20 @@ TEST(DesignMap, CrossHoleOfFig1MatchesInclusionExclusionOfTheTwoClosedForms) {
   // Two super-ellipse holes (ξ = η = 4) combined by AND in a square plate: the void is their
   // union; its area is A1 + A2 − A(1 ∩ 2), the intersection by an independent 1-D quadrature.
   const double a1 = 0.08, b1 = 0.025, a2 = 0.025, b2 = 0.08, ex = 4;
-  Feature s1("h", Feature::Type::kSuperEllipse, {constant(0), constant(0), constant(a1), constant(b1), constant(ex), constant(ex)}, true);
-  Feature s2("v", Feature::Type::kSuperEllipse, {constant(0), constant(0), constant(a2), constant(b2), constant(ex), constant(ex)}, true);
+  Feature s1("h", Feature::Type::kSuperEllipse,
+             {constant(0), constant(0), constant(a1), constant(b1), constant(ex), constant(ex)},
+             true);
+  Feature s2("v", Feature::Type::kSuperEllipse,
+             {constant(0), constant(0), constant(a2), constant(b2), constant(ex), constant(ex)},
+             true);
   const int n = 100;
   const Mesh2D mesh = Mesh2D::rectangle(-0.1, -0.1, 0.2, 0.2, n, n);
   DesignMap m(mesh, LevelSet({s1, s2}, and_of(2), 0), {});
   Vec mu;
   m.map(Vec(), mu);
-  auto y_of = [&](double x, double a, double b) { return std::abs(x) >= a ? 0.0 : b * std::pow(1 - std::pow(std::abs(x) / a, ex), 1 / ex); };
+  auto y_of = [&](double x, double a, double b) {
+    return std::abs(x) >= a ? 0.0 : b * std::pow(1 - std::pow(std::abs(x) / a, ex), 1 / ex);
+  };
   const int N = 400000;
   const double xm = std::min(a1, a2), dx = 2 * xm / N;
   double inter = 0;
@@ -274,9 +308,11 @@ TEST(DesignMap, CrossHoleOfFig1MatchesInclusionExclusionOfTheTwoClosedForms) {
     inter += w * 2 * std::min(y_of(x, a1, b1), y_of(x, a2, b2));
   }
   inter *= dx / 3;
-  const double ref = super_ellipse_area(a1, b1, ex, ex) + super_ellipse_area(a2, b2, ex, ex) - inter;
+  const double ref =
+      super_ellipse_area(a1, b1, ex, ex) + super_ellipse_area(a2, b2, ex, ex) - inter;
   const double A = void_area(m, mu);
-  std::printf("cross hole: %.6e vs inclusion-exclusion %.6e (%+.3f %%)\n", A, ref, 100 * (A / ref - 1));
+  std::printf("cross hole: %.6e vs inclusion-exclusion %.6e (%+.3f %%)\n", A, ref,
+              100 * (A / ref - 1));
   EXPECT_NEAR(A / ref, 1, 0.005);
   EXPECT_EQ(void_components(mu, n, n), 1);
 }
@@ -284,17 +320,20 @@ TEST(DesignMap, CrossHoleOfFig1MatchesInclusionExclusionOfTheTwoClosedForms) {
 TEST(Feature, EllipseDistanceIsTheEuclideanDistanceToTheCurve) {
   // Reference: brute force over 2·10⁵ points of the (rotated) ellipse with semi-axes a·d, b·d.
   const double cx = 0.03, cy = -0.01, a = 0.05, b = 0.3, d = 0.04, rot = 0.7;
-  Feature f("E", Feature::Type::kEllipse, {constant(cx), constant(cy), constant(a), constant(b), constant(d), constant(rot)},
+  Feature f("E", Feature::Type::kEllipse,
+            {constant(cx), constant(cy), constant(a), constant(b), constant(d), constant(rot)},
             true);
   const double th[6] = {cx, cy, a, b, d, rot};
   const int ns = 200000;
   double worst = 0;
   for (int k = 0; k < 60; ++k) {
-    const Vec2 x(cx + 0.03 * std::sin(1.3 * k), cy + 0.025 * std::cos(0.7 * k + 0.2));  // inside and outside
+    const Vec2 x(cx + 0.03 * std::sin(1.3 * k),
+                 cy + 0.025 * std::cos(0.7 * k + 0.2));  // inside and outside
     double best = 1e300;
     for (int i = 0; i < ns; ++i) {
       const double t = 2 * M_PI * i / ns, u = a * d * std::cos(t), v = b * d * std::sin(t);
-      const Vec2 y(cx + std::cos(rot) * u - std::sin(rot) * v, cy + std::sin(rot) * u + std::cos(rot) * v);
+      const Vec2 y(cx + std::cos(rot) * u - std::sin(rot) * v,
+                   cy + std::sin(rot) * u + std::cos(rot) * v);
       best = std::min(best, (x - y).norm());
     }
     const double D = f.distance<double>(x, th);
@@ -312,8 +351,10 @@ TEST(DesignMap, MassOfATinySlenderHoleDecreasesMonotonically) {
   // sub-cell. The exact area π a b d² grows monotonically; the mapped mass must fall
   // monotonically with a gradient of the right sign, or the optimizer cannot leave the start.
   const Mesh2D mesh = Mesh2D::rectangle(0.04, -0.01, 0.055, 0.02, 44, 16);  // 1.25 mm elements
-  Feature f("hole", Feature::Type::kEllipse,
-            {constant(0.0678), constant(0), constant(0.05), constant(0.3), var(0), constant(M_PI / 2)}, true);
+  Feature f(
+      "hole", Feature::Type::kEllipse,
+      {constant(0.0678), constant(0), constant(0.05), constant(0.3), var(0), constant(M_PI / 2)},
+      true);
   DesignMap m(mesh, LevelSet({f}, and_of(1), 1), {});
   double prev = 1e300;
   for (double d = 0.001; d <= 0.004 + 1e-12; d += 0.0001) {

@@ -4,6 +4,8 @@
 // the constraint manifold (μ ≠ 0, Φ ≠ 0) with scales s₁, s₃, s₄ of different sizes, on the rigid
 // pendulum and on a small flexible model (a plate pinned to ground, a driven rigid crank with an
 // offset centre of mass pinned to the plate off its reference point, a spring–damper, gravity).
+#include "lsmbs/integrators/ggl_system.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -11,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "lsmbs/integrators/ggl_system.hpp"
 #include "support/pendulum.hpp"
 #include "support/test_models.hpp"
 
@@ -59,7 +60,9 @@ struct GglPoint {
     ggl.set_scales({.s1 = 3.7e2, .s3 = 1.3e4, .s4 = 0.61});
     std::mt19937 g(seed);
     std::uniform_real_distribution<double> u(-1, 1);
-    auto random = [&](int n, double scale) { return Vec(Vec::NullaryExpr(n, [&] { return scale * u(g); })); };
+    auto random = [&](int n, double scale) {
+      return Vec(Vec::NullaryExpr(n, [&] { return scale * u(g); }));
+    };
     y.resize(N);
     yp.resize(N);
     y << cs.initial.q + random(nq, 2e-3), random(nq, 1.0), random(nc, 10.0), random(nc, 1e-2);
@@ -84,7 +87,9 @@ struct GglPoint {
     }
     return D;
   }
-  Mat jacobian(double cj) { return Mat(ggl.jacobian(model().params(), t, cj, y.data(), yp.data())); }
+  Mat jacobian(double cj) {
+    return Mat(ggl.jacobian(model().params(), t, cj, y.data(), yp.data()));
+  }
 };
 
 // Largest |a − ref| relative to the largest |ref| (the entries of F span many magnitudes; an
@@ -108,7 +113,8 @@ double worst_block_error(const GglSystem& ggl, const Mat& a, const Mat& ref, std
     if (rows == 0) continue;
     const double scale = ref.middleRows(off[r], rows).cwiseAbs().maxCoeff();
     if (scale == 0) continue;
-    const double e = (a.middleRows(off[r], rows) - ref.middleRows(off[r], rows)).cwiseAbs().maxCoeff() / scale;
+    const double e =
+        (a.middleRows(off[r], rows) - ref.middleRows(off[r], rows)).cwiseAbs().maxCoeff() / scale;
     if (e > worst) worst = e, where = "rows F" + std::to_string(r + 1);
   }
   return worst;
@@ -123,23 +129,26 @@ void check_jacobian(GglPoint& pt, const char* name) {
   const double e_y = worst_block_error(pt.ggl, J0, Dy, w0);
   const double e_yp = worst_block_error(pt.ggl, (Jc - J0) / cj, Dyp, w1);
   const double e_all = worst_block_error(pt.ggl, Jc, Dy + cj * Dyp, w2);
-  std::printf("%s (N = %d): F_y %.2e (%s), F_ẏ %.2e (%s), F_y + c_j F_ẏ %.2e (%s)\n", name, pt.ggl.size(), e_y,
-              w0.c_str(), e_yp, w1.c_str(), e_all, w2.c_str());
+  std::printf("%s (N = %d): F_y %.2e (%s), F_ẏ %.2e (%s), F_y + c_j F_ẏ %.2e (%s)\n", name,
+              pt.ggl.size(), e_y, w0.c_str(), e_yp, w1.c_str(), e_all, w2.c_str());
   EXPECT_LT(e_y, 1e-7) << "F_y, " << w0;
   EXPECT_LT(e_yp, 1e-7) << "F_ẏ, " << w1;
   EXPECT_LT(e_all, 1e-7) << "F_y + c_j F_ẏ, " << w2;
 }
 
 // r = F_y yS + F_ẏ ẏS + F_p d against the derivative of F along (yS, ẏS, d) by central differences.
-void check_sensitivity_residual(GglPoint& pt, const std::vector<ParamDirection>& dirs, const char* name) {
+void check_sensitivity_residual(GglPoint& pt, const std::vector<ParamDirection>& dirs,
+                                const char* name) {
   const int N = pt.ggl.size(), nv = static_cast<int>(dirs.size());
   std::mt19937 g(7);
   std::uniform_real_distribution<double> u(-1, 1);
-  Mat yS = Mat::NullaryExpr(N, nv, [&] { return u(g); }), ypS = Mat::NullaryExpr(N, nv, [&] { return u(g); });
+  Mat yS = Mat::NullaryExpr(N, nv, [&] { return u(g); }),
+      ypS = Mat::NullaryExpr(N, nv, [&] { return u(g); });
   Mat r(N, nv);
   std::vector<const double*> a(nv), b(nv);
   std::vector<double*> c(nv);
-  for (int i = 0; i < nv; ++i) a[i] = yS.col(i).data(), b[i] = ypS.col(i).data(), c[i] = r.col(i).data();
+  for (int i = 0; i < nv; ++i)
+    a[i] = yS.col(i).data(), b[i] = ypS.col(i).data(), c[i] = r.col(i).data();
   pt.ggl.sensitivity_residual(pt.model().params(), pt.t, pt.y.data(), pt.yp.data(), dirs, a, b, c);
   Mat ref(N, nv);
   const double h = 1e-6;
@@ -167,8 +176,10 @@ double adjoint_residual_error(GglPoint& pt, bool mass_rate_only, std::string& wh
   const int nq = pt.ggl.nq(), N = pt.ggl.size();
   std::mt19937 g(11);
   std::uniform_real_distribution<double> u(-1, 1);
-  Vec xi = Vec::NullaryExpr(N, [&] { return u(g); }), xid = Vec::NullaryExpr(N, [&] { return u(g); });
-  Vec gq = Vec::NullaryExpr(nq, [&] { return u(g); }), gv = Vec::NullaryExpr(nq, [&] { return u(g); });
+  Vec xi = Vec::NullaryExpr(N, [&] { return u(g); }),
+      xid = Vec::NullaryExpr(N, [&] { return u(g); });
+  Vec gq = Vec::NullaryExpr(nq, [&] { return u(g); }),
+      gv = Vec::NullaryExpr(nq, [&] { return u(g); });
   if (mass_rate_only) {
     const Vec xv = xi.segment(nq, nq);
     xi.setZero();
@@ -176,8 +187,8 @@ double adjoint_residual_error(GglPoint& pt, bool mass_rate_only, std::string& wh
     xid.setZero(), gq.setZero(), gv.setZero();
   }
   Vec r(N);
-  EXPECT_TRUE(pt.ggl.adjoint_residual(pt.model().params(), pt.t, pt.y.data(), pt.yp.data(), xi.data(), xid.data(), gq,
-                                      gv, r.data()));
+  EXPECT_TRUE(pt.ggl.adjoint_residual(pt.model().params(), pt.t, pt.y.data(), pt.yp.data(),
+                                      xi.data(), xid.data(), gq, gv, r.data()));
   const Mat Dy = pt.differences(false, 1e-6), Dyp = pt.differences(true, 1e-3);
   auto mass_times_xi_v = [&](double tau) {  // M(q) ξ_v at q = y_q + τ v
     Vec y = pt.y, a = pt.yp;
@@ -192,8 +203,8 @@ double adjoint_residual_error(GglPoint& pt, bool mass_rate_only, std::string& wh
   ref.head(nq) += gq;
   ref.segment(nq, nq) += gv;
   if (!mass_rate_only) return worst_block_error(pt.ggl, r, ref, where);
-  where = "rows v, |Ṁ ξ_v| = " + std::to_string(mdot_xi.norm()) + " of |r_v| = " +
-          std::to_string(r.segment(nq, nq).norm());
+  where = "rows v, |Ṁ ξ_v| = " + std::to_string(mdot_xi.norm()) +
+          " of |r_v| = " + std::to_string(r.segment(nq, nq).norm());
   EXPECT_GT(mdot_xi.norm(), 1e-3 * r.segment(nq, nq).norm()) << "the mass rate must be visible";
   return (r - ref).segment(nq, nq).cwiseAbs().maxCoeff() / mdot_xi.cwiseAbs().maxCoeff();
 }
@@ -229,7 +240,8 @@ TEST(GglSystem, SensitivityResidualsAreTheDerivativeOfTheResidualAlongTheSensiti
     const int field = m.flexible_bodies()[0]->field;
     for (int e = 0; e < m.flexible_bodies()[0]->mesh.num_elements(); ++e)
       density.fields.push_back({field, e, 0.3 + 0.2 * e});
-    stiffness.scalars = {{m.parameter_index("spring.stiffness"), 50.0}, {m.parameter_index("plate.E"), 3e6},
+    stiffness.scalars = {{m.parameter_index("spring.stiffness"), 50.0},
+                         {m.parameter_index("plate.E"), 3e6},
                          {m.parameter_index("crank.mass"), 0.1}};
     for (const auto& [j, v] : stiffness.scalars) ASSERT_GE(j, 0);
     check_sensitivity_residual(pt, {density, stiffness}, "plate and crank");

@@ -30,7 +30,8 @@ void expect_each_field_named(const std::vector<Breakage<Options>>& cases) {
     Options o;
     c.make_invalid(o);
     const std::string msg = o.validate();
-    EXPECT_EQ(msg.substr(0, c.field.size() + 2), c.field + ": ") << "for " << c.field << ", got \"" << msg << "\"";
+    EXPECT_EQ(msg.substr(0, c.field.size() + 2), c.field + ": ")
+        << "for " << c.field << ", got \"" << msg << "\"";
   }
 }
 
@@ -62,21 +63,23 @@ TEST(IntegratorOptions, GeneralizedAlphaNamesTheOffendingField) {
 
 TEST(IntegratorOptions, ObserverOptionsNameTheOffendingField) {
   using O = StepObserverOptions;
-  expect_each_field_named<O>({{"threads", [](O& o) { o.threads = 0; }}, {"threads", [](O& o) { o.threads = 3; }}});
+  expect_each_field_named<O>(
+      {{"threads", [](O& o) { o.threads = 0; }}, {"threads", [](O& o) { o.threads = 3; }}});
 }
 
 TEST(IntegratorOptions, IdasNamesTheOffendingField) {
   using O = IdasOptions;
-  expect_each_field_named<O>({{"rtol", [](O& o) { o.rtol = 0; }},
-                              {"atol", [](O& o) { o.atol = -1; }},
-                              {"h_out", [](O& o) { o.h_out = 0; }},
-                              {"t_end", [](O& o) { o.t_end = NAN; }},
-                              {"max_steps", [](O& o) { o.max_steps = 0; }},
-                              {"max_order", [](O& o) { o.max_order = 6; }},
-                              {"max_order", [](O& o) { o.max_order = -1; }},
-                              {"klu_pivot_tolerance", [](O& o) { o.klu_pivot_tolerance = 0; }},
-                              {"klu_pivot_tolerance", [](O& o) { o.klu_pivot_tolerance = 1.5; }},
-                              {"adjoint_checkpoint_steps", [](O& o) { o.adjoint_checkpoint_steps = 0; }}});
+  expect_each_field_named<O>(
+      {{"rtol", [](O& o) { o.rtol = 0; }},
+       {"atol", [](O& o) { o.atol = -1; }},
+       {"h_out", [](O& o) { o.h_out = 0; }},
+       {"t_end", [](O& o) { o.t_end = NAN; }},
+       {"max_steps", [](O& o) { o.max_steps = 0; }},
+       {"max_order", [](O& o) { o.max_order = 6; }},
+       {"max_order", [](O& o) { o.max_order = -1; }},
+       {"klu_pivot_tolerance", [](O& o) { o.klu_pivot_tolerance = 0; }},
+       {"klu_pivot_tolerance", [](O& o) { o.klu_pivot_tolerance = 1.5; }},
+       {"adjoint_checkpoint_steps", [](O& o) { o.adjoint_checkpoint_steps = 0; }}});
 }
 
 TEST(IntegratorOptions, StaticNamesTheOffendingField) {
@@ -92,7 +95,8 @@ TEST(IntegratorOptions, RunsRefuseInvalidOptionsWithTheFieldNamed) {
   Case cs = test::make_case(test::Pendulum{}.json(1e-2, 0.1));
   StepObserverOptions served;
   served.threads = 3;
-  const auto r = GeneralizedAlpha(cs.simulation, served).run(*cs.model, cs.model->params(), cs.initial, {});
+  const auto r =
+      GeneralizedAlpha(cs.simulation, served).run(*cs.model, cs.model->params(), cs.initial, {});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("threads: expected 1 or 2"), std::string::npos) << r.message;
   EXPECT_EQ(r.steps, 0);

@@ -6,7 +6,6 @@
 // must be the same to the bit: the IDAS reference runs before and after the switch to SparseLU
 // are compared bit for bit.
 #include <gtest/gtest.h>
-
 #include <sunlinsol/sunlinsol_klu.h>
 
 #include <Eigen/Dense>
@@ -43,7 +42,8 @@ struct Solvers {
   // `fresh_klu`: SUNLinSol_KLU re-initialized first (what the history-free mode replaces).
   void step(const SpMat& J, const Vec& rhs, bool fresh_klu, Vec& x_ours, Vec& x_klu) {
     sun::copy_to(J, A.get());
-    if (fresh_klu) SUNLinSol_KLUReInit(klu.get(), A.get(), SM_NNZ_S(A.get()), SUNKLU_REINIT_PARTIAL);
+    if (fresh_klu)
+      SUNLinSol_KLUReInit(klu.get(), A.get(), SM_NNZ_S(A.get()), SUNKLU_REINIT_PARTIAL);
     ASSERT_EQ(SUNLinSolSetup(ours.get(), A.get()), 0);
     ASSERT_EQ(SUNLinSolSetup(klu.get(), A.get()), 0);
     sun::map(b.get()) = rhs;
@@ -74,8 +74,10 @@ struct Jacobians {
   }
 };
 
-void expect_same_bits_and_right(const SpMat& J, const Vec& rhs, const Vec& x_ours, const Vec& x_klu, const char* what) {
-  for (Eigen::Index i = 0; i < x_ours.size(); ++i) EXPECT_EQ(x_ours[i], x_klu[i]) << what << ", entry " << i;
+void expect_same_bits_and_right(const SpMat& J, const Vec& rhs, const Vec& x_ours, const Vec& x_klu,
+                                const char* what) {
+  for (Eigen::Index i = 0; i < x_ours.size(); ++i)
+    EXPECT_EQ(x_ours[i], x_klu[i]) << what << ", entry " << i;
   const Vec x_dense = Mat(J).fullPivLu().solve(rhs);
   EXPECT_LT((x_ours - x_dense).norm(), 1e-9 * x_dense.norm()) << what;
 }
@@ -99,7 +101,8 @@ TEST(SparseLuLinearSolver, SolvesAsSunLinSolKluToTheBitThroughRefactorizationsAn
   s.step(J, rhs, false, a, b);
   const double eps23 = std::pow(std::numeric_limits<double>::epsilon(), 2.0 / 3.0);
   EXPECT_LT(SUNLinSol_KLUGetCommon(s.klu.get())->rcond, eps23) << "the condest path is exercised";
-  EXPECT_GT(SUNLinSol_KLUGetCommon(s.klu.get())->condest, 1 / eps23) << "the fresh pivoting is exercised";
+  EXPECT_GT(SUNLinSol_KLUGetCommon(s.klu.get())->condest, 1 / eps23)
+      << "the fresh pivoting is exercised";
   for (Eigen::Index i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << "badly scaled, entry " << i;
   EXPECT_TRUE(a.allFinite());
   // IDAS re-initialized (IDAReInit): the next setup factorizes with fresh pivoting.

@@ -1,10 +1,9 @@
 // Invalid case files fail with the file, the JSON path and what was expected.
 #include <gtest/gtest.h>
 
-#include <fstream>
-
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -45,12 +44,14 @@ TEST(CaseLoader, ConstraintForceMeasureInAnyOrderLoadsAndDuplicatesAreRefused) {
     json cf = {{"name", "pin_force"}, {"type", "constraint_force"}, {"joint", "pin"}};
     json ang = {{"name", "theta"}, {"type", "angle"}, {"body", "bob"}};
     json pos = {{"name", "p"}, {"type", "position"}, {"point", {{"body", "bob"}}}};
-    j["output"]["measures"] = first == 0 ? json::array({cf, ang, pos}) : json::array({ang, cf, pos});
+    j["output"]["measures"] =
+        first == 0 ? json::array({cf, ang, pos}) : json::array({ang, cf, pos});
     const Case cs = test::make_case(j);
     ASSERT_EQ(cs.measures.size(), 3u);
     for (const auto& m : cs.measures) EXPECT_TRUE(m != nullptr);
     j["output"]["measures"].push_back({{"name", "pin_force"}, {"type", "angle"}, {"body", "bob"}});
-    EXPECT_NE(error_of(j).find("duplicate measure name 'pin_force'"), std::string::npos) << error_of(j);
+    EXPECT_NE(error_of(j).find("duplicate measure name 'pin_force'"), std::string::npos)
+        << error_of(j);
   }
 }
 
@@ -80,73 +81,147 @@ TEST_P(CaseLoaderErrors, MessageNamesThePathAndWhatWasExpected) {
 INSTANTIATE_TEST_SUITE_P(
     Table, CaseLoaderErrors,
     ::testing::Values(
-        BadInput{"unknown key", R"([{"op":"add","path":"/bodies/0/thickess","value":1}])", "/bodies/0/thickess: unknown key"},
-        BadInput{"negative mass", R"([{"op":"replace","path":"/bodies/0/mass","value":-1}])", "/bodies/0/mass: expected a non-negative number"},
-        BadInput{"wrong type", R"([{"op":"replace","path":"/bodies/0/mass","value":"heavy"}])", "/bodies/0/mass: expected a number, got string"},
-        BadInput{"unknown body type", R"([{"op":"replace","path":"/bodies/0/type","value":"soft"}])", "/bodies/0/type: expected one of \"rigid\", \"flexible\""},
-        BadInput{"unknown body in joint", R"([{"op":"replace","path":"/joints/0/a/body","value":"bobb"}])", "/joints/0/a/body: unknown body 'bobb'"},
-        BadInput{"missing time step", R"([{"op":"remove","path":"/simulation/h"}])", "/simulation: missing required key 'h'"},
-        BadInput{"zero time step", R"([{"op":"replace","path":"/simulation/h","value":0}])", "/simulation/h: expected a positive number"},
-        BadInput{"rho_inf out of range", R"([{"op":"add","path":"/simulation/rho_inf","value":1.5}])", "/simulation/rho_inf: expected a value in [0, 1]"},
-        BadInput{"duplicate names", R"([{"op":"replace","path":"/joints/0/name","value":"bob"}])", "/joints/0/name: duplicate name 'bob'"},
-        BadInput{"point not an object", R"([{"op":"replace","path":"/joints/0/a","value":3}])", "/joints/0/a: expected a point object"},
-        BadInput{"vector of wrong size", R"([{"op":"replace","path":"/bodies/0/position","value":[1,2,3]}])", "/bodies/0/position: expected an array of two numbers"},
-        BadInput{"unconstrained massless body", R"([{"op":"replace","path":"/bodies/0/mass","value":0},{"op":"replace","path":"/bodies/0/inertia","value":0},{"op":"remove","path":"/joints/0"}])",
-                 "rigid body 'bob' has no mass and no joint"},
-        BadInput{"no bodies", R"([{"op":"replace","path":"/bodies","value":[]}])", "/bodies: expected at least one body"},
-        BadInput{"unknown joint type", R"([{"op":"replace","path":"/joints/0/type","value":"hinge"}])", "/joints/0/type: expected one of"},
-        BadInput{"t_end not a multiple of h", R"([{"op":"replace","path":"/simulation/h","value":0.03}])", "/simulation/h: t_end = "},
-        BadInput{"response window after the run", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"r","measure":"a","aggregate":"average","window":{"t0":0.5,"t1":0.6}}]}}])",
-                 "/output/responses/0/window: the window"},
-        BadInput{"response window between two steps", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"r","measure":"a","aggregate":"max","window":{"t0":0.051,"t1":0.059}}]}}])",
-                 "contains no time step"},
-        BadInput{"negative node-set tolerance", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001,"node_sets":{"tip":{"line_x":1,"tolerance":-1}}}}])",
-                 "/bodies/1/node_sets/tip/tolerance: expected a positive number"},
-        BadInput{"unknown ordering", R"([{"op":"add","path":"/simulation/ordering","value":"metis"}])", "/simulation/ordering: expected one of \"amd\", \"nested_dissection\""},
-        BadInput{"negative thickness", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":-0.001}}])",
-                 "/bodies/1/thickness: expected a positive number"},
-        BadInput{"empty node set", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001,"node_sets":{"far":{"line_x":5}}}}])",
-                 "/bodies/1/node_sets/far: the selector selects no node"},
-        BadInput{"unknown node set", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/joints/-","value":{"type":"clamp","flexible":"p","node_set":"middle"}}])",
-                 "/joints/1/node_set: body 'p' has no node set 'middle'"},
-        BadInput{"Poisson ratio", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.5,"rho":1000},"thickness":0.001}}])",
-                 "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"},
-        BadInput{"torque on a flexible body", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/forces","value":[{"type":"torque","body":"p","torque":1}]}])",
-                 "/forces/0/body: 'p' is a flexible body; a rigid body is expected here"},
-        BadInput{"torque on an unknown body", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bobb","torque":1}]}])",
-                 "/forces/0/body: unknown rigid body 'bobb'"},
-        BadInput{"torque and law both given", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":1,"law":{"type":"constant","value":2}}]}])",
-                 "/forces/0: expected either \"torque\": T or \"law\": {...} (one of them)"},
-        BadInput{"torque without torque or law", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob"}]}])",
+        BadInput{"unknown key", R"([{"op":"add","path":"/bodies/0/thickess","value":1}])",
+                 "/bodies/0/thickess: unknown key"},
+        BadInput{"negative mass", R"([{"op":"replace","path":"/bodies/0/mass","value":-1}])",
+                 "/bodies/0/mass: expected a non-negative number"},
+        BadInput{"wrong type", R"([{"op":"replace","path":"/bodies/0/mass","value":"heavy"}])",
+                 "/bodies/0/mass: expected a number, got string"},
+        BadInput{"unknown body type",
+                 R"([{"op":"replace","path":"/bodies/0/type","value":"soft"}])",
+                 "/bodies/0/type: expected one of \"rigid\", \"flexible\""},
+        BadInput{"unknown body in joint",
+                 R"([{"op":"replace","path":"/joints/0/a/body","value":"bobb"}])",
+                 "/joints/0/a/body: unknown body 'bobb'"},
+        BadInput{"missing time step", R"([{"op":"remove","path":"/simulation/h"}])",
+                 "/simulation: missing required key 'h'"},
+        BadInput{"zero time step", R"([{"op":"replace","path":"/simulation/h","value":0}])",
+                 "/simulation/h: expected a positive number"},
+        BadInput{"rho_inf out of range",
+                 R"([{"op":"add","path":"/simulation/rho_inf","value":1.5}])",
+                 "/simulation/rho_inf: expected a value in [0, 1]"},
+        BadInput{"duplicate names", R"([{"op":"replace","path":"/joints/0/name","value":"bob"}])",
+                 "/joints/0/name: duplicate name 'bob'"},
+        BadInput{"point not an object", R"([{"op":"replace","path":"/joints/0/a","value":3}])",
+                 "/joints/0/a: expected a point object"},
+        BadInput{"vector of wrong size",
+                 R"([{"op":"replace","path":"/bodies/0/position","value":[1,2,3]}])",
+                 "/bodies/0/position: expected an array of two numbers"},
+        BadInput{
+            "unconstrained massless body",
+            R"([{"op":"replace","path":"/bodies/0/mass","value":0},{"op":"replace","path":"/bodies/0/inertia","value":0},{"op":"remove","path":"/joints/0"}])",
+            "rigid body 'bob' has no mass and no joint"},
+        BadInput{"no bodies", R"([{"op":"replace","path":"/bodies","value":[]}])",
+                 "/bodies: expected at least one body"},
+        BadInput{"unknown joint type",
+                 R"([{"op":"replace","path":"/joints/0/type","value":"hinge"}])",
+                 "/joints/0/type: expected one of"},
+        BadInput{"t_end not a multiple of h",
+                 R"([{"op":"replace","path":"/simulation/h","value":0.03}])",
+                 "/simulation/h: t_end = "},
+        BadInput{
+            "response window after the run",
+            R"([{"op":"add","path":"/output","value":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"r","measure":"a","aggregate":"average","window":{"t0":0.5,"t1":0.6}}]}}])",
+            "/output/responses/0/window: the window"},
+        BadInput{
+            "response window between two steps",
+            R"([{"op":"add","path":"/output","value":{"measures":[{"name":"a","type":"angle","body":"bob"}],"responses":[{"name":"r","measure":"a","aggregate":"max","window":{"t0":0.051,"t1":0.059}}]}}])",
+            "contains no time step"},
+        BadInput{
+            "negative node-set tolerance",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001,"node_sets":{"tip":{"line_x":1,"tolerance":-1}}}}])",
+            "/bodies/1/node_sets/tip/tolerance: expected a positive number"},
+        BadInput{"unknown ordering",
+                 R"([{"op":"add","path":"/simulation/ordering","value":"metis"}])",
+                 "/simulation/ordering: expected one of \"amd\", \"nested_dissection\""},
+        BadInput{
+            "negative thickness",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":-0.001}}])",
+            "/bodies/1/thickness: expected a positive number"},
+        BadInput{
+            "empty node set",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001,"node_sets":{"far":{"line_x":5}}}}])",
+            "/bodies/1/node_sets/far: the selector selects no node"},
+        BadInput{
+            "unknown node set",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/joints/-","value":{"type":"clamp","flexible":"p","node_set":"middle"}}])",
+            "/joints/1/node_set: body 'p' has no node set 'middle'"},
+        BadInput{
+            "Poisson ratio",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.5,"rho":1000},"thickness":0.001}}])",
+            "/bodies/1/material/nu: expected Poisson's ratio in [0, 0.5)"},
+        BadInput{
+            "torque on a flexible body",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/forces","value":[{"type":"torque","body":"p","torque":1}]}])",
+            "/forces/0/body: 'p' is a flexible body; a rigid body is expected here"},
+        BadInput{
+            "torque on an unknown body",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bobb","torque":1}]}])",
+            "/forces/0/body: unknown rigid body 'bobb'"},
+        BadInput{
+            "torque and law both given",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":1,"law":{"type":"constant","value":2}}]}])",
+            "/forces/0: expected either \"torque\": T or \"law\": {...} (one of them)"},
+        BadInput{"torque without torque or law",
+                 R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob"}]}])",
                  "/forces/0: expected either \"torque\": T or \"law\""},
-        BadInput{"torque given as a string", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":"big"}]}])",
-                 "/forces/0/torque: expected a number, got string"},
-        BadInput{"torque with a misspelt key", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":1,"sacle":2}]}])",
-                 "/forces/0/sacle: unknown key"},
-        BadInput{"torque law of unknown type", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"sine"}}]}])",
-                 "/forces/0/law/type: expected one of \"trapezoid\", \"ramp\", \"table\", \"constant\""},
-        BadInput{"rotational spring to an unknown body", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"rob","stiffness":1}]}])",
-                 "/forces/0/b: unknown rigid body 'rob'"},
-        BadInput{"rotational spring on itself", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"bob","stiffness":1}]}])",
-                 "/forces/0/b: a rotational spring cannot connect a body to itself"},
-        BadInput{"rotational spring without b", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","stiffness":1}]}])",
-                 "/forces/0: missing required key 'b'"},
-        BadInput{"rotational spring with negative stiffness", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":-1}]}])",
-                 "/forces/0/stiffness: expected a non-negative number, got -1"},
-        BadInput{"rotational spring with a misspelt key", R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":1,"free_angel":0}]}])",
-                 "/forces/0/free_angel: unknown key"},
-        BadInput{"periodic table whose ends differ", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[2,0.5]],"period":2}}]}])",
-                 "/forces/0/law/points: table: a periodic table must end with its first value: s(x0) = 0 but s(x0 + period) = 0.5"},
-        BadInput{"periodic table longer than its period", R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[3,0]],"period":2}}]}])",
-                 "/forces/0/law/points: table: the points span 3, more than the period 2"},
-        BadInput{"angular velocity of a flexible body", R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/output","value":{"measures":[{"name":"w","type":"angular_velocity","body":"p"}]}}])",
-                 "/output/measures/0/body: 'p' is a flexible body; a rigid body is expected here"},
-        BadInput{"velocity of a point on an unknown body", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","point":{"body":"rob"}}]}}])",
-                 "/output/measures/0/point/body: unknown body 'rob'"},
-        BadInput{"velocity measure with a misspelt key", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","piont":{"body":"bob"}}]}}])",
-                 "/output/measures/0: missing required key 'point'"},
-        BadInput{"duplicate measure name after a constraint force", R"([{"op":"add","path":"/output","value":{"measures":[{"name":"f","type":"constraint_force","joint":"pin"},{"name":"f","type":"angular_velocity","body":"bob"}]}}])",
-                 "/output/measures/1/name: duplicate measure name 'f'"}),
+        BadInput{
+            "torque given as a string",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":"big"}]}])",
+            "/forces/0/torque: expected a number, got string"},
+        BadInput{
+            "torque with a misspelt key",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","torque":1,"sacle":2}]}])",
+            "/forces/0/sacle: unknown key"},
+        BadInput{
+            "torque law of unknown type",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"sine"}}]}])",
+            "/forces/0/law/type: expected one of \"trapezoid\", \"ramp\", \"table\", \"constant\""},
+        BadInput{
+            "rotational spring to an unknown body",
+            R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"rob","stiffness":1}]}])",
+            "/forces/0/b: unknown rigid body 'rob'"},
+        BadInput{
+            "rotational spring on itself",
+            R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"bob","stiffness":1}]}])",
+            "/forces/0/b: a rotational spring cannot connect a body to itself"},
+        BadInput{
+            "rotational spring without b",
+            R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","stiffness":1}]}])",
+            "/forces/0: missing required key 'b'"},
+        BadInput{
+            "rotational spring with negative stiffness",
+            R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":-1}]}])",
+            "/forces/0/stiffness: expected a non-negative number, got -1"},
+        BadInput{
+            "rotational spring with a misspelt key",
+            R"([{"op":"add","path":"/forces","value":[{"type":"rotational_spring_damper","a":"bob","b":"ground","stiffness":1,"free_angel":0}]}])",
+            "/forces/0/free_angel: unknown key"},
+        BadInput{
+            "periodic table whose ends differ",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[2,0.5]],"period":2}}]}])",
+            "/forces/0/law/points: table: a periodic table must end with its first value: s(x0) = "
+            "0 but s(x0 + period) = 0.5"},
+        BadInput{
+            "periodic table longer than its period",
+            R"([{"op":"add","path":"/forces","value":[{"type":"torque","body":"bob","law":{"type":"table","points":[[0,0],[1,1],[3,0]],"period":2}}]}])",
+            "/forces/0/law/points: table: the points span 3, more than the period 2"},
+        BadInput{
+            "angular velocity of a flexible body",
+            R"([{"op":"add","path":"/bodies/-","value":{"name":"p","type":"flexible","mesh":{"type":"rectangle","size":[1,0.1],"elements":[2,1]},"material":{"E":1e9,"nu":0.3,"rho":1000},"thickness":0.001}},{"op":"add","path":"/output","value":{"measures":[{"name":"w","type":"angular_velocity","body":"p"}]}}])",
+            "/output/measures/0/body: 'p' is a flexible body; a rigid body is expected here"},
+        BadInput{
+            "velocity of a point on an unknown body",
+            R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","point":{"body":"rob"}}]}}])",
+            "/output/measures/0/point/body: unknown body 'rob'"},
+        BadInput{
+            "velocity measure with a misspelt key",
+            R"([{"op":"add","path":"/output","value":{"measures":[{"name":"v","type":"velocity","piont":{"body":"bob"}}]}}])",
+            "/output/measures/0: missing required key 'point'"},
+        BadInput{
+            "duplicate measure name after a constraint force",
+            R"([{"op":"add","path":"/output","value":{"measures":[{"name":"f","type":"constraint_force","joint":"pin"},{"name":"f","type":"angular_velocity","body":"bob"}]}}])",
+            "/output/measures/1/name: duplicate measure name 'f'"}),
     [](const auto& info) {
       std::string s = info.param.label;
       for (char& c : s)
@@ -157,7 +232,8 @@ INSTANTIATE_TEST_SUITE_P(
 namespace {
 json with_design() {
   json j = minimal();
-  j["bodies"].push_back(R"({"name": "p", "type": "flexible", "mesh": {"type": "rectangle", "size": [0.1, 0.02], "elements": [10, 2]},
+  j["bodies"].push_back(
+      R"({"name": "p", "type": "flexible", "mesh": {"type": "rectangle", "size": [0.1, 0.02], "elements": [10, 2]},
                              "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "thickness": 0.001})"_json);
   j["design"] = R"({"variables": [{"name": "r", "initial": 0.005, "lower": 0.001, "upper": 0.008}],
                     "geometry": [{"body": "p", "features": [{"name": "hole", "type": "circle", "cx": 0.05, "cy": 0.01, "r": "r"}]}]})"_json;
@@ -192,10 +268,13 @@ TEST(CaseLoader, DesignSectionSetsTheInitialMaterialField) {
   j["bodies"][1]["mesh"]["elements"] = {40, 8};
   const Case fine = test::make_case(j);
   const double m10 = void_mass(coarse), m25 = void_mass(fine), ref = rho_t * area * (1 - mu_min);
-  std::printf("circle r = 5 mm: void mass %+.3f %% (10 mm mesh), %+.3f %% (2.5 mm) of the closed form; with the "
-              "band's area: %+.4f %%, %+.4f %%\n",
-              100 * (m10 / ref - 1), 100 * (m25 / ref - 1), 100 * (m10 / (ref + rho_t * (1 - mu_min) * band_area(0.01)) - 1),
-              100 * (m25 / (ref + rho_t * (1 - mu_min) * band_area(0.0025)) - 1));
+  std::printf(
+      "circle r = 5 mm: void mass %+.3f %% (10 mm mesh), %+.3f %% (2.5 mm) of the closed form; "
+      "with the "
+      "band's area: %+.4f %%, %+.4f %%\n",
+      100 * (m10 / ref - 1), 100 * (m25 / ref - 1),
+      100 * (m10 / (ref + rho_t * (1 - mu_min) * band_area(0.01)) - 1),
+      100 * (m25 / (ref + rho_t * (1 - mu_min) * band_area(0.0025)) - 1));
   // the logistic band adds π²ε²/(3r²) to the area: 5.1 % with ε = 0.625 mm (10 mm elements),
   // 0.32 % with 0.156 mm; what remains is the sub-cell quadrature (measured ≤ 1.1e-5): 2e-4
   EXPECT_NEAR(m25 / ref, 1.0, 0.02);
@@ -208,16 +287,24 @@ TEST(CaseLoader, SuperEllipseHoleHasItsClosedFormArea) {
   // 2.5 mm mesh, rotated by 0.4 rad, loaded through the design section
   json j = with_design();
   j["bodies"][1]["mesh"]["elements"] = {40, 8};
-  j["design"]["geometry"][0]["features"] = json::array(
-      {{{"name", "se"}, {"type", "super_ellipse"}, {"cx", 0.05}, {"cy", 0.01}, {"a", 0.012}, {"b", 0.006}, {"xi", 4},
-        {"eta", 3}, {"angle", 0.4}}});
+  j["design"]["geometry"][0]["features"] = json::array({{{"name", "se"},
+                                                         {"type", "super_ellipse"},
+                                                         {"cx", 0.05},
+                                                         {"cy", 0.01},
+                                                         {"a", 0.012},
+                                                         {"b", 0.006},
+                                                         {"xi", 4},
+                                                         {"eta", 3},
+                                                         {"angle", 0.4}}});
   const Case cs = test::make_case(j);
   const double area = 4 * 0.012 * 0.006 * std::tgamma(1 + 1 / 4.0) * std::tgamma(1 + 1 / 3.0) /
                       std::tgamma(1 + 1 / 4.0 + 1 / 3.0);
   const double m = void_mass(cs), ref = 1000 * 0.001 * area * (1 - 1e-3);
   const double with_band = 1000 * 0.001 * (area + band_area(0.0025)) * (1 - 1e-3);
-  std::printf("super-ellipse: void mass %.6e kg, closed form %.6e kg (%+.3f %%), with the band's area %+.4f %%\n", m, ref,
-              100 * (m / ref - 1), 100 * (m / with_band - 1));
+  std::printf(
+      "super-ellipse: void mass %.6e kg, closed form %.6e kg (%+.3f %%), with the band's area "
+      "%+.4f %%\n",
+      m, ref, 100 * (m / ref - 1), 100 * (m / with_band - 1));
   // the band adds 0.10 %; the rest is the sub-cell quadrature and the rounded corners of the
   // super-ellipse, where κ is large (measured 4e-5): 5e-4
   EXPECT_NEAR(m / ref, 1.0, 0.005);
@@ -230,12 +317,18 @@ TEST(CaseLoader, BadDesignBindingsNameTheJsonPath) {
     const char* expected;
   };
   const Bad bad[] = {
-      {R"([{"op":"replace","path":"/design/geometry/0/features/0/r","value":"rr"}])", "/design/geometry/0/features/0/r: unknown design variable 'rr'"},
-      {R"([{"op":"replace","path":"/design/variables/0/initial","value":0.01}])", "/design/variables/0/initial: initial value 0.010000 is outside its bounds"},
-      {R"([{"op":"replace","path":"/design/variables/0/lower","value":-0.001}])", "feature 'hole' is degenerate within the design bounds: radius r must be non-negative"},
-      {R"([{"op":"replace","path":"/design/geometry/0/body","value":"bob"}])", "/design/geometry/0/body: unknown flexible body 'bob'"},
-      {R"([{"op":"add","path":"/design/geometry/0/region","value":{"and":["hole","slot"]}}])", "/design/geometry/0/region/and/1: unknown feature 'slot'"},
-      {R"([{"op":"add","path":"/design/parameters","value":[{"parameter":"bob.massive","variable":"r"}]}])", "/design/parameters/0/parameter: unknown model parameter 'bob.massive'"},
+      {R"([{"op":"replace","path":"/design/geometry/0/features/0/r","value":"rr"}])",
+       "/design/geometry/0/features/0/r: unknown design variable 'rr'"},
+      {R"([{"op":"replace","path":"/design/variables/0/initial","value":0.01}])",
+       "/design/variables/0/initial: initial value 0.010000 is outside its bounds"},
+      {R"([{"op":"replace","path":"/design/variables/0/lower","value":-0.001}])",
+       "feature 'hole' is degenerate within the design bounds: radius r must be non-negative"},
+      {R"([{"op":"replace","path":"/design/geometry/0/body","value":"bob"}])",
+       "/design/geometry/0/body: unknown flexible body 'bob'"},
+      {R"([{"op":"add","path":"/design/geometry/0/region","value":{"and":["hole","slot"]}}])",
+       "/design/geometry/0/region/and/1: unknown feature 'slot'"},
+      {R"([{"op":"add","path":"/design/parameters","value":[{"parameter":"bob.massive","variable":"r"}]}])",
+       "/design/parameters/0/parameter: unknown model parameter 'bob.massive'"},
   };
   for (const auto& b : bad) {
     const std::string msg = error_of(with_design().patch(json::parse(b.patch)));
@@ -245,8 +338,10 @@ TEST(CaseLoader, BadDesignBindingsNameTheJsonPath) {
 
 TEST(CaseLoader, DesignVariableBoundToAModelParameter) {
   json j = with_design();
-  j["design"]["variables"].push_back(R"({"name": "m", "initial": 2.5, "lower": 1, "upper": 5})"_json);
-  j["design"]["parameters"] = R"([{"parameter": "bob.mass", "variable": "m", "scale": 2, "offset": 0.1}])"_json;
+  j["design"]["variables"].push_back(
+      R"({"name": "m", "initial": 2.5, "lower": 1, "upper": 5})"_json);
+  j["design"]["parameters"] =
+      R"([{"parameter": "bob.mass", "variable": "m", "scale": 2, "offset": 0.1}])"_json;
   const Case cs = test::make_case(j);
   EXPECT_DOUBLE_EQ(cs.model->params().scalars[cs.model->parameter_index("bob.mass")], 5.1);
 }
@@ -260,7 +355,8 @@ TEST(Sha256, MatchesTheFipsTestVectors) {
 
 TEST(CaseLoader, TorqueAndRotationalSpringParameters) {
   json j = minimal();
-  j["bodies"].push_back(R"({"name": "arm", "type": "rigid", "position": [0, 1], "angle": 0.25, "mass": 1, "inertia": 0.1})"_json);
+  j["bodies"].push_back(
+      R"({"name": "arm", "type": "rigid", "position": [0, 1], "angle": 0.25, "mass": 1, "inertia": 0.1})"_json);
   j["bodies"][0]["angle"] = 1.0;
   j["forces"] = R"([
     {"name": "motor", "type": "torque", "body": "bob", "law": {"type": "ramp", "speed": 2, "ramp_time": 0.5}},
@@ -289,7 +385,8 @@ TEST(CaseLoader, TorqueAndRotationalSpringParameters) {
   const double k = 1;
   m.residual(s, m.params(), k, 0, R);
   const int th = m.find_rigid("bob")->dof0 + 2, th_arm = m.find_rigid("arm")->dof0 + 2;
-  EXPECT_NEAR(R[th], -(2 * 0.3 * 0.3 / (2 * 0.5)), 1e-15) << "the springs are at their free angles, bob has no load";
+  EXPECT_NEAR(R[th], -(2 * 0.3 * 0.3 / (2 * 0.5)), 1e-15)
+      << "the springs are at their free angles, bob has no load";
   EXPECT_NEAR(R[th_arm], 3 * 0.5 + 7 * (0.25 + 0.5), 1e-14);
 }
 
@@ -301,10 +398,12 @@ TEST(CaseLoader, PeriodicTableFileErrorNamesTheJsonPathAndTheFile) {
     std::fclose(out);
   }
   json j = minimal();
-  j["forces"] = json::array({{{"type", "torque"}, {"body", "bob"},
+  j["forces"] = json::array({{{"type", "torque"},
+                              {"body", "bob"},
                               {"law", {{"type", "table"}, {"file", f}, {"period", 2}}}}});
   const std::string msg = error_of(j);
-  EXPECT_NE(msg.find("<test>: /forces/0/law/file: " + f + ": table: a periodic table must end with its first value"),
+  EXPECT_NE(msg.find("<test>: /forces/0/law/file: " + f +
+                     ": table: a periodic table must end with its first value"),
             std::string::npos)
       << msg;
 }
@@ -313,7 +412,8 @@ TEST(CaseLoader, RedundantOrConflictingConstraintsAreRefusedNamingTheJoints) {
   // independent reference: the slider-crank has 10 independent constraint equations; a second
   // copy of a bearing adds 2 dependent ones, a second prismatic joint along y locks the piston's
   // rotation twice (1 dependent) — both seen at load time, naming the added joint
-  const std::string file = std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json";
+  const std::string file =
+      std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank_rigid/slider_crank_spring.json";
   const json base = json::parse(std::ifstream(file));
   EXPECT_EQ(error_of(base), "");
   json dup = base;
@@ -321,10 +421,13 @@ TEST(CaseLoader, RedundantOrConflictingConstraintsAreRefusedNamingTheJoints) {
   bearing["name"] = "main_bearing_2";
   dup["joints"].push_back(bearing);
   const std::string e1 = error_of(dup);
-  EXPECT_NE(e1.find("/joints: 2 of the 10 constraint equations are redundant"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("/joints: 2 of the 10 constraint equations are redundant"), std::string::npos)
+      << e1;
   EXPECT_NE(e1.find("'main_bearing_2'"), std::string::npos) << e1;
   json two = base;
-  two["joints"].push_back({{"name", "cyl2"}, {"type", "prismatic"}, {"a", {{"body", "piston"}, {"at", {0, 0}}}},
+  two["joints"].push_back({{"name", "cyl2"},
+                           {"type", "prismatic"},
+                           {"a", {{"body", "piston"}, {"at", {0, 0}}}},
                            {"direction", {0, 1}}});
   const std::string e2 = error_of(two);
   EXPECT_NE(e2.find("1 of the 10 constraint equations"), std::string::npos) << e2;

@@ -187,7 +187,9 @@ TEST(LoaderErrors, SensitivitiesNeedADesignAndResponses) {
       compute_sensitivities(cs, Vec(), SensitivityOptions{});
       FAIL();
     } catch (const SetupError& e) {  // by name; the command line locates it in the case file
-      EXPECT_EQ(std::string(locate("c.json", e).what()).find("c.json: /design: sensitivities need a design section"), 0u)
+      EXPECT_EQ(std::string(locate("c.json", e).what())
+                    .find("c.json: /design: sensitivities need a design section"),
+                0u)
           << e.what();
     }
   }
@@ -200,7 +202,8 @@ TEST(LoaderErrors, SensitivitiesNeedADesignAndResponses) {
       compute_sensitivities(cs, cs.design->initial(), SensitivityOptions{});
       FAIL();
     } catch (const SetupError& e) {
-      EXPECT_EQ(std::string(locate("c.json", e).what()).find("c.json: /output/responses: sensitivities need at least one response"),
+      EXPECT_EQ(std::string(locate("c.json", e).what())
+                    .find("c.json: /output/responses: sensitivities need at least one response"),
                 0u)
           << e.what();
     }

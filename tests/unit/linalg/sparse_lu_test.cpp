@@ -1,10 +1,10 @@
 // SparseLU (KLU) against a dense LU of the same matrix; refactorization and multi-RHS solves.
+#include "lsmbs/linalg/sparse_lu.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <random>
-
-#include "lsmbs/linalg/sparse_lu.hpp"
 
 using namespace lsmbs;
 
@@ -115,7 +115,8 @@ TEST(SparseLU, NestedDissectionFillsLessThanAmdOnALargeGrid) {
   sb.add_diagonal();
   BlockAssembler asmb(sb.finalize());
   std::vector<double> vals(asmb.pattern().nnz(), 0.0);
-  for (size_t e = 0; e < edges.size(); ++e) asmb.add(vals, static_cast<int>(e), Eigen::Matrix2d{{1, -1}, {-1, 1}});
+  for (size_t e = 0; e < edges.size(); ++e)
+    asmb.add(vals, static_cast<int>(e), Eigen::Matrix2d{{1, -1}, {-1, 1}});
   for (int i = 0; i < n; ++i) asmb.add_diagonal(vals, i, 1e-3);
   long fill[2];
   for (int o = 0; o < 2; ++o) {
@@ -129,7 +130,8 @@ TEST(SparseLU, NestedDissectionFillsLessThanAmdOnALargeGrid) {
     const SpMat A = asmb.to_sparse(vals);
     EXPECT_LT((A * x - b).norm() / b.norm(), 1e-10);
   }
-  std::printf("5-point Laplacian %d x %d: nnz(L+U) AMD %ld, nested dissection %ld\n", m, m, fill[0], fill[1]);
+  std::printf("5-point Laplacian %d x %d: nnz(L+U) AMD %ld, nested dissection %ld\n", m, m, fill[0],
+              fill[1]);
   EXPECT_LT(fill[1], fill[0]);
 }
 

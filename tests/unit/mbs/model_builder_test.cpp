@@ -4,12 +4,13 @@
 // connection, the kinetic energy of given initial velocity fields; errors that name the entity and
 // the argument; and a model built in code against the same model read from JSON (identical
 // residuals: the builder is the loader's only way to make a model).
+#include "lsmbs/mbs/model_builder.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "lsmbs/integrators/generalized_alpha.hpp"
-#include "lsmbs/mbs/model_builder.hpp"
 #include "support/test_models.hpp"
 
 using namespace lsmbs;
@@ -62,7 +63,8 @@ TEST(ModelBuilder, RigidBodyIsThreeUnknownsAndItsInertiaAboutTheReferencePoint) 
   const Mat M = test::dense_mass_matrix(*model, s);
   const Vec2 Rpc = perp(rotation(p.th0) * p.c);
   Mat expected(3, 3);
-  expected << p.m, 0, p.m * Rpc.x(), 0, p.m, p.m * Rpc.y(), p.m * Rpc.x(), p.m * Rpc.y(), p.J + p.m * p.c.squaredNorm();
+  expected << p.m, 0, p.m * Rpc.x(), 0, p.m, p.m * Rpc.y(), p.m * Rpc.x(), p.m * Rpc.y(),
+      p.J + p.m * p.c.squaredNorm();
   EXPECT_LT((M - expected).lpNorm<Eigen::Infinity>(), 1e-14) << M;
 }
 
@@ -96,8 +98,10 @@ TEST(ModelBuilder, SpringFreeLengthDefaultsToTheInitialDistance) {
   ModelBuilder b;
   p.add(b);
   const Vec2 ground(2, 1), offset(0.2, 0.1);
-  b.spring_damper("relaxed", Point::at("bob", offset), Point::ground(ground), {.stiffness = 1e3, .damping = 5});
-  b.spring_damper("preloaded", Point::at("bob", offset), Point::ground(ground), {.stiffness = 1e3, .free_length = 0.5});
+  b.spring_damper("relaxed", Point::at("bob", offset), Point::ground(ground),
+                  {.stiffness = 1e3, .damping = 5});
+  b.spring_damper("preloaded", Point::at("bob", offset), Point::ground(ground),
+                  {.stiffness = 1e3, .free_length = 0.5});
   const auto model = b.build();
   const Vec2 a0 = p.x0 + rotation(p.th0) * offset;
   const double L = (ground - a0).norm();
@@ -126,8 +130,9 @@ TEST(ModelBuilder, RigidConnectionIsOneCoincidencePerNodeWithTheNodesOffsetInThe
   const Mesh2D mesh = Mesh2D::rectangle(0, -0.01, 0.1, 0.02, 4, 2);
   const std::vector<int> left = mesh.node_sets.at("left");
   ASSERT_EQ(left.size(), 3u);
-  b.flexible_body("plate", mesh,
-                  {.E = 1e7, .nu = 0.3, .rho = 1000, .thickness = 0.005, .origin = origin, .angle = alpha});
+  b.flexible_body(
+      "plate", mesh,
+      {.E = 1e7, .nu = 0.3, .rho = 1000, .thickness = 0.005, .origin = origin, .angle = alpha});
   b.rigid_connection("weld", "hub", "plate", "left");
   b.clamp("wall", "plate", "right");
   EXPECT_EQ(b.joint_equations("weld"), 6);
@@ -157,7 +162,9 @@ TEST(ModelBuilder, InitialVelocitiesGiveTheKineticEnergyOfTheirFields) {
   const double m = 1.5, J = 0.02, th0 = -0.6, w = 3.0;
   const Vec2 c(0.05, -0.03), v(0.4, -0.7);
   ModelBuilder rigid;
-  rigid.rigid_body("body", {.mass = m, .inertia = J, .angle = th0, .com = c, .velocity = v, .angular_velocity = w});
+  rigid.rigid_body(
+      "body",
+      {.mass = m, .inertia = J, .angle = th0, .com = c, .velocity = v, .angular_velocity = w});
   const auto mr = rigid.build();
   const Vec2 vG = v + w * perp(rotation(th0) * c);
   const double e_rigid = 0.5 * J * w * w + 0.5 * m * vG.squaredNorm();
@@ -170,14 +177,22 @@ TEST(ModelBuilder, InitialVelocitiesGiveTheKineticEnergyOfTheirFields) {
   const Vec2 O(0.2, -0.1);
   ModelBuilder flex;
   flex.flexible_body("plate", Mesh2D::rectangle(x0, y0, a, h, 6, 2),
-                     {.E = 7e10, .nu = 0.3, .rho = rho, .thickness = t, .origin = O, .angle = alpha, .velocity = v,
+                     {.E = 7e10,
+                      .nu = 0.3,
+                      .rho = rho,
+                      .thickness = t,
+                      .origin = O,
+                      .angle = alpha,
+                      .velocity = v,
                       .angular_velocity = w});
   const auto mf = flex.build();
   const double x1 = x0 + a, y1 = y0 + h, A = a * h;
   const Vec2 int_X = A * Vec2(x0 + a / 2, y0 + h / 2);
-  const double int_X2 = h * (x1 * x1 * x1 - x0 * x0 * x0) / 3 + a * (y1 * y1 * y1 - y0 * y0 * y0) / 3;
+  const double int_X2 =
+      h * (x1 * x1 * x1 - x0 * x0 * x0) / 3 + a * (y1 * y1 * y1 - y0 * y0 * y0) / 3;
   const double e_flex =
-      0.5 * rho * t * (A * v.squaredNorm() + 2 * w * v.dot(perp(rotation(alpha) * int_X)) + w * w * int_X2);
+      0.5 * rho * t *
+      (A * v.squaredNorm() + 2 * w * v.dot(perp(rotation(alpha) * int_X)) + w * w * int_X2);
   EXPECT_NEAR(mf->kinetic_energy(flex.initial_state(), mf->params()), e_flex, 1e-12 * e_flex);
 
   // which velocities were given: the integrators' initial projection keeps exactly those
@@ -197,8 +212,9 @@ TEST(ModelBuilder, InitialVelocitiesGiveTheKineticEnergyOfTheirFields) {
 TEST(ModelBuilder, PointsByName) {
   ModelBuilder b;
   b.rigid_body("arm", {.mass = 1, .inertia = 0.1, .position = {1, 2}, .angle = 0.5});
-  b.flexible_body("plate", Mesh2D::rectangle(0, 0, 1, 0.5, 2, 1),
-                  {.E = 1e9, .nu = 0.3, .rho = 1000, .thickness = 0.01, .origin = {3, 0}, .angle = 0.2});
+  b.flexible_body(
+      "plate", Mesh2D::rectangle(0, 0, 1, 0.5, 2, 1),
+      {.E = 1e9, .nu = 0.3, .rho = 1000, .thickness = 0.01, .origin = {3, 0}, .angle = 0.2});
   EXPECT_EQ(b.body_kind("arm"), ModelBuilder::BodyKind::kRigid);
   EXPECT_EQ(b.body_kind("plate"), ModelBuilder::BodyKind::kFlexible);
   EXPECT_EQ(b.body_kind("ground"), ModelBuilder::BodyKind::kNone);
@@ -212,8 +228,10 @@ TEST(ModelBuilder, PointsByName) {
   const PointRef n = b.resolve(Point::nearest("plate", {0.9, 0.45}));
   EXPECT_EQ(n.kind, PointRef::Kind::kNode);
   EXPECT_EQ(n.dof0, 3 + 2 * 5);  // nodes row by row: (0,0) (0.5,0) (1,0) (0,0.5) (0.5,0.5) (1,0.5)
-  EXPECT_LT((b.initial_position(Point::node("plate", 5)) - (Vec2(3, 0) + rotation(0.2) * Vec2(1, 0.5))).norm(),
-            1e-15);
+  EXPECT_LT(
+      (b.initial_position(Point::node("plate", 5)) - (Vec2(3, 0) + rotation(0.2) * Vec2(1, 0.5)))
+          .norm(),
+      1e-15);
 }
 
 TEST(ModelBuilder, ErrorsNameTheEntityAndTheArgument) {
@@ -230,20 +248,29 @@ TEST(ModelBuilder, ErrorsNameTheEntityAndTheArgument) {
   EXPECT_STREQ(e.what(), "joint 'pivot', a/body: unknown body 'crnk'");
 
   e = error_of([&] { b.rigid_body("pin", {.mass = 1}); });
-  EXPECT_STREQ(e.what(), "rigid body 'pin', name: duplicate name 'pin' (bodies, joints and forces need unique names)");
+  EXPECT_STREQ(
+      e.what(),
+      "rigid body 'pin', name: duplicate name 'pin' (bodies, joints and forces need unique names)");
   e = error_of([&] { b.rigid_body("ground", {.mass = 1}); });
   EXPECT_STREQ(e.what(), "rigid body 'ground', name: 'ground' is reserved");
   const Point pin = Point::at("bob", {-p.l, 0});
-  e = error_of([&] { b.spring_damper("s1", pin, Point::ground(b.initial_position(pin)), {.stiffness = 1}); });
-  EXPECT_STREQ(e.what(), "spring 's1': the spring's end points coincide initially (direction undefined)");
+  e = error_of([&] {
+    b.spring_damper("s1", pin, Point::ground(b.initial_position(pin)), {.stiffness = 1});
+  });
+  EXPECT_STREQ(e.what(),
+               "spring 's1': the spring's end points coincide initially (direction undefined)");
   e = error_of([&] { b.torque("motor", "plate", 1.0); });
-  EXPECT_STREQ(e.what(), "torque 'motor', body: 'plate' is a flexible body; a rigid body is expected here");
+  EXPECT_STREQ(e.what(),
+               "torque 'motor', body: 'plate' is a flexible body; a rigid body is expected here");
   e = error_of([&] { b.clamp("wall", "plate", "middle"); });
   EXPECT_STREQ(e.what(),
-               "joint 'wall', node_set: body 'plate' has no node set 'middle' (available: bottom, left, right, top)");
+               "joint 'wall', node_set: body 'plate' has no node set 'middle' (available: bottom, "
+               "left, right, top)");
   e = error_of([&] { b.revolute("hinge", Point::node("plate", 99), Point::at("bob")); });
-  EXPECT_STREQ(e.what(), "joint 'hinge', a/node: node index 99 out of range (body 'plate' has 6 nodes)");
-  e = error_of([&] { b.rotation_driver("motor", "bob", std::make_shared<ConstantLaw>(0.0), "bob"); });
+  EXPECT_STREQ(e.what(),
+               "joint 'hinge', a/node: node index 99 out of range (body 'plate' has 6 nodes)");
+  e = error_of(
+      [&] { b.rotation_driver("motor", "bob", std::make_shared<ConstantLaw>(0.0), "bob"); });
   EXPECT_STREQ(e.what(), "joint 'motor', relative_to: a body cannot be driven relative to itself");
   e = error_of([&] { b.joint_equations("nope"); });
   EXPECT_STREQ(e.what(), "unknown joint 'nope'");
@@ -260,7 +287,9 @@ TEST(ModelBuilder, ErrorsNameTheEntityAndTheArgument) {
   ModelBuilder lone;  // a body without mass, inertia or joint: its motion is not determined
   lone.rigid_body("free", {});
   e = error_of([&] { lone.build(); });
-  EXPECT_STREQ(e.what(), "rigid body 'free': rigid body 'free' has no mass and no joint: its motion is not determined");
+  EXPECT_STREQ(e.what(),
+               "rigid body 'free': rigid body 'free' has no mass and no joint: its motion is not "
+               "determined");
 }
 
 // The same model built in code and read from a JSON case: every element type the builder makes,
@@ -309,13 +338,20 @@ TEST(ModelBuilder, CodeAndJsonGiveTheSameModel) {
 
   ModelBuilder b;
   b.set_gravity({0.2, -9.81});
-  b.rigid_body("crank", {.mass = 1.2, .inertia = 0.01, .angle = 0.3, .com = {0.02, 0.01}, .angular_velocity = 5.0});
+  b.rigid_body(
+      "crank",
+      {.mass = 1.2, .inertia = 0.01, .angle = 0.3, .com = {0.02, 0.01}, .angular_velocity = 5.0});
   b.rigid_body("link", {.mass = 0.8, .inertia = 0.004, .position = {0.1, 0.05}, .angle = -0.2});
   b.rigid_body("slider", {.mass = 0.5, .inertia = 0.001, .position = {0.3, 0}});
   Mesh2D mesh = Mesh2D::rectangle(0, -0.01, 0.1, 0.02, 4, 2);
   mesh.node_sets["tip"] = mesh.nodes_on_line_x(0.1);
   b.flexible_body("plate", mesh,
-                  {.E = 1e7, .nu = 0.3, .rho = 1000, .thickness = 0.005, .origin = {0.3, 0.1}, .angle = 0.4,
+                  {.E = 1e7,
+                   .nu = 0.3,
+                   .rho = 1000,
+                   .thickness = 0.005,
+                   .origin = {0.3, 0.1},
+                   .angle = 0.4,
                    .velocity = Vec2(0.1, 0)});
   b.rigid_body("rod", {.mass = 0.1, .inertia = 0.001, .position = {0.3, 0.1}, .angle = 0.4});
   b.revolute("bearing", Point::at("crank"));
@@ -328,12 +364,14 @@ TEST(ModelBuilder, CodeAndJsonGiveTheSameModel) {
   b.point_mass("m_node", Point::nearest("plate", {0.05, 0}), 0.2);
   b.point_mass("m_body", Point::at("link", {0.03, 0.01}), 0.3);
   b.point_force("f", Point::node("plate", 3), Vec2(3, -2), 2);
-  b.spring_damper("spring", Point::at("crank", {0.02, 0}), Point::ground({0.5, 0.5}), {.stiffness = 1e3, .damping = 5});
+  b.spring_damper("spring", Point::at("crank", {0.02, 0}), Point::ground({0.5, 0.5}),
+                  {.stiffness = 1e3, .damping = 5});
   b.torque("motor", "crank", 0.5);
   b.rotational_spring_damper("coil", "link", "ground", {.stiffness = 20, .damping = 0.1});
   const double period = 6.283185307179586;
   b.pressure("gas", Point::at("slider"), {-1, 0}, 1e-3,
-             Table1D({0, 3}, {1e5, 2e5}, Table1D::Interp::kLinear, period), {.angle_of = "crank", .offset = 0.1});
+             Table1D({0, 3}, {1e5, 2e5}, Table1D::Interp::kLinear, period),
+             {.angle_of = "crank", .offset = 0.1});
   const auto model = b.build();
 
   const Model& from_json = *cs.model;
@@ -343,7 +381,8 @@ TEST(ModelBuilder, CodeAndJsonGiveTheSameModel) {
   EXPECT_EQ(model->params().scalars, from_json.params().scalars);
   EXPECT_EQ(b.joint_rows(), cs.joint_rows);
   EXPECT_EQ(b.initial_state().q, cs.initial.q);
-  EXPECT_EQ(b.initial_state().v, cs.initial.v);  // project_initial false: the given velocities as they are
+  EXPECT_EQ(b.initial_state().v,
+            cs.initial.v);  // project_initial false: the given velocities as they are
   // the residual (eq. 7) at the initial state with some accelerations and multipliers
   State s = b.initial_state();
   s.t = 0.05;
@@ -375,7 +414,8 @@ TEST(ModelBuilder, DocumentationExample) {
   o.h = 1e-3;
   o.t_end = 1.0;
   State end;
-  const IntegratorSummary run = GeneralizedAlpha(o).run(*model, model->params(), b.initial_state(), {}, &end);
+  const IntegratorSummary run =
+      GeneralizedAlpha(o).run(*model, model->params(), b.initial_state(), {}, &end);
   ASSERT_TRUE(run.ok) << run.message;
   EXPECT_EQ(run.steps, 1000);
   const PointRef bob = b.resolve(Point::at("bob"));

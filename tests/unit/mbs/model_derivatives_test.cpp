@@ -105,14 +105,16 @@ struct Fixture : ::testing::Test {
     }
     return D;
   }
-  static void expect_close(const Mat& a, const Mat& ref, double rel, const Model& m, const char* what) {
+  static void expect_close(const Mat& a, const Mat& ref, double rel, const Model& m,
+                           const char* what) {
     const double floor = 1e-9 * ref.lpNorm<Eigen::Infinity>();
     int bad = 0;
     for (int j = 0; j < ref.cols(); ++j)
       for (int i = 0; i < ref.rows(); ++i)
         if (std::abs(a(i, j) - ref(i, j)) > rel * std::abs(ref(i, j)) + floor && bad++ < 5)
-          ADD_FAILURE() << what << " entry (" << i << ", " << j << ") [" << m.describe_unknown(i) << " / "
-                        << m.describe_unknown(j) << "]: analytic " << a(i, j) << ", finite differences " << ref(i, j);
+          ADD_FAILURE() << what << " entry (" << i << ", " << j << ") [" << m.describe_unknown(i)
+                        << " / " << m.describe_unknown(j) << "]: analytic " << a(i, j)
+                        << ", finite differences " << ref(i, j);
     EXPECT_EQ(bad, 0) << what;
   }
 };
@@ -187,8 +189,10 @@ TEST_F(Fixture, VelocityAndAccelerationLevelConstraintTermsMatchDifferences) {
   const Vec d2 = (phi_at(h) - 2 * phi_at(0) + phi_at(-h)) / (h * h);
   const Mat J = Mat(m.constraint_jacobian(s.t, s.q, m.params()));
   const Vec vel = J * s.v + phi_t;
-  EXPECT_LT((vel - d1).lpNorm<Eigen::Infinity>(), 1e-7 * std::max(1.0, d1.lpNorm<Eigen::Infinity>()));
-  EXPECT_LT((gamma - d2).lpNorm<Eigen::Infinity>(), 1e-5 * std::max(1.0, d2.lpNorm<Eigen::Infinity>()));
+  EXPECT_LT((vel - d1).lpNorm<Eigen::Infinity>(),
+            1e-7 * std::max(1.0, d1.lpNorm<Eigen::Infinity>()));
+  EXPECT_LT((gamma - d2).lpNorm<Eigen::Infinity>(),
+            1e-5 * std::max(1.0, d2.lpNorm<Eigen::Infinity>()));
 }
 
 namespace {
@@ -205,8 +209,10 @@ Mat fd_of_jacobian(const Model& m, const State& s, const Vec& x, bool transposed
     Vec qp = s.q, qm = s.q;
     qp[j] += h;
     qm[j] -= h;
-    const SpMat Jp = m.constraint_jacobian(s.t, qp, m.params()), Jm = m.constraint_jacobian(s.t, qm, m.params());
-    D.col(j) = transposed ? Vec((Jp.transpose() * x - Jm.transpose() * x) / (2 * h)) : Vec((Jp * x - Jm * x) / (2 * h));
+    const SpMat Jp = m.constraint_jacobian(s.t, qp, m.params()),
+                Jm = m.constraint_jacobian(s.t, qm, m.params());
+    D.col(j) = transposed ? Vec((Jp.transpose() * x - Jm.transpose() * x) / (2 * h))
+                          : Vec((Jp * x - Jm * x) / (2 * h));
   }
   return D;
 }
@@ -222,9 +228,11 @@ TEST_F(Fixture, ConstraintHessianIsTheDerivativeOfTheTransposedJacobianTimesW) {
   ASSERT_EQ(H.rows(), m.nq());
   ASSERT_EQ(H.cols(), m.nq());
   const Mat ref = fd_of_jacobian(m, s, w, true);
-  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-2) << "the case must have constraints non-linear in q";
+  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-2)
+      << "the case must have constraints non-linear in q";
   expect_close(Mat(H), ref, 1e-8, m, "Σ w_i ∂²Φ_i/∂q²");
-  EXPECT_LT((Mat(H) - Mat(H).transpose()).lpNorm<Eigen::Infinity>(), 1e-14 * ref.lpNorm<Eigen::Infinity>())
+  EXPECT_LT((Mat(H) - Mat(H).transpose()).lpNorm<Eigen::Infinity>(),
+            1e-14 * ref.lpNorm<Eigen::Infinity>())
       << "a Hessian is symmetric";
   // the pattern holds explicit zeros: the same at w = 0 and at another state
   State x = s;
@@ -265,8 +273,10 @@ TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
     double mass, J;
     Vec2 c;
   };
-  const Rigid rigid[] = {{"crank", 1.2, 0.01, {0.02, 0.01}}, {"link", 0.8, 0.004, {0.05, -0.005}},
-                         {"slider", 0.5, 0.001, {0, 0}},     {"floater", 1, 0.01, {0, 0}},
+  const Rigid rigid[] = {{"crank", 1.2, 0.01, {0.02, 0.01}},
+                         {"link", 0.8, 0.004, {0.05, -0.005}},
+                         {"slider", 0.5, 0.001, {0, 0}},
+                         {"floater", 1, 0.01, {0, 0}},
                          {"rod", 0, 0, {0, 0}}};
   for (const auto& r : rigid)
     T += 0.5 * r.mass * point_velocity(r.name, r.c).squaredNorm() +
@@ -275,9 +285,12 @@ TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
   const FlexibleBody& plate = *m.find_flexible("plate");
   int node = 0;  // m_node: the node nearest to (0.05, 0) in the mesh frame
   for (int i = 0; i < plate.mesh.num_nodes(); ++i)
-    if ((plate.mesh.nodes[i] - Vec2(0.05, 0)).norm() < (plate.mesh.nodes[node] - Vec2(0.05, 0)).norm()) node = i;
+    if ((plate.mesh.nodes[i] - Vec2(0.05, 0)).norm() <
+        (plate.mesh.nodes[node] - Vec2(0.05, 0)).norm())
+      node = i;
   T += 0.5 * 0.2 * s.v.segment<2>(plate.node_dof(node)).squaredNorm();
-  const double rho_t = 1000 * 0.005, g = std::sqrt(0.6), gp[3] = {-g, 0, g}, gw[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
+  const double rho_t = 1000 * 0.005, g = std::sqrt(0.6), gp[3] = {-g, 0, g},
+               gw[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
   const double xi_n[4] = {-1, 1, 1, -1}, eta_n[4] = {-1, -1, 1, 1};  // counter-clockwise corners
   for (const auto& quad : plate.mesh.quads)
     for (int a = 0; a < 3; ++a)
@@ -293,7 +306,8 @@ TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
         T += 0.5 * rho_t * gw[a] * gw[b] * detJ * v.squaredNorm();
       }
   const double Tm = m.kinetic_energy(s, m.params());
-  std::printf("kinetic energy: model %.15e, closed form %.15e (%.1e)\n", Tm, T, std::abs(Tm / T - 1));
+  std::printf("kinetic energy: model %.15e, closed form %.15e (%.1e)\n", Tm, T,
+              std::abs(Tm / T - 1));
   // both sums are exact: round-off of a few dozen terms of one sign
   EXPECT_NEAR(Tm, T, 1e-13 * T);
 }
@@ -313,7 +327,8 @@ TEST_F(Fixture, MassRateProductIsTheDerivativeOfMAlongTheMotion) {
   };
   const double h = 1e-5;
   const Vec ref = (mass_times_w(h) - mass_times_w(-h)) / (2 * h);
-  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-3) << "the case must have a mass matrix that depends on q";
+  ASSERT_GT(ref.lpNorm<Eigen::Infinity>(), 1e-3)
+      << "the case must have a mass matrix that depends on q";
   EXPECT_LT((out - ref).lpNorm<Eigen::Infinity>(), 1e-7 * ref.lpNorm<Eigen::Infinity>());
 }
 
@@ -359,13 +374,15 @@ TEST_F(Fixture, ParameterDerivativesMatchCentralDifferencesOfTheResidualForEvery
     ASSERT_GT(scale, 0) << names[j] << ": the parameter must act on the residual at this state";
     const double e = (a - ref).lpNorm<Eigen::Infinity>() / scale;
     EXPECT_LT(e, 1e-8) << names[j];
-    EXPECT_EQ(a.tail(m.nc()).lpNorm<Eigen::Infinity>(), 0.0) << names[j] << ": constraints carry no parameter";
+    EXPECT_EQ(a.tail(m.nc()).lpNorm<Eigen::Infinity>(), 0.0)
+        << names[j] << ": constraints carry no parameter";
     if (e > worst) worst = e, worst_name = names[j];
     if (!names[j].ends_with(".nu")) worst_linear = std::max(worst_linear, e);
   }
-  std::printf("∂R/∂p exact vs central differences, %zu scalar parameters: worst relative error %.2e (%s); "
-              "without ν %.2e\n",
-              names.size(), worst, worst_name.c_str(), worst_linear);
+  std::printf(
+      "∂R/∂p exact vs central differences, %zu scalar parameters: worst relative error %.2e (%s); "
+      "without ν %.2e\n",
+      names.size(), worst, worst_name.c_str(), worst_linear);
 }
 
 TEST_F(Fixture, ParameterDerivativeAlongMaterialFieldsAndScalarsMatchesCentralDifferences) {
@@ -409,18 +426,21 @@ TEST_F(Fixture, ParameterDerivativeOfEachElementMatchesDifferencesOfItsOwnResidu
       const auto d = f.dofs();
       const auto nd = static_cast<Eigen::Index>(d.size());
       ls.q.resize(nd), ls.v.resize(nd), ls.a.resize(nd);
-      for (Eigen::Index i = 0; i < nd; ++i) ls.q[i] = s.q[d[i]], ls.v[i] = s.v[d[i]], ls.a[i] = s.a[d[i]];
+      for (Eigen::Index i = 0; i < nd; ++i)
+        ls.q[i] = s.q[d[i]], ls.v[i] = s.v[d[i]], ls.a[i] = s.a[d[i]];
       LocalVec dr = LocalVec::Zero(nd);
       f.param_derivative(ls, m.params(), j, dr);
       ModelParams p = m.params();
-      const double v0 = p.scalars[j], h = 1e-2 * std::max(std::abs(v0), 1e-3);  // as fd_param_derivative
+      const double v0 = p.scalars[j],
+                   h = 1e-2 * std::max(std::abs(v0), 1e-3);  // as fd_param_derivative
       auto r_at = [&](double v) {
         p.scalars[j] = v;
         LocalVec r;
         m.element_residual(e, s, p, r);
         return r;
       };
-      const LocalVec d1 = (r_at(v0 + h) - r_at(v0 - h)) / (2 * h), d2 = (r_at(v0 + 2 * h) - r_at(v0 - 2 * h)) / (4 * h);
+      const LocalVec d1 = (r_at(v0 + h) - r_at(v0 - h)) / (2 * h),
+                     d2 = (r_at(v0 + 2 * h) - r_at(v0 - 2 * h)) / (4 * h);
       const LocalVec ref = (4 * d1 - d2) / 3;
       const double scale = std::max(ref.lpNorm<Eigen::Infinity>(), 1e-300);
       const double err = (dr - ref).lpNorm<Eigen::Infinity>() / scale;
@@ -452,7 +472,8 @@ ElementAt element_derivative(const Model& m, const State& s, int e, const std::s
   const auto d = f.dofs();
   const auto nd = static_cast<Eigen::Index>(d.size());
   out.ls.q.resize(nd), out.ls.v.resize(nd), out.ls.a.resize(nd);
-  for (Eigen::Index i = 0; i < nd; ++i) out.ls.q[i] = s.q[d[i]], out.ls.v[i] = s.v[d[i]], out.ls.a[i] = s.a[d[i]];
+  for (Eigen::Index i = 0; i < nd; ++i)
+    out.ls.q[i] = s.q[d[i]], out.ls.v[i] = s.v[d[i]], out.ls.a[i] = s.a[d[i]];
   out.dr = LocalVec::Zero(nd);
   f.param_derivative(out.ls, m.params(), j, out.dr);
   return out;
@@ -481,7 +502,8 @@ TEST_F(Fixture, SpringParameterDerivativesMatchTheClosedForm) {
   const RigidBody& B = *m.find_rigid("link");
   const Vec2 da(0.0, 0.01), db(0.05, 0.0);
   const double tha = s.q[A.dof0 + 2], thb = s.q[B.dof0 + 2];
-  const Vec2 pa = s.q.segment<2>(A.dof0) + rotation(tha) * da, pb = s.q.segment<2>(B.dof0) + rotation(thb) * db;
+  const Vec2 pa = s.q.segment<2>(A.dof0) + rotation(tha) * da,
+             pb = s.q.segment<2>(B.dof0) + rotation(thb) * db;
   const Vec2 va = s.v.segment<2>(A.dof0) + s.v[A.dof0 + 2] * rotation_derivative(tha) * da;
   const Vec2 vb = s.v.segment<2>(B.dof0) + s.v[B.dof0 + 2] * rotation_derivative(thb) * db;
   const double l = (pb - pa).norm();
@@ -490,13 +512,15 @@ TEST_F(Fixture, SpringParameterDerivativesMatchTheClosedForm) {
   auto closed = [&](double w) {  // ∂r/∂p for ∂T/∂p = w; local order (xA, yA, θA, xB, yB, θB)
     LocalVec r(6);
     const Vec2 FB = -w * n;  // ∂F_B/∂p
-    r << FB.x(), FB.y(), (rotation_derivative(tha) * da).dot(FB), -FB.x(), -FB.y(), -(rotation_derivative(thb) * db).dot(FB);
+    r << FB.x(), FB.y(), (rotation_derivative(tha) * da).dot(FB), -FB.x(), -FB.y(),
+        -(rotation_derivative(thb) * db).dot(FB);
     return r;
   };
   const LocalVec dk = element_derivative(m, s, e, "spring_bodies.stiffness").dr;
   const LocalVec dc = element_derivative(m, s, e, "spring_bodies.damping").dr;
   const LocalVec dl0 = element_derivative(m, s, e, "spring_bodies.free_length").dr;
-  const double ek = rel(dk, closed(l - l0)), ec = rel(dc, closed(ldot)), el0 = rel(dl0, closed(-k0));
+  const double ek = rel(dk, closed(l - l0)), ec = rel(dc, closed(ldot)),
+               el0 = rel(dl0, closed(-k0));
   // the translation rows of B are −∂F_B/∂p exactly as the closed form states
   EXPECT_LT((Vec2(dk[3], dk[4]) - (l - l0) * n).norm(), 1e-12 * std::abs(l - l0));
   EXPECT_LT((Vec2(dc[3], dc[4]) - ldot * n).norm(), 1e-12 * std::abs(ldot));
@@ -519,12 +543,16 @@ TEST_F(Fixture, RotationalSpringTorqueAndLoadParameterDerivativesMatchClosedForm
   {
     const int e = force_index(m, "rotational spring 'torsion_bodies'");
     const int a = m.find_rigid("link")->dof0 + 2, b = m.find_rigid("floater")->dof0 + 2;
-    const double rel_angle = s.q[a] - s.q[b] - par("torsion_bodies.free_angle"), rel_rate = s.v[a] - s.v[b];
+    const double rel_angle = s.q[a] - s.q[b] - par("torsion_bodies.free_angle"),
+                 rel_rate = s.v[a] - s.v[b];
     LocalVec r(2);
-    check(element_derivative(m, s, e, "torsion_bodies.stiffness").dr, (r << rel_angle, -rel_angle).finished(), "∂/∂k");
-    check(element_derivative(m, s, e, "torsion_bodies.damping").dr, (r << rel_rate, -rel_rate).finished(), "∂/∂c");
+    check(element_derivative(m, s, e, "torsion_bodies.stiffness").dr,
+          (r << rel_angle, -rel_angle).finished(), "∂/∂k");
+    check(element_derivative(m, s, e, "torsion_bodies.damping").dr,
+          (r << rel_rate, -rel_rate).finished(), "∂/∂c");
     const double k = par("torsion_bodies.stiffness");
-    check(element_derivative(m, s, e, "torsion_bodies.free_angle").dr, (r << -k, k).finished(), "∂/∂θ0");
+    check(element_derivative(m, s, e, "torsion_bodies.free_angle").dr, (r << -k, k).finished(),
+          "∂/∂θ0");
   }
   // Rotational spring slider–ground (θb ≡ 0), free angle defaulted to the initial angle 0.
   {
@@ -532,17 +560,20 @@ TEST_F(Fixture, RotationalSpringTorqueAndLoadParameterDerivativesMatchClosedForm
     const int a = m.find_rigid("slider")->dof0 + 2;
     EXPECT_EQ(par("torsion_ground.free_angle"), 0.0);
     LocalVec r(1);
-    check(element_derivative(m, s, e, "torsion_ground.stiffness").dr, (r << s.q[a]).finished(), "∂/∂k (ground)");
-    check(element_derivative(m, s, e, "torsion_ground.damping").dr, (r << s.v[a]).finished(), "∂/∂c (ground)");
+    check(element_derivative(m, s, e, "torsion_ground.stiffness").dr, (r << s.q[a]).finished(),
+          "∂/∂k (ground)");
+    check(element_derivative(m, s, e, "torsion_ground.damping").dr, (r << s.v[a]).finished(),
+          "∂/∂c (ground)");
   }
   // Torque: r_θ = −scale T(t): ∂r_θ/∂scale = −T(t) (T: the same tabulated law, built here).
   {
     const int e = force_index(m, "torque 'motor'");
     Table1D law({0, 0.1, 0.3, 1}, {0.5, 2, -1, 0.2});
     LocalVec r(1);
-    check(element_derivative(m, s, e, "motor.scale").dr, (r << -law.value(s.t)).finished(), "∂/∂scale (law)");
-    check(element_derivative(m, s, force_index(m, "torque 'brake'"), "brake.scale").dr, (r << 0.7).finished(),
-          "∂/∂scale (constant)");
+    check(element_derivative(m, s, e, "motor.scale").dr, (r << -law.value(s.t)).finished(),
+          "∂/∂scale (law)");
+    check(element_derivative(m, s, force_index(m, "torque 'brake'"), "brake.scale").dr,
+          (r << 0.7).finished(), "∂/∂scale (constant)");
   }
   // Point force (3, −2) at body offset (0.05, 0.01): ∂r/∂scale = −(F, (R′d)·F).
   {
@@ -558,30 +589,39 @@ TEST_F(Fixture, RotationalSpringTorqueAndLoadParameterDerivativesMatchClosedForm
     const int th_crank = m.find_rigid("crank")->dof0 + 2;
     Table1D tab({0, 1, 2.5, 4}, {1e5, 3e5, 2e5, 1e5}, Table1D::Interp::kCubic, 4);
     const double Pv = tab.value(s.q[th_crank] + 0.1);
-    const Vec2 u(-1, 0), Rd = rotation_derivative(s.q[m.find_rigid("slider")->dof0 + 2]) * Vec2(0.01, 0);
+    const Vec2 u(-1, 0),
+        Rd = rotation_derivative(s.q[m.find_rigid("slider")->dof0 + 2]) * Vec2(0.01, 0);
     LocalVec r(4);  // (x, y, θ of the slider, θ of the crank: the argument, no force)
-    check(element_derivative(m, s, e, "gas.area").dr, (r << -Pv * u.x(), -Pv * u.y(), -Pv * u.dot(Rd), 0).finished(),
-          "pressure ∂/∂area");
+    check(element_derivative(m, s, e, "gas.area").dr,
+          (r << -Pv * u.x(), -Pv * u.y(), -Pv * u.dot(Rd), 0).finished(), "pressure ∂/∂area");
   }
   // Node mass: ∂r/∂m = q̈ − g.
   {
-    const ElementAt x = element_derivative(m, s, force_index(m, "point mass 'm_node'"), "m_node.mass");
+    const ElementAt x =
+        element_derivative(m, s, force_index(m, "point mass 'm_node'"), "m_node.mass");
     LocalVec r(2);
     check(x.dr, (r << x.ls.a[0] - 0.3, x.ls.a[1] + 9.81).finished(), "node mass ∂/∂m");
   }
-  // Rigid inertia (methods.md): r_xy = m (ẍ + θ̈ R′c − θ̇² R c − g), r_θ = (J_c + m|c|²) θ̈ + m (R′c)·(ẍ − g).
+  // Rigid inertia (methods.md): r_xy = m (ẍ + θ̈ R′c − θ̇² R c − g), r_θ = (J_c + m|c|²) θ̈ + m
+  // (R′c)·(ẍ − g).
   {
     const RigidBody& b = *m.find_rigid("crank");
     const int e = force_index(m, "rigid body 'crank'");
     const Vec2 c(0.02, 0.01), g(0.3, -9.81), acc = s.a.segment<2>(b.dof0);
     const double th = s.q[b.dof0 + 2], w = s.v[b.dof0 + 2], al = s.a[b.dof0 + 2];
-    const Vec2 Rc = rotation(th) * c, Rpc = rotation_derivative(th) * c, rxy = acc + al * Rpc - w * w * Rc - g;
+    const Vec2 Rc = rotation(th) * c, Rpc = rotation_derivative(th) * c,
+               rxy = acc + al * Rpc - w * w * Rc - g;
     LocalVec r(3);
-    check(element_derivative(m, s, e, "crank.mass").dr, (r << rxy.x(), rxy.y(), c.squaredNorm() * al + Rpc.dot(acc - g)).finished(),
+    check(element_derivative(m, s, e, "crank.mass").dr,
+          (r << rxy.x(), rxy.y(), c.squaredNorm() * al + Rpc.dot(acc - g)).finished(),
           "rigid ∂/∂m");
-    check(element_derivative(m, s, e, "crank.inertia").dr, (r << 0, 0, al).finished(), "rigid ∂/∂J");
+    check(element_derivative(m, s, e, "crank.inertia").dr, (r << 0, 0, al).finished(),
+          "rigid ∂/∂J");
   }
-  std::printf("∂r/∂p vs closed forms (rotational springs, torques, point force, pressure, masses): worst %.2e\n", worst);
+  std::printf(
+      "∂r/∂p vs closed forms (rotational springs, torques, point force, pressure, masses): worst "
+      "%.2e\n",
+      worst);
 }
 
 TEST_F(Fixture, FlexibleParameterDerivativesFollowFromLinearity) {
@@ -608,7 +648,8 @@ TEST_F(Fixture, FlexibleParameterDerivativesFollowFromLinearity) {
       worst = std::max(worst, err);
     }
     const double t0 = m.params().scalars[m.parameter_index("plate.thickness")];
-    const double err = rel(element_derivative(m, s, e, "plate.thickness").dr, r_with("plate.thickness", t0) / t0);
+    const double err =
+        rel(element_derivative(m, s, e, "plate.thickness").dr, r_with("plate.thickness", t0) / t0);
     EXPECT_LT(err, 1e-12) << "thickness, element " << el;
     worst = std::max(worst, err);
   }

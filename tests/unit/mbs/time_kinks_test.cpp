@@ -16,7 +16,9 @@ namespace {
 
 std::vector<double> sorted_unique(std::vector<double> v) {
   std::sort(v.begin(), v.end());
-  v.erase(std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-12; }), v.end());
+  v.erase(
+      std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-12; }),
+      v.end());
   return v;
 }
 
@@ -42,7 +44,8 @@ void expect_kinks_are_the_jumps(const TimeLaw& law, double t0, double t1, int or
   for (double t : k) EXPECT_GT(jump(law, order, t), big) << "no jump at reported kink t = " << t;
   for (int i = 1; i < 4000; ++i) {
     const double t = t0 + (t1 - t0) * (i + 0.5) / 4000;
-    const bool near_kink = std::any_of(k.begin(), k.end(), [&](double x) { return std::abs(x - t) < 1e-6; });
+    const bool near_kink =
+        std::any_of(k.begin(), k.end(), [&](double x) { return std::abs(x - t) < 1e-6; });
     if (!near_kink) EXPECT_LT(jump(law, order, t), 1e-6 * big) << "unreported jump at t = " << t;
   }
 }
@@ -89,7 +92,8 @@ TEST(TimeKinks, LinearTableKnotsAndEnds) {
 
 TEST(TimeKinks, PeriodicLinearTableRepeatsItsKnots) {
   // period 4: the point (4, 0) closes the period; knots at every integer
-  TabulatedLaw law(Table1D({0, 1, 2, 3}, {0, 2, 3, -1}, Table1D::Interp::kLinear, 4));  // slopes 2, 1, −4, 1
+  TabulatedLaw law(
+      Table1D({0, 1, 2, 3}, {0, 2, 3, -1}, Table1D::Interp::kLinear, 4));  // slopes 2, 1, −4, 1
   std::vector<double> k;
   law.kinks(0, 9, k);
   expect_times(sorted_unique(k), {1, 2, 3, 4, 5, 6, 7, 8});

@@ -1,4 +1,6 @@
 // Driver laws against closed forms and their derivatives against central differences.
+#include "lsmbs/mbs/time_law.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
-#include "lsmbs/mbs/time_law.hpp"
 
 using namespace lsmbs;
 
@@ -117,9 +118,11 @@ TEST(Table1D, PeriodicCubicSplineOfACosineIsC2AcrossThePeriodAndBeatsTheNaturalS
   // [0, 2π] the same values as this unwrapped table; the jumps compare its two ends).
   const Table1D natural(x, y, Table1D::Interp::kCubic);
   const CosErrors p = cos_errors(periodic), n = cos_errors(natural);
-  std::printf("cos on 33 points: periodic spline |e| %.2e, |e'| %.2e, |e''| %.2e, jumps %.1e %.1e %.1e; "
-              "natural spline |e| %.2e, |e'| %.2e, |e''| %.2e, jumps %.1e %.1e %.1e\n",
-              p.value, p.d1, p.d2, p.jump0, p.jump1, p.jump2, n.value, n.d1, n.d2, n.jump0, n.jump1, n.jump2);
+  std::printf(
+      "cos on 33 points: periodic spline |e| %.2e, |e'| %.2e, |e''| %.2e, jumps %.1e %.1e %.1e; "
+      "natural spline |e| %.2e, |e'| %.2e, |e''| %.2e, jumps %.1e %.1e %.1e\n",
+      p.value, p.d1, p.d2, p.jump0, p.jump1, p.jump2, n.value, n.d1, n.d2, n.jump0, n.jump1,
+      n.jump2);
   // Interpolation error of a cubic spline with exact end conditions: (5/384) h⁴ max|f⁗| = 1.2e-5
   // for the value, (1/24) h³ max|f⁗| = 3.1e-4 for the derivative (Hall & Meyer 1976).
   const double h = M_PI / 16;
@@ -165,8 +168,9 @@ TEST(Table1D, PeriodicTableWithoutItsClosingPointAndWithFewPoints) {
   std::vector<double> y;
   for (double xi : x) y.push_back(std::cos(xi));
   const Table1D full(x, y, Table1D::Interp::kCubic, 2 * M_PI);
-  const Table1D open(std::vector<double>(x.begin(), x.end() - 1), std::vector<double>(y.begin(), y.end() - 1),
-                     Table1D::Interp::kCubic, 2 * M_PI);
+  const Table1D open(std::vector<double>(x.begin(), x.end() - 1),
+                     std::vector<double>(y.begin(), y.end() - 1), Table1D::Interp::kCubic,
+                     2 * M_PI);
   for (double xx : {0.1, 3.0, 6.2, 6.28, -0.05})
     EXPECT_NEAR(open.value(xx), full.value(xx), 1e-15) << xx;
   // Three points (a 2 × 2 cyclic system): through (0, 1), (π, −1), (2π, 1) the periodic spline
@@ -197,7 +201,9 @@ TEST(Table1D, PeriodicTableInputErrors) {
     }
     return std::string();
   };
-  EXPECT_NE(error_of({0, 1, 2}, {0, 5, 1}, 2).find("a periodic table must end with its first value"), std::string::npos);
+  EXPECT_NE(
+      error_of({0, 1, 2}, {0, 5, 1}, 2).find("a periodic table must end with its first value"),
+      std::string::npos);
   EXPECT_NE(error_of({0, 1, 3}, {0, 5, 0}, 2).find("more than the period"), std::string::npos);
   EXPECT_EQ(error_of({0, 1, 2}, {0, 5, 0}, 2), "");
 }

@@ -2,10 +2,9 @@
 #include <gtest/gtest.h>
 #include <nlopt.h>
 
+#include <Eigen/QR>
 #include <cmath>
 #include <functional>
-
-#include <Eigen/QR>
 
 #include "lsmbs/optimization/mma_classic.hpp"
 
@@ -160,8 +159,9 @@ TEST(MmaClassic, SvanbergCantileverPublishedOptimum) {
   // NLopt's MMA reaches the same point
   const Outcome nl = run_nlopt(t);
   EXPECT_NEAR((nl.x - r.x).cwiseAbs().maxCoeff(), 0, 1e-4);
-  std::printf("cantilever: classic MMA %d iterations, f = %.6f; NLopt LD_MMA %d evaluations, f = %.6f\n",
-              r.iterations, r.f, nl.iterations, nl.f);
+  std::printf(
+      "cantilever: classic MMA %d iterations, f = %.6f; NLopt LD_MMA %d evaluations, f = %.6f\n",
+      r.iterations, r.f, nl.iterations, nl.f);
 }
 
 TEST(MmaClassic, ToyProblemAgreesWithNloptAndKkt) {
@@ -179,8 +179,8 @@ TEST(MmaClassic, ToyProblemAgreesWithNloptAndKkt) {
   const Vec lam = df.transpose().colPivHouseholderQr().solve(-df0);
   EXPECT_GT(lam.minCoeff(), 0);
   EXPECT_LT((df0 + df.transpose() * lam).norm(), 1e-6);
-  std::printf("toy: classic MMA %d iterations, x = (%.6f, %.6f, %.6f); NLopt %d evaluations\n", r.iterations, r.x[0],
-              r.x[1], r.x[2], nl.iterations);
+  std::printf("toy: classic MMA %d iterations, x = (%.6f, %.6f, %.6f); NLopt %d evaluations\n",
+              r.iterations, r.x[0], r.x[1], r.x[2], nl.iterations);
 }
 
 TEST(MmaClassic, StepDoesNotScaleWithTheGradient) {
@@ -221,6 +221,7 @@ TEST(MmaClassic, StepDoesNotScaleWithTheGradient) {
     // 1e-3 for g = −1e-4 (measured 2.7e-3 short of x = 1 in the last step; lsmbs scales its
     // objective to f/|f(p0)| and its variables to [0, 1], which keeps gradients far above that).
     const double tol = g == -1e-2 ? 1e-3 : 4e-3;
-    for (size_t k = 0; k < ref.size(); ++k) EXPECT_NEAR(path[k], ref[k], tol) << g << ", iteration " << k + 1;
+    for (size_t k = 0; k < ref.size(); ++k)
+      EXPECT_NEAR(path[k], ref[k], tol) << g << ", iteration " << k + 1;
   }
 }

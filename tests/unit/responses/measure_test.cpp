@@ -44,8 +44,8 @@ using test::measure;
 
 TEST(VelocityMeasures, ColumnsAndValuesMatchTheClosedForm) {
   const Case cs = test::make_case(spinning_case());
-  const std::vector<std::string> cols = {"spin", "rim.x", "rim.y", "hub.x", "hub.y", "corner.x", "corner.y",
-                                         "still.x", "still.y"};
+  const std::vector<std::string> cols = {"spin",     "rim.x",    "rim.y",   "hub.x",  "hub.y",
+                                         "corner.x", "corner.y", "still.x", "still.y"};
   EXPECT_EQ(cs.measure_columns(), cols);
   const Model& m = *cs.model;
   const RigidBody& w = *m.find_rigid("wheel");
@@ -110,12 +110,16 @@ TEST(VelocityMeasures, PartialDerivativesMatchCentralDifferences) {
         a.v[i] += h, b.v[i] -= h;
         fv[i] = (value(a) - value(b)) / (2 * h);
       }
-      const double e = std::max((dq - fq).lpNorm<Eigen::Infinity>(), (dv - fv).lpNorm<Eigen::Infinity>());
+      const double e =
+          std::max((dq - fq).lpNorm<Eigen::Infinity>(), (dv - fv).lpNorm<Eigen::Infinity>());
       EXPECT_LT(e, 1e-9) << ms->components()[c];
       worst = std::max(worst, e);
     }
   }
-  std::printf("velocity measures: ∂f/∂q, ∂f/∂q̇ vs central differences: worst absolute error %.2e (values O(1))\n", worst);
+  std::printf(
+      "velocity measures: ∂f/∂q, ∂f/∂q̇ vs central differences: worst absolute error %.2e (values "
+      "O(1))\n",
+      worst);
 }
 
 TEST(VelocityMeasures, SpinningWheelThroughAGeneralizedAlphaRun) {
@@ -138,10 +142,13 @@ TEST(VelocityMeasures, SpinningWheelThroughAGeneralizedAlphaRun) {
     }
   } w;
   w.cs = &cs;
-  const auto r = GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w});
+  const auto r =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, cs.model->params(), cs.initial, {&w});
   ASSERT_TRUE(r.ok) << r.message;
-  std::printf("spinning wheel over 2 s: |ω − ω0| ≤ %.2e rad/s, |v_rim − closed form| ≤ %.2e m/s (|v_rim| = %.3f)\n",
-              w.worst_spin, w.worst_rim, 3.0 * std::hypot(0.2, 0.1));
+  std::printf(
+      "spinning wheel over 2 s: |ω − ω0| ≤ %.2e rad/s, |v_rim − closed form| ≤ %.2e m/s (|v_rim| = "
+      "%.3f)\n",
+      w.worst_spin, w.worst_rim, 3.0 * std::hypot(0.2, 0.1));
   EXPECT_LT(w.worst_spin, 1e-9);
   EXPECT_LT(w.worst_rim, 1e-9);
 }

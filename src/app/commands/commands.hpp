@@ -1,0 +1,71 @@
+#pragma once
+// The lsmbs commands, one file each. main.cpp parses the command line into these argument
+// structs and calls one command; a command loads the case, runs the library, writes the output
+// folder, prints, and returns the exit code: 0 success, 1 numerical failure (the results are
+// flagged partial), 130 interrupted. Invalid input throws (lsmbs::Error, lsmbs::SetupError:
+// exit 2, nothing written).
+#include <string>
+#include <vector>
+
+#include "lsmbs/io/bench_run.hpp"
+#include "lsmbs/io/verify_run.hpp"
+#include "lsmbs/sensitivity/gradient_check.hpp"
+
+namespace lsmbs::app {
+
+/// What every command gets.
+struct CommonArgs {
+  std::string case_file;
+  std::string out = "out";        ///< output folder (-o)
+  std::string command_line;       ///< recorded in summary.json
+  std::vector<std::string> sets;  ///< --set name=value design-variable overrides
+  bool quiet = false, verbose = false;
+};
+
+struct SimulateArgs {
+  std::string integrator = "generalized-alpha";  ///< or "idas"
+  double rtol = 1e-9, atol = 0;                  ///< IDAS tolerances (atol 0: rtol)
+  int max_order = 0;                             ///< IDAS maximum BDF order (0: automatic)
+  std::string error_test = "auto";               ///< IDAS error test
+};
+
+struct GeometryArgs {
+  int width = 1600;  ///< PNG width [pixels]
+};
+
+struct SensitivityArgs {
+  std::string method = "direct-analytic";
+  double delta = 1e-6;
+  bool absolute = false;
+  std::string matrix = "converged";
+  bool full_residual = false;
+  double rtol = 1e-9, atol = 0;
+  int threads = 2;
+  bool check = false;  ///< gradient check along a random direction
+  GradientCheckOptions check_options;
+};
+
+struct OptimizeArgs {
+  bool resume = false;
+  std::string optimizer;  ///< empty: the case's
+  bool check = true;      ///< gradient check at the initial design
+  GradientCheckOptions check_options;
+};
+
+struct VerifyArgs {
+  VerifyOptions options;
+};
+
+struct BenchArgs {
+  BenchOptions options;
+  std::vector<std::string> methods;  ///< empty: the default methods; {"none"}: none
+};
+
+int simulate_command(const CommonArgs& c, const SimulateArgs& a);
+int geometry_command(const CommonArgs& c, const GeometryArgs& a);
+int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a);
+int optimize_command(const CommonArgs& c, const OptimizeArgs& a);
+int verify_command(const CommonArgs& c, VerifyArgs a);
+int bench_command(const CommonArgs& c, BenchArgs a);
+
+}  // namespace lsmbs::app

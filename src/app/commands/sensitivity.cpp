@@ -1,0 +1,200 @@
+// lsmbs sensitivity: responses and their design gradients by one method (§4.3), gradients.csv
+// and summary.json, with an optional gradient check along a random direction.
+#include "lsmbs/sensitivity/sensitivity.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+#include "app/commands/commands.hpp"
+#include "app/commands/common.hpp"
+#include "app/progress_line.hpp"
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/core/json_file.hpp"
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/io/output.hpp"
+#include "lsmbs/records/json.hpp"
+#include "lsmbs/sensitivity/response_quadrature.hpp"
+
+namespace lsmbs::app {
+
+int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
+  const std::string& case_file = c.case_file;
+  const std::string& out = c.out;
+  const std::string& method = a.method;
+  const std::string& cmdline = c.command_line;
+  const bool quiet = c.quiet;
+  const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
+  lsmbs::SensitivityOptions so;
+  so.threads = a.threads;
+  if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
+    std::string all;
+    for (const auto& n : lsmbs::SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
+    throw lsmbs::Error("--method " + method + ": expected one of " + all);
+  }
+  if (!(a.delta > 0) || !std::isfinite(a.delta))
+    throw lsmbs::Error("--delta: expected a positive step");
+  check_idas_tolerances(a.rtol, a.atol);
+  if (!lsmbs::SensitivityOptions::parse_matrix(a.matrix, so.matrix))
+    throw lsmbs::Error("--matrix " + a.matrix + ": expected last, converged or refined");
+  so.delta = a.delta;
+  so.relative = !a.absolute;
+  so.idas.rtol = a.rtol;
+  so.idas.atol = a.atol > 0 ? a.atol : a.rtol;
+  so.full_residual = a.full_residual;
+  lsmbs::Case cs = lsmbs::load_case(case_file);
+  if (!cs.design)
+    throw lsmbs::Error(case_file, "/design",
+                       "sensitivities need a design section (design variables)");
+  if (cs.responses.empty())
+    throw lsmbs::Error(case_file, "/output/responses", "sensitivities need at least one response");
+  const lsmbs::Vec p = design_point(cs, c.sets);
+  so.idas.h_out = cs.simulation.h;  // what IDAS runs with (recorded in summary.json)
+  so.idas.t_end = cs.simulation.t_end;
+  ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
+  so.progress = line.callback();
+  lsmbs::install_interrupt_handlers();  // an interrupt stops the generalized-α runs at the next
+                                        // step
+  const auto res = lsmbs::compute_sensitivities(cs, p, so);
+  std::optional<lsmbs::GradientCheckResult> checked;
+  if (check && res.ok) checked = lsmbs::check_gradients(cs, p, res.responses, *check);
+  line.clear();
+  const auto& d = *cs.design;
+  // summary.json and gradients.csv
+  nlohmann::json responses = nlohmann::json::object(), grads = nlohmann::json::object();
+  std::vector<std::string> header = {"response", "index", "t", "value"};
+  for (const auto& v : d.variables) header.push_back("d/d" + v.name);
+  std::vector<std::vector<double>> rows;
+  std::vector<std::string> row_names;
+  for (size_t r = 0; r < res.responses.size(); ++r) {
+    const auto& rs = res.responses[r];
+    const bool per_step = !rs.times.empty();
+    nlohmann::json g = nlohmann::json::object();
+    for (int i = 0; i < d.size(); ++i) {
+      if (per_step) {
+        std::vector<double> col;
+        for (Eigen::Index k = 0; k < rs.gradient.rows(); ++k) col.push_back(rs.gradient(k, i));
+        g[d.variables[i].name] = col;
+      } else {
+        g[d.variables[i].name] = rs.gradient.rows() ? rs.gradient(0, i) : NAN;
+      }
+    }
+    responses[rs.name] = per_step ? nlohmann::json(rs.values)
+                                  : nlohmann::json(rs.values.empty() ? NAN : rs.values[0]);
+    grads[rs.name] = g;
+    for (size_t k = 0; k < rs.values.size(); ++k) {
+      std::vector<double> row = {static_cast<double>(r), static_cast<double>(k),
+                                 per_step ? rs.times[k] : NAN, rs.values[k]};
+      for (int i = 0; i < d.size(); ++i)
+        row.push_back(rs.gradient(static_cast<Eigen::Index>(k), i));
+      rows.push_back(row);
+    }
+  }
+  nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+  S["case_name"] = cs.name;
+  S["status"] = res.ok ? "complete" : res.interrupted ? "interrupted" : "partial";
+  if (!res.ok) S["failure"] = res.message;
+  nlohmann::json vars = nlohmann::json::object();
+  for (int i = 0; i < d.size(); ++i) vars[d.variables[i].name] = p[i];
+  S["design"] = vars;
+  S["options"] = {{"sensitivity", nlohmann::json(so)},
+                  {"generalized_alpha", nlohmann::json(cs.simulation)}};
+  S["counts"] = nlohmann::json(res.counts);
+  S["primal"] = nlohmann::json(res.primal);
+  S["warnings"] = res.warnings;
+  if (checked) S["gradient_check"] = lsmbs::gradient_check_json(*checked, *check);
+  for (const auto& w : res.warnings)
+    std::fprintf(stderr, "lsmbs sensitivity: warning: %s\n", w.c_str());
+  S["wall_seconds"] = res.counts.wall_seconds;
+  if (res.ok) {
+    S["responses"] = responses;
+    S["gradients"] = grads;
+  } else {
+    // a failed run's aggregates cover only the steps before the failure: not reported as the
+    // responses (null), but apart, under a name that says so
+    nlohmann::json nulls = nlohmann::json::object();
+    for (const auto& [name, v] : responses.items()) nulls[name] = nullptr;
+    S["responses"] = nulls;
+    S["gradients"] = nulls;
+    S["partial_responses_until_failure"] = responses;
+  }
+  if (!res.quadratures.empty() && res.ok) {
+    std::vector<std::string> names;
+    for (const auto& v : d.variables) names.push_back(v.name);
+    S["quadratures"] = lsmbs::quadratures_json(res.quadratures, names);
+  }
+  if (so.is_idas()) S["idas"] = nlohmann::json(res.idas);
+  std::filesystem::create_directories(out);
+  {
+    // the CSV names responses by index (numbers only); the mapping is in the header comment
+    std::string csv = "# responses:";
+    for (size_t r = 0; r < res.responses.size(); ++r)
+      csv += " " + std::to_string(r) + "=" + res.responses[r].name;
+    csv += "\n";
+    for (size_t i = 0; i < header.size(); ++i) csv += (i ? "," : "") + header[i];
+    csv += "\n";
+    char buf[64];
+    for (const auto& row : rows) {
+      for (size_t i = 0; i < row.size(); ++i) {
+        std::snprintf(buf, sizeof buf, "%.17g", row[i]);
+        csv += (i ? "," : "") + std::string(buf);
+      }
+      csv += "\n";
+    }
+    if (res.ok)
+      lsmbs::write_file_atomic(out + "/gradients.csv", csv);  // a failed run has no gradients
+  }
+  lsmbs::write_json_atomic(out + "/summary.json", S);
+  if (!quiet) {
+    std::printf(
+        "lsmbs sensitivity (%s): %s — %ld simulations, %ld steps, %ld factorizations, %ld "
+        "back-solves (%ld rhs), %.3f s\n",
+        method.c_str(), res.ok ? "complete" : "FAILED", res.counts.simulations, res.counts.steps,
+        res.counts.factorizations, res.counts.back_solves, res.counts.back_solve_rhs,
+        res.counts.wall_seconds);
+    for (const auto& rs : res.responses) {
+      if (!res.ok) break;  // aggregates of a failed run are not responses
+      if (!rs.times.empty()) {
+        std::printf("  %-24s per-step, %zu values\n", rs.name.c_str(), rs.values.size());
+        continue;
+      }
+      std::printf("  %-24s %.10g\n", rs.name.c_str(), rs.values.empty() ? NAN : rs.values[0]);
+      for (int i = 0; i < d.size() && rs.gradient.rows(); ++i)
+        std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), rs.gradient(0, i));
+    }
+    for (const auto& q : res.quadratures) {
+      if (!res.ok) break;
+      std::printf("  %-24s %.10g (IDAS quadrature on [%g, %g])\n", q.name.c_str(), q.value, q.t0,
+                  q.t1);
+      for (int i = 0; i < d.size() && i < q.gradient.size(); ++i)
+        std::printf("      d/d%-12s %+.10e\n", d.variables[i].name.c_str(), q.gradient[i]);
+    }
+    if (checked) print_gradient_check(*checked, *check);
+    std::printf("  results in %s\n", out.c_str());
+  }
+  if (res.interrupted) {
+    std::fprintf(stderr, "lsmbs sensitivity: %s; partial results in %s\n", res.message.c_str(),
+                 out.c_str());
+    return 130;
+  }
+  if (!res.ok) {
+    std::fprintf(stderr, "lsmbs: numerical failure: %s\n", res.message.c_str());
+    return 1;
+  }
+  if (checked && checked->verdict(*check) == "fail") {
+    std::fprintf(stderr, "lsmbs: gradient check failed: %s\n",
+                 checked->ok
+                     ? ("response '" + checked->worst_response +
+                        "' disagrees with central differences by " + std::to_string(checked->worst))
+                           .c_str()
+                     : checked->message.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace lsmbs::app

@@ -1,0 +1,70 @@
+#pragma once
+// One interface for the sensitivity methods of §4.3 (DESIGN.md): each method is a class behind
+// SensitivityMethod; compute_sensitivities (sensitivity.hpp) picks one by
+// SensitivityOptions::method.
+//   DirectSensitivity          Algorithm 2: semi-analytical (forward or central Δp) and
+//                              direct-analytic pseudo-loads, back-solves per step (eqs. 30–40)
+//   FiniteDifferenceSensitivity  whole re-simulations per design variable (forward or central)
+//   IdasSensitivity            SUNDIALS IDAS on the GGL form: forward sensitivities, or the
+//                              adjoint of the time-integral responses
+#include <memory>
+
+#include "lsmbs/sensitivity/sensitivity.hpp"
+
+namespace lsmbs {
+
+class SensitivityMethod {
+ public:
+  explicit SensitivityMethod(SensitivityOptions o) : options_(std::move(o)) {}
+  virtual ~SensitivityMethod() = default;
+  const SensitivityOptions& options() const { return options_; }
+
+  /// Sensitivities of the study's responses at design p; the study's parameters are left at p.
+  /// Checks the study first (SetupError naming the missing part), measures the wall time, marks
+  /// an interrupted run, and turns a NaN or an infinity in the results into a numerical failure.
+  SensitivityResult compute(Study& study, const Vec& p) const;
+
+ protected:
+  /// The method proper (called by compute).
+  virtual SensitivityResult run(Study& study, const Vec& p) const = 0;
+  /// False when the grid responses carry no gradients (NaN by design), as with the IDAS adjoint.
+  virtual bool grid_gradients() const { return true; }
+
+ private:
+  SensitivityOptions options_;
+};
+
+/// semi-analytical, semi-analytical-central, direct-analytic.
+class DirectSensitivity final : public SensitivityMethod {
+ public:
+  using SensitivityMethod::SensitivityMethod;
+
+ protected:
+  SensitivityResult run(Study& study, const Vec& p) const override;
+};
+
+/// fd-forward, fd-central.
+class FiniteDifferenceSensitivity final : public SensitivityMethod {
+ public:
+  using SensitivityMethod::SensitivityMethod;
+
+ protected:
+  SensitivityResult run(Study& study, const Vec& p) const override;
+};
+
+/// idas (forward sensitivities), idas-adjoint (time-integral responses).
+class IdasSensitivity final : public SensitivityMethod {
+ public:
+  using SensitivityMethod::SensitivityMethod;
+
+ protected:
+  SensitivityResult run(Study& study, const Vec& p) const override;
+  bool grid_gradients() const override {
+    return options().method != SensitivityOptions::Method::kIdasAdjoint;
+  }
+};
+
+/// The method named by o.method.
+std::unique_ptr<SensitivityMethod> make_sensitivity_method(const SensitivityOptions& o);
+
+}  // namespace lsmbs
