@@ -9,7 +9,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 command -v clang-format >/dev/null || bash scripts/setup-deps.sh
 mapfile -t files < <(git ls-files -- 'src/*.cpp' 'src/*.hpp' 'src/*.hpp.in' 'tests/*.cpp' 'tests/*.hpp' \
-  'examples/*.cpp' 'examples/*.hpp' 'bench/*.cpp' 'bench/*.hpp' 'verification/*.cpp' 'verification/*.hpp' |
+  'examples/*.cpp' 'examples/*.hpp' 'python/*.cpp' 'bench/*.cpp' 'bench/*.hpp' 'verification/*.cpp' 'verification/*.hpp' |
   grep -v '\.in$')
 if [ "${1:-}" = "--check" ]; then
   bad=()

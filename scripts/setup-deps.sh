@@ -9,6 +9,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   gnuplot-nox
   clang-format
+  pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-scipy python3-matplotlib
 )
 
 missing=()

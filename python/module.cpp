@@ -1,0 +1,548 @@
+// The Python module `lsmbs` (compiled part, `lsmbs._lsmbs`): cases loaded from JSON and changed
+// from Python, simulations, sensitivities, the design problem, optimization, geometry and the
+// verification report. Results come back as NumPy arrays that own their memory (copies). Long
+// runs release the GIL, report progress to an optional Python callable, and stop at the next
+// step on Ctrl-C (KeyboardInterrupt is raised once the run has stopped). Errors become
+// lsmbs.Error (with `file` and `json_path`, as the command line names them) and
+// lsmbs.NumericalFailure.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <csignal>
+#include <memory>
+#include <optional>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/core/version.hpp"
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/io/verify_run.hpp"
+#include "lsmbs/optimization/optimizer.hpp"
+#include "lsmbs/records/json.hpp"
+#include "lsmbs/sensitivity/gradient_check.hpp"
+#include "lsmbs/sensitivity/sensitivity.hpp"
+
+namespace py = pybind11;
+using namespace lsmbs;
+
+namespace {
+
+using CasePtr = std::shared_ptr<Case>;
+
+// ------------------------------------------------------------------ NumPy copies (owning)
+py::array_t<double> array(const std::vector<double>& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
+py::array_t<double> array(const Vec& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.data(), v.data() + v.size(), a.mutable_data());
+  return a;
+}
+py::array_t<double> array(const Mat& m) {
+  py::array_t<double> a({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
+  auto r = a.mutable_unchecked<2>();
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) r(i, j) = m(i, j);
+  return a;
+}
+py::object json_to_python(const nlohmann::json& j) {
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+// A design point from Python: None (the case's current design), a sequence of numbers, or a dict
+// of variable name -> value over the initial design.
+Vec design_point(const Case& cs, const py::object& design) {
+  if (!cs.design) {
+    if (!design.is_none()) throw Error(cs.file, "/design", "the case has no design variables");
+    return Vec();
+  }
+  const Design& d = *cs.design;
+  Vec p = d.initial();
+  if (design.is_none()) return p;
+  if (py::isinstance<py::dict>(design)) {
+    for (const auto& [k, v] : design.cast<py::dict>()) {
+      const std::string name = py::cast<std::string>(k);
+      const int i = d.variable_index(name);
+      if (i < 0) throw py::key_error("unknown design variable '" + name + "'");
+      p[i] = py::cast<double>(v);
+    }
+  } else {
+    const auto v = design.cast<std::vector<double>>();
+    if (static_cast<int>(v.size()) != d.size())
+      throw py::value_error("design: expected " + std::to_string(d.size()) + " values, got " +
+                            std::to_string(v.size()));
+    for (int i = 0; i < d.size(); ++i) p[i] = v[static_cast<size_t>(i)];
+  }
+  for (int i = 0; i < d.size(); ++i) {
+    const auto& var = d.variables[static_cast<size_t>(i)];
+    if (!(p[i] >= var.lower && p[i] <= var.upper))
+      throw py::value_error("design variable '" + var.name + "' = " + std::to_string(p[i]) +
+                            " is outside its bounds [" + std::to_string(var.lower) + ", " +
+                            std::to_string(var.upper) + "]");
+  }
+  return p;
+}
+
+// ------------------------------------------------------------------ long runs
+// Releases the GIL for the run; the library's progress reports (every step) call back into
+// Python at most every 50 ms: the user's callable (if any) and Python's signal check. A pending
+// KeyboardInterrupt (or an exception of the callable) asks the run to stop at its next step
+// (core/interrupt.hpp) and is raised when the run has returned.
+class PythonRun {
+ public:
+  explicit PythonRun(py::object callback) : callback_(std::move(callback)) {
+    interrupt_signal().store(0);
+  }
+  ProgressCallback progress() {
+    return [this](const Progress& p) { report(p); };
+  }
+  void report(const Progress& p) {
+    const auto now = std::chrono::steady_clock::now();
+    if (called_ && now - last_ < std::chrono::milliseconds(50)) return;
+    called_ = true;
+    last_ = now;
+    py::gil_scoped_acquire gil;
+    if (error_) return;
+    if (PyErr_CheckSignals() != 0) return stop();
+    if (callback_.is_none()) return;
+    try {
+      callback_(py::dict(py::arg("label") = p.label, py::arg("t") = p.t, py::arg("t_end") = p.t_end,
+                         py::arg("step") = p.step,
+                         py::arg("newton_iterations") = p.newton_iterations));
+    } catch (py::error_already_set& e) {
+      e.restore();
+      stop();
+    }
+  }
+  /// Runs f without the GIL; raises what Python asked for during the run.
+  template <class F>
+  auto operator()(F&& f) {
+    struct Reset {
+      ~Reset() { interrupt_signal().store(0); }
+    } reset;
+    auto result = [&] {
+      py::gil_scoped_release nogil;
+      return f();
+    }();
+    if (error_) {
+      error_->restore();
+      throw py::error_already_set();
+    }
+    return result;
+  }
+
+ private:
+  void stop() {  // the Python error is set: keep it, and stop the run at its next step
+    error_.emplace();
+    interrupt_signal().store(SIGINT);
+  }
+  py::object callback_;
+  std::optional<py::error_already_set> error_;
+  bool called_ = false;
+  std::chrono::steady_clock::time_point last_{};
+};
+
+// Library errors by name (SetupError) located in the case file, as the command line reports them.
+template <class F>
+auto located(const Case& cs, F&& f) {
+  try {
+    return f();
+  } catch (const SetupError& e) {
+    throw locate(cs.file, e);
+  }
+}
+
+// ------------------------------------------------------------------ views of a case
+struct Parameters {
+  CasePtr cs;
+  int index(const std::string& name) const {
+    const int i = cs->model->parameter_index(name);
+    if (i < 0) throw py::key_error("unknown model parameter '" + name + "'");
+    return i;
+  }
+};
+
+struct SensitivityRun {
+  SensitivityResult result;
+  std::vector<std::string> variables;
+};
+
+struct Problem {
+  CasePtr cs;
+  std::unique_ptr<DesignProblem> problem;
+  /// The run in progress, to which the problem's simulations report (set by evaluate).
+  std::shared_ptr<PythonRun*> current = std::make_shared<PythonRun*>(nullptr);
+};
+
+py::dict evaluation_dict(const Evaluation& e) {
+  return py::dict(py::arg("p") = array(e.p), py::arg("objective") = e.objective,
+                  py::arg("constraints") = array(e.constraints), py::arg("upper") = array(e.upper),
+                  py::arg("objective_gradient") = array(e.objective_gradient),
+                  py::arg("constraint_gradient") = array(e.constraint_gradient),
+                  py::arg("max_violation") = e.max_violation, py::arg("ok") = e.ok,
+                  py::arg("message") = e.message);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_lsmbs, m) {
+  m.doc() = "lsmbs: level-set structural optimization of flexible multibody system components";
+  m.attr("__version__") = kVersion;
+  m.attr("git_commit") = git_commit();
+
+  // ---------------------------------------------------------------- errors
+  static py::exception<Error> error_type(m, "Error", PyExc_ValueError);
+  static py::exception<NumericalFailure> failure_type(m, "NumericalFailure", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      py::object exc = py::reinterpret_borrow<py::object>(error_type.ptr())(e.what());
+      exc.attr("file") = e.file();
+      exc.attr("json_path") = e.json_path();
+      PyErr_SetObject(error_type.ptr(), exc.ptr());
+    } catch (const NumericalFailure& e) {
+      PyErr_SetString(failure_type.ptr(), e.what());
+    }
+  });
+
+  // ---------------------------------------------------------------- options
+  py::class_<GeneralizedAlphaOptions>(m, "SimulationOptions",
+                                      "Generalized-α options of a case (its 'simulation' section)")
+      .def_readwrite("h", &GeneralizedAlphaOptions::h, "time step [s]")
+      .def_readwrite("t_end", &GeneralizedAlphaOptions::t_end, "final time [s]")
+      .def_readwrite("rho_inf", &GeneralizedAlphaOptions::rho_inf, "spectral radius at infinity")
+      .def_readwrite("tol_r", &GeneralizedAlphaOptions::tol_r)
+      .def_readwrite("tol_phi", &GeneralizedAlphaOptions::tol_phi)
+      .def_readwrite("tol_q", &GeneralizedAlphaOptions::tol_q)
+      .def_readwrite("max_iter", &GeneralizedAlphaOptions::max_iter)
+      .def_readwrite("min_iter", &GeneralizedAlphaOptions::min_iter)
+      .def_readwrite("max_halvings", &GeneralizedAlphaOptions::max_halvings)
+      .def_readwrite("consistent_start", &GeneralizedAlphaOptions::consistent_start)
+      .def_readwrite("project_initial", &GeneralizedAlphaOptions::project_initial)
+      .def_readwrite("k", &GeneralizedAlphaOptions::k, "constraint scaling of eq. (7); 0: automatic")
+      .def_readwrite("zeta", &GeneralizedAlphaOptions::zeta, "penalty of eq. (7); 0: automatic")
+      .def("validate", &GeneralizedAlphaOptions::validate,
+           "'' when valid, else 'field: what is expected'")
+      .def("to_dict", [](const GeneralizedAlphaOptions& o) { return json_to_python(o); })
+      .def("__repr__", [](const GeneralizedAlphaOptions& o) {
+        return "SimulationOptions(" + nlohmann::json(o).dump() + ")";
+      });
+
+  // ---------------------------------------------------------------- parameters
+  py::class_<Parameters>(m, "Parameters", "The model's named scalar parameters ('body.E', …)")
+      .def("__getitem__",
+           [](const Parameters& p, const std::string& name) {
+             return p.cs->model->params().scalars[static_cast<size_t>(p.index(name))];
+           })
+      .def("__setitem__",
+           [](Parameters& p, const std::string& name, double value) {
+             const int i = p.index(name);
+             if (p.cs->design)
+               for (const auto& b : p.cs->design->bindings)
+                 if (b.parameter == i)
+                   throw py::value_error(
+                       "model parameter '" + name + "' is set by design variable '" +
+                       p.cs->design->variables[static_cast<size_t>(b.variable)].name +
+                       "': change the design instead (design=…)");
+             p.cs->model->params().scalars[static_cast<size_t>(i)] = value;
+           })
+      .def("__contains__",
+           [](const Parameters& p, const std::string& name) {
+             return p.cs->model->parameter_index(name) >= 0;
+           })
+      .def("__len__", [](const Parameters& p) { return p.cs->model->parameter_names().size(); })
+      .def("keys", [](const Parameters& p) { return p.cs->model->parameter_names(); })
+      .def("__iter__",
+           [](const Parameters& p) {
+             return py::iter(py::cast(p.cs->model->parameter_names()));
+           })
+      .def("to_dict", [](const Parameters& p) {
+        py::dict d;
+        const auto& names = p.cs->model->parameter_names();
+        for (size_t i = 0; i < names.size(); ++i) d[py::str(names[i])] = p.cs->model->params().scalars[i];
+        return d;
+      });
+
+  // ---------------------------------------------------------------- case
+  py::class_<Case, CasePtr>(m, "Case", "A case loaded from JSON (docs/case-format.md)")
+      .def_readonly("name", &Case::name)
+      .def_readonly("file", &Case::file)
+      .def_readonly("sha256", &Case::sha256)
+      .def_property(
+          "simulation", [](Case& c) -> GeneralizedAlphaOptions& { return c.simulation; },
+          [](Case& c, const GeneralizedAlphaOptions& o) { c.simulation = o; },
+          py::return_value_policy::reference_internal)
+      .def_property_readonly("parameters",
+                             [](const CasePtr& c) { return Parameters{c}; })
+      .def_property_readonly("variables",
+                             [](const Case& c) {
+                               std::vector<std::string> v;
+                               if (c.design)
+                                 for (const auto& x : c.design->variables) v.push_back(x.name);
+                               return v;
+                             })
+      .def_property_readonly(
+          "initial_design",
+          [](const Case& c) { return c.design ? array(c.design->initial()) : array(Vec()); })
+      .def_property_readonly("lower",
+                             [](const Case& c) { return c.design ? array(c.design->lower()) : array(Vec()); })
+      .def_property_readonly("upper",
+                             [](const Case& c) { return c.design ? array(c.design->upper()) : array(Vec()); })
+      .def_property_readonly("responses",
+                             [](const Case& c) {
+                               std::vector<std::string> v;
+                               for (const auto& r : c.responses) v.push_back(r.name);
+                               return v;
+                             })
+      .def_property_readonly("measures", &Case::measure_columns)
+      .def_property_readonly("dofs", [](const Case& c) { return c.model->nq(); })
+      .def_property_readonly("constraints", [](const Case& c) { return c.model->nc(); })
+      .def("__repr__", [](const Case& c) {
+        return "<lsmbs.Case '" + c.name + "' from " + c.file + ": " + std::to_string(c.model->nq()) +
+               " DOFs, " + std::to_string(c.design ? c.design->size() : 0) + " design variables>";
+      });
+
+  m.def(
+      "load_case", [](const std::string& path) { return std::make_shared<Case>(load_case(path)); },
+      py::arg("path"), "Loads and validates a case file (raises lsmbs.Error naming the JSON path)");
+
+  // ---------------------------------------------------------------- simulate
+  py::class_<SimulationResult>(m, "SimulationResult")
+      .def_property_readonly("status",
+                             [](const SimulationResult& r) { return run_status_name(r.status()); })
+      .def("report", &SimulationResult::report)
+      .def_property_readonly("times", [](const SimulationResult& r) { return array(r.times); })
+      .def_property_readonly("columns", [](const SimulationResult& r) { return r.columns; })
+      .def_property_readonly("history",
+                             [](const SimulationResult& r) {
+                               Mat h(static_cast<Eigen::Index>(r.history.size()),
+                                     static_cast<Eigen::Index>(r.columns.size()));
+                               for (size_t i = 0; i < r.history.size(); ++i)
+                                 for (size_t j = 0; j < r.columns.size(); ++j)
+                                   h(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+                                       r.history[i][j];
+                               return array(h);
+                             })
+      .def("column", [](const SimulationResult& r, const std::string& name) { return array(r.column(name)); })
+      .def_property_readonly("responses", [](const SimulationResult& r) { return r.responses; })
+      .def_property_readonly("summary", [](const SimulationResult& r) { return json_to_python(r.summary); });
+
+  m.def(
+      "simulate",
+      [](const CasePtr& cs, const py::object& design, const std::string& out_dir,
+         const py::object& progress) {
+        const Vec p = design_point(*cs, design);
+        if (cs->design) cs->design->apply(p, cs->model->params());
+        RunOptions ro;
+        ro.out_dir = out_dir;
+        ro.design_point = p;
+        PythonRun run(progress);
+        ro.progress = run.progress();
+        return run([&] { return located(*cs, [&] { return run_simulation(*cs, ro); }); });
+      },
+      py::arg("case"), py::arg("design") = py::none(), py::arg("out_dir") = "",
+      py::arg("progress") = py::none(),
+      "Generalized-α simulation (Algorithm 1); design: None, a sequence, or {name: value}");
+
+  // ---------------------------------------------------------------- sensitivity
+  py::class_<SensitivityRun>(m, "SensitivityResult")
+      .def_property_readonly(
+          "status", [](const SensitivityRun& r) { return run_status_name(r.result.status()); })
+      .def("report", [](const SensitivityRun& r) { return r.result.report(); })
+      .def_property_readonly("message", [](const SensitivityRun& r) { return r.result.message; })
+      .def_property_readonly("warnings", [](const SensitivityRun& r) { return r.result.warnings; })
+      .def_property_readonly("variables", [](const SensitivityRun& r) { return r.variables; })
+      .def_property_readonly("values",
+                             [](const SensitivityRun& r) {
+                               py::dict d;
+                               for (const auto& x : r.result.responses)
+                                 d[py::str(x.name)] =
+                                     x.times.empty() && x.values.size() == 1
+                                         ? py::object(py::float_(x.values[0]))
+                                         : py::object(array(x.values));
+                               return d;
+                             })
+      .def_property_readonly(
+          "gradients",
+          [](const SensitivityRun& r) {
+            py::dict d;  // scalar responses: a vector over the variables; per-step: steps × variables
+            for (const auto& x : r.result.responses)
+              d[py::str(x.name)] = x.times.empty() && x.gradient.rows() == 1
+                                       ? py::object(array(Vec(x.gradient.row(0).transpose())))
+                                       : py::object(array(x.gradient));
+            return d;
+          })
+      .def_property_readonly("times",
+                             [](const SensitivityRun& r) {
+                               py::dict d;
+                               for (const auto& x : r.result.responses)
+                                 if (!x.times.empty()) d[py::str(x.name)] = array(x.times);
+                               return d;
+                             })
+      .def_property_readonly("counts",
+                             [](const SensitivityRun& r) { return json_to_python(r.result.counts); });
+
+  m.def(
+      "sensitivity",
+      [](const CasePtr& cs, const std::string& method, const py::object& design, double delta,
+         bool relative, const std::string& matrix, int threads, double rtol, double atol,
+         const py::object& progress) {
+        SensitivityOptions o;
+        if (!SensitivityOptions::parse(method, o.method)) {
+          std::string all;
+          for (const auto& n : SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
+          throw py::value_error("method '" + method + "': expected one of " + all);
+        }
+        if (!SensitivityOptions::parse_matrix(matrix, o.matrix))
+          throw py::value_error("matrix '" + matrix + "': expected last, converged or refined");
+        o.delta = delta;
+        o.relative = relative;
+        o.threads = threads;
+        o.idas.rtol = rtol;
+        o.idas.atol = atol > 0 ? atol : rtol;
+        const Vec p = design_point(*cs, design);
+        PythonRun run(progress);
+        o.progress = run.progress();
+        SensitivityRun out;
+        out.result = run([&] { return located(*cs, [&] { return compute_sensitivities(*cs, p, o); }); });
+        for (const auto& v : cs->design->variables) out.variables.push_back(v.name);
+        return out;
+      },
+      py::arg("case"), py::arg("method") = "direct-analytic", py::arg("design") = py::none(),
+      py::arg("delta") = 1e-6, py::arg("relative") = true, py::arg("matrix") = "converged",
+      py::arg("threads") = 2, py::arg("rtol") = 1e-9, py::arg("atol") = 0.0,
+      py::arg("progress") = py::none(),
+      "Responses and their design gradients (§4.3) by one method, as `lsmbs sensitivity`");
+
+  // ---------------------------------------------------------------- design problem, optimize
+  py::class_<Problem>(m, "DesignProblem",
+                      "The case's optimization problem (its 'optimization' section); evaluate(p) "
+                      "runs one simulation with sensitivities and caches the result by p")
+      .def(py::init([](const CasePtr& cs) {
+             Problem pr{cs, nullptr};
+             located(*cs, [&] {
+               OptimizationSpec spec = parse_optimization(*cs);
+               spec.sensitivity.progress = [slot = pr.current](const Progress& p) {
+                 if (*slot) (*slot)->report(p);
+               };
+               pr.problem = std::make_unique<DesignProblem>(*cs, spec);
+               return 0;
+             });
+             return pr;
+           }),
+           py::arg("case"))
+      .def_property_readonly("num_variables",
+                             [](const Problem& p) { return p.problem->num_variables(); })
+      .def_property_readonly("num_constraints",
+                             [](const Problem& p) { return p.problem->num_constraints(); })
+      .def_property_readonly("simulations", [](const Problem& p) { return p.problem->simulations(); })
+      .def_property_readonly("cache_hits", [](const Problem& p) { return p.problem->cache_hits(); })
+      .def(
+          "evaluate",
+          [](Problem& pr, const py::object& design, const py::object& progress) {
+            const Vec p = design_point(*pr.cs, design);
+            PythonRun run(progress);
+            *pr.current = &run;
+            struct Unset {
+              PythonRun** slot;
+              ~Unset() { *slot = nullptr; }
+            } unset{pr.current.get()};
+            return evaluation_dict(run([&] {
+              return located(*pr.cs, [&] { return pr.problem->evaluate(p); });
+            }));
+          },
+          py::arg("design"), py::arg("progress") = py::none(),
+          "{'objective', 'constraints', 'upper', 'objective_gradient', 'constraint_gradient', …}");
+
+  m.def(
+      "optimize",
+      [](const CasePtr& cs, const std::string& out_dir, bool resume, const std::string& optimizer) {
+        PythonRun run{py::none()};
+        return located(*cs, [&] {
+          OptimizationSpec spec = parse_optimization(*cs);
+          if (!optimizer.empty()) spec.optimizer = optimizer;
+          spec.sensitivity.progress = run.progress();
+          DesignProblem prob(*cs, spec);
+          OptimizeOptions o;
+          o.out_dir = out_dir;
+          o.resume = resume;
+          o.input_sha256 = cs->sha256;
+          const OptimizeResult r = run([&] { return optimize(prob, o); });
+          py::list history;
+          for (const auto& e : r.history) history.append(evaluation_dict(e));
+          return py::dict(py::arg("status") = run_status_name(r.status()),
+                          py::arg("report") = r.report(), py::arg("p") = array(r.p),
+                          py::arg("final") = evaluation_dict(r.final), py::arg("history") = history,
+                          py::arg("converged") = r.converged,
+                          py::arg("nlopt_status") = r.nlopt_status,
+                          py::arg("evaluations") = r.evaluations);
+        });
+      },
+      py::arg("case"), py::arg("out_dir") = "", py::arg("resume") = false,
+      py::arg("optimizer") = "",
+      "The fully coupled optimization of the case's design (as `lsmbs optimize`, without its "
+      "gradient check)");
+
+  // ---------------------------------------------------------------- geometry
+  m.def(
+      "geometry",
+      [](const CasePtr& cs, const py::object& design) {
+        if (!cs->design) throw Error(cs->file, "/design", "the case has no design section");
+        const Vec p = design_point(*cs, design);
+        ModelParams params = cs->model->params();
+        std::vector<SpMat> dmu;
+        cs->design->apply(p, params, &dmu);
+        py::dict bodies;
+        for (size_t b = 0; b < cs->design->bodies.size(); ++b) {
+          const BodyDesign& bd = cs->design->bodies[b];
+          const FlexibleBody& body = *bd.body;
+          const Mesh2D& mesh = body.mesh;
+          Mat nodes(mesh.num_nodes(), 2);
+          Vec phi(mesh.num_nodes());
+          const auto values = bd.map->level_set().values(p);
+          for (int i = 0; i < mesh.num_nodes(); ++i) {
+            nodes.row(i) = mesh.nodes[static_cast<size_t>(i)].transpose();
+            phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
+          }
+          py::array_t<int> quads({static_cast<py::ssize_t>(mesh.num_elements()), py::ssize_t{4}});
+          auto q = quads.mutable_unchecked<2>();
+          for (int e = 0; e < mesh.num_elements(); ++e)
+            for (int k = 0; k < 4; ++k) q(e, k) = mesh.quads[static_cast<size_t>(e)][static_cast<size_t>(k)];
+          Vec grad;
+          const double mass = Design::mass_gradient(bd, dmu[b], params, grad);
+          bodies[py::str(body.name)] = py::dict(
+              py::arg("nodes") = array(nodes), py::arg("quads") = quads,
+              py::arg("mu") = array(params.fields[static_cast<size_t>(body.field)]),
+              py::arg("phi") = array(phi), py::arg("mass") = mass,
+              py::arg("mass_gradient") = array(grad));
+        }
+        return bodies;
+      },
+      py::arg("case"), py::arg("design") = py::none(),
+      "Per designed body: mesh nodes and quads (body frame), μ_e, the nodal level set φ (material "
+      "where φ > 0), the mass and its gradient");
+
+  // ---------------------------------------------------------------- verify
+  m.def(
+      "verify",
+      [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study) {
+        VerifyOptions o;
+        o.out_dir = out_dir;
+        o.idas = idas;
+        o.mesh_study = mesh_study;
+        o.command_line = "lsmbs.verify (Python)";
+        PythonRun run{py::none()};
+        const VerifyResult r = run([&] { return run_verify(path, o); });
+        return json_to_python(r.summary);
+      },
+      py::arg("path"), py::arg("out_dir"), py::arg("idas") = true, py::arg("mesh_study") = true,
+      "The verification report of a case file (as `lsmbs verify`); returns its summary");
+}

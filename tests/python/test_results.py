@@ -1,0 +1,127 @@
+"""Values and gradients from Python against the command line's summary.json, bit for bit (the
+same library computes both; the reference is the program users already trust), and the
+options and parameters changed from Python against the command line on the edited JSON."""
+import math
+
+import numpy as np
+import pytest
+
+import lsmbs
+from conftest import SPRING, run_cli
+
+
+def as_list(v):
+    return [v] if isinstance(v, float) else list(v)
+
+
+@pytest.mark.parametrize("method", ["direct-analytic", "semi-analytical", "fd-central"])
+def test_sensitivity_equals_command_line(tmp_path, method):
+    case = lsmbs.load_case(str(SPRING))
+    r = lsmbs.sensitivity(case, method=method)
+    assert r.status == "complete", r.report()
+    s = run_cli("sensitivity", SPRING, "--method", method, "-o", tmp_path / "cli")
+    assert r.variables == ["k", "c"]
+    assert set(r.values) == set(s["responses"])
+    for name, v in r.values.items():
+        assert as_list(v) == as_list(s["responses"][name]), name
+        g = np.atleast_2d(r.gradients[name])
+        for i, var in enumerate(r.variables):
+            ref = s["gradients"][name][var]
+            ref = ref if isinstance(ref, list) else [ref]
+            got = list(g[:, i]) if g.shape[0] > 1 else [g[0, i]]
+            assert got == ref, (name, var)
+
+
+def test_simulate_equals_command_line(tmp_path):
+    case = lsmbs.load_case(str(SPRING))
+    r = lsmbs.simulate(case)
+    s = run_cli("simulate", SPRING, "-o", tmp_path / "cli")
+    assert r.status == "complete"
+    for name, v in s["responses"].items():
+        got = r.responses[name]
+        assert got == v or (math.isnan(got) and v is None), name
+    t = r.times
+    assert t[0] == 0 and abs(t[-1] - 0.25) < 1e-12
+    assert r.history.shape == (len(t), len(r.columns))
+    np.testing.assert_array_equal(r.column("piston.x"), r.history[:, r.columns.index("piston.x")])
+
+
+def test_options_and_parameters_set_from_python_equal_the_edited_json(tmp_path, spring_doc, write_case):
+    # from Python: a coarser step and a heavier piston
+    case = lsmbs.load_case(str(SPRING))
+    case.simulation.h = 2e-3
+    assert "piston.mass" in case.parameters
+    m0 = case.parameters["piston.mass"]
+    case.parameters["piston.mass"] = 2 * m0
+    r = lsmbs.sensitivity(case)
+    # the same edits in the JSON, through the command line
+    spring_doc["simulation"]["h"] = 2e-3
+    for b in spring_doc["bodies"]:
+        if b["name"] == "piston":
+            b["mass"] = 2 * m0
+    s = run_cli("sensitivity", write_case(spring_doc), "-o", tmp_path / "cli")
+    for name, v in r.values.items():
+        assert as_list(v) == as_list(s["responses"][name]), name
+    # and it did change the results
+    r0 = lsmbs.sensitivity(lsmbs.load_case(str(SPRING)))
+    assert r0.values["mean_piston_x"] != r.values["mean_piston_x"]
+
+
+def test_design_point_by_name_or_sequence(tmp_path):
+    case = lsmbs.load_case(str(SPRING))
+    a = lsmbs.sensitivity(case, design={"k": 5000})
+    b = lsmbs.sensitivity(case, design=[5000, 20])
+    s = run_cli("sensitivity", SPRING, "--set", "k=5000", "-o", tmp_path / "cli")
+    assert a.values["mean_piston_x"] == b.values["mean_piston_x"] == s["responses"]["mean_piston_x"]
+    with pytest.raises(ValueError, match="outside its bounds"):
+        lsmbs.sensitivity(case, design={"k": 1e9})
+    with pytest.raises(KeyError, match="unknown design variable"):
+        lsmbs.sensitivity(case, design={"stiffness": 1})
+
+
+def test_arrays_own_their_memory():
+    case = lsmbs.load_case(str(SPRING))
+    r = lsmbs.sensitivity(case)
+    g = r.gradients["mean_piston_x"]
+    h = lsmbs.simulate(case).history
+    ref_g, ref_h = g.copy(), h.copy()
+    assert g.flags.owndata and h.flags.owndata
+    del case, r
+    import gc
+    gc.collect()
+    lsmbs.simulate(lsmbs.load_case(str(SPRING)))  # reuse the freed memory, if anything pointed there
+    np.testing.assert_array_equal(g, ref_g)
+    np.testing.assert_array_equal(h, ref_h)
+    g[0] = 1.0  # writable: a copy of its own
+
+
+def test_design_problem_evaluates_and_caches(spring_doc, write_case):
+    spring_doc["optimization"] = {"objective": "energy_integral",
+                                  "constraints": [{"response": "mean_piston_x", "upper": 1.0}],
+                                  "sensitivity": {"method": "direct-analytic"}}
+    case = lsmbs.load_case(str(write_case(spring_doc)))
+    prob = lsmbs.DesignProblem(case)
+    assert (prob.num_variables, prob.num_constraints) == (2, 1)
+    e = prob.evaluate([4000, 20])
+    s = lsmbs.sensitivity(lsmbs.load_case(str(SPRING)), method="direct-analytic")
+    assert e["objective"] == s.values["energy_integral"]
+    np.testing.assert_array_equal(e["objective_gradient"], s.gradients["energy_integral"])
+    assert e["constraints"][0] == s.values["mean_piston_x"]
+    assert prob.simulations == 1
+    prob.evaluate([4000, 20])
+    assert (prob.simulations, prob.cache_hits) == (1, 1)
+
+
+def test_geometry_of_a_level_set_design(tmp_path):
+    case = lsmbs.load_case(str(SPRING.parents[1] / "slider_crank" / "slider_crank_1hole_coarse.json"))
+    mid = {v: 0.5 * (lo + up) for v, lo, up in zip(case.variables, case.lower, case.upper)}
+    g = lsmbs.geometry(case, design=mid)
+    s = run_cli("geometry", case.file, *[f"--set={k}={v!r}" for k, v in mid.items()],
+                "-o", tmp_path / "cli")
+    (name, body), = g.items()
+    assert body["quads"].shape[1] == 4 and body["nodes"].shape[1] == 2
+    assert body["mu"].shape == (body["quads"].shape[0],)
+    assert 0 < body["mu"].min() <= body["mu"].max() <= 1
+    ref = {b["body"]: b for b in s["bodies"]}[name]
+    assert body["mass"] == ref["mass"]
+    assert body["phi"].min() < 0 < body["phi"].max()  # a hole: void and material nodes
