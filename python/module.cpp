@@ -227,7 +227,8 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def_readwrite("max_halvings", &GeneralizedAlphaOptions::max_halvings)
       .def_readwrite("consistent_start", &GeneralizedAlphaOptions::consistent_start)
       .def_readwrite("project_initial", &GeneralizedAlphaOptions::project_initial)
-      .def_readwrite("k", &GeneralizedAlphaOptions::k, "constraint scaling of eq. (7); 0: automatic")
+      .def_readwrite("k", &GeneralizedAlphaOptions::k,
+                     "constraint scaling of eq. (7); 0: automatic")
       .def_readwrite("zeta", &GeneralizedAlphaOptions::zeta, "penalty of eq. (7); 0: automatic")
       .def("validate", &GeneralizedAlphaOptions::validate,
            "'' when valid, else 'field: what is expected'")
@@ -261,13 +262,12 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def("__len__", [](const Parameters& p) { return p.cs->model->parameter_names().size(); })
       .def("keys", [](const Parameters& p) { return p.cs->model->parameter_names(); })
       .def("__iter__",
-           [](const Parameters& p) {
-             return py::iter(py::cast(p.cs->model->parameter_names()));
-           })
+           [](const Parameters& p) { return py::iter(py::cast(p.cs->model->parameter_names())); })
       .def("to_dict", [](const Parameters& p) {
         py::dict d;
         const auto& names = p.cs->model->parameter_names();
-        for (size_t i = 0; i < names.size(); ++i) d[py::str(names[i])] = p.cs->model->params().scalars[i];
+        for (size_t i = 0; i < names.size(); ++i)
+          d[py::str(names[i])] = p.cs->model->params().scalars[i];
         return d;
       });
 
@@ -280,8 +280,7 @@ PYBIND11_MODULE(_lsmbs, m) {
           "simulation", [](Case& c) -> GeneralizedAlphaOptions& { return c.simulation; },
           [](Case& c, const GeneralizedAlphaOptions& o) { c.simulation = o; },
           py::return_value_policy::reference_internal)
-      .def_property_readonly("parameters",
-                             [](const CasePtr& c) { return Parameters{c}; })
+      .def_property_readonly("parameters", [](const CasePtr& c) { return Parameters{c}; })
       .def_property_readonly("variables",
                              [](const Case& c) {
                                std::vector<std::string> v;
@@ -292,10 +291,10 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def_property_readonly(
           "initial_design",
           [](const Case& c) { return c.design ? array(c.design->initial()) : array(Vec()); })
-      .def_property_readonly("lower",
-                             [](const Case& c) { return c.design ? array(c.design->lower()) : array(Vec()); })
-      .def_property_readonly("upper",
-                             [](const Case& c) { return c.design ? array(c.design->upper()) : array(Vec()); })
+      .def_property_readonly(
+          "lower", [](const Case& c) { return c.design ? array(c.design->lower()) : array(Vec()); })
+      .def_property_readonly(
+          "upper", [](const Case& c) { return c.design ? array(c.design->upper()) : array(Vec()); })
       .def_property_readonly("responses",
                              [](const Case& c) {
                                std::vector<std::string> v;
@@ -306,8 +305,9 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def_property_readonly("dofs", [](const Case& c) { return c.model->nq(); })
       .def_property_readonly("constraints", [](const Case& c) { return c.model->nc(); })
       .def("__repr__", [](const Case& c) {
-        return "<lsmbs.Case '" + c.name + "' from " + c.file + ": " + std::to_string(c.model->nq()) +
-               " DOFs, " + std::to_string(c.design ? c.design->size() : 0) + " design variables>";
+        return "<lsmbs.Case '" + c.name + "' from " + c.file + ": " +
+               std::to_string(c.model->nq()) + " DOFs, " +
+               std::to_string(c.design ? c.design->size() : 0) + " design variables>";
       });
 
   m.def(
@@ -331,9 +331,11 @@ PYBIND11_MODULE(_lsmbs, m) {
                                        r.history[i][j];
                                return array(h);
                              })
-      .def("column", [](const SimulationResult& r, const std::string& name) { return array(r.column(name)); })
+      .def("column",
+           [](const SimulationResult& r, const std::string& name) { return array(r.column(name)); })
       .def_property_readonly("responses", [](const SimulationResult& r) { return r.responses; })
-      .def_property_readonly("summary", [](const SimulationResult& r) { return json_to_python(r.summary); });
+      .def_property_readonly("summary",
+                             [](const SimulationResult& r) { return json_to_python(r.summary); });
 
   m.def(
       "simulate",
@@ -364,16 +366,16 @@ PYBIND11_MODULE(_lsmbs, m) {
                              [](const SensitivityRun& r) {
                                py::dict d;
                                for (const auto& x : r.result.responses)
-                                 d[py::str(x.name)] =
-                                     x.times.empty() && x.values.size() == 1
-                                         ? py::object(py::float_(x.values[0]))
-                                         : py::object(array(x.values));
+                                 d[py::str(x.name)] = x.times.empty() && x.values.size() == 1
+                                                          ? py::object(py::float_(x.values[0]))
+                                                          : py::object(array(x.values));
                                return d;
                              })
       .def_property_readonly(
           "gradients",
           [](const SensitivityRun& r) {
-            py::dict d;  // scalar responses: a vector over the variables; per-step: steps × variables
+            py::dict
+                d;  // scalar responses: a vector over the variables; per-step: steps × variables
             for (const auto& x : r.result.responses)
               d[py::str(x.name)] = x.times.empty() && x.gradient.rows() == 1
                                        ? py::object(array(Vec(x.gradient.row(0).transpose())))
@@ -387,8 +389,8 @@ PYBIND11_MODULE(_lsmbs, m) {
                                  if (!x.times.empty()) d[py::str(x.name)] = array(x.times);
                                return d;
                              })
-      .def_property_readonly("counts",
-                             [](const SensitivityRun& r) { return json_to_python(r.result.counts); });
+      .def_property_readonly(
+          "counts", [](const SensitivityRun& r) { return json_to_python(r.result.counts); });
 
   m.def(
       "sensitivity",
@@ -412,7 +414,8 @@ PYBIND11_MODULE(_lsmbs, m) {
         PythonRun run(progress);
         o.progress = run.progress();
         SensitivityRun out;
-        out.result = run([&] { return located(*cs, [&] { return compute_sensitivities(*cs, p, o); }); });
+        out.result =
+            run([&] { return located(*cs, [&] { return compute_sensitivities(*cs, p, o); }); });
         for (const auto& v : cs->design->variables) out.variables.push_back(v.name);
         return out;
       },
@@ -443,7 +446,8 @@ PYBIND11_MODULE(_lsmbs, m) {
                              [](const Problem& p) { return p.problem->num_variables(); })
       .def_property_readonly("num_constraints",
                              [](const Problem& p) { return p.problem->num_constraints(); })
-      .def_property_readonly("simulations", [](const Problem& p) { return p.problem->simulations(); })
+      .def_property_readonly("simulations",
+                             [](const Problem& p) { return p.problem->simulations(); })
       .def_property_readonly("cache_hits", [](const Problem& p) { return p.problem->cache_hits(); })
       .def(
           "evaluate",
@@ -455,9 +459,8 @@ PYBIND11_MODULE(_lsmbs, m) {
               PythonRun** slot;
               ~Unset() { *slot = nullptr; }
             } unset{pr.current.get()};
-            return evaluation_dict(run([&] {
-              return located(*pr.cs, [&] { return pr.problem->evaluate(p); });
-            }));
+            return evaluation_dict(
+                run([&] { return located(*pr.cs, [&] { return pr.problem->evaluate(p); }); }));
           },
           py::arg("design"), py::arg("progress") = py::none(),
           "{'objective', 'constraints', 'upper', 'objective_gradient', 'constraint_gradient', …}");
@@ -478,12 +481,11 @@ PYBIND11_MODULE(_lsmbs, m) {
           const OptimizeResult r = run([&] { return optimize(prob, o); });
           py::list history;
           for (const auto& e : r.history) history.append(evaluation_dict(e));
-          return py::dict(py::arg("status") = run_status_name(r.status()),
-                          py::arg("report") = r.report(), py::arg("p") = array(r.p),
-                          py::arg("final") = evaluation_dict(r.final), py::arg("history") = history,
-                          py::arg("converged") = r.converged,
-                          py::arg("nlopt_status") = r.nlopt_status,
-                          py::arg("evaluations") = r.evaluations);
+          return py::dict(
+              py::arg("status") = run_status_name(r.status()), py::arg("report") = r.report(),
+              py::arg("p") = array(r.p), py::arg("final") = evaluation_dict(r.final),
+              py::arg("history") = history, py::arg("converged") = r.converged,
+              py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations);
         });
       },
       py::arg("case"), py::arg("out_dir") = "", py::arg("resume") = false,
@@ -510,19 +512,21 @@ PYBIND11_MODULE(_lsmbs, m) {
           const auto values = bd.map->level_set().values(p);
           for (int i = 0; i < mesh.num_nodes(); ++i) {
             nodes.row(i) = mesh.nodes[static_cast<size_t>(i)].transpose();
-            phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
+            phi[i] =
+                bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
           }
           py::array_t<int> quads({static_cast<py::ssize_t>(mesh.num_elements()), py::ssize_t{4}});
           auto q = quads.mutable_unchecked<2>();
           for (int e = 0; e < mesh.num_elements(); ++e)
-            for (int k = 0; k < 4; ++k) q(e, k) = mesh.quads[static_cast<size_t>(e)][static_cast<size_t>(k)];
+            for (int k = 0; k < 4; ++k)
+              q(e, k) = mesh.quads[static_cast<size_t>(e)][static_cast<size_t>(k)];
           Vec grad;
           const double mass = Design::mass_gradient(bd, dmu[b], params, grad);
-          bodies[py::str(body.name)] = py::dict(
-              py::arg("nodes") = array(nodes), py::arg("quads") = quads,
-              py::arg("mu") = array(params.fields[static_cast<size_t>(body.field)]),
-              py::arg("phi") = array(phi), py::arg("mass") = mass,
-              py::arg("mass_gradient") = array(grad));
+          bodies[py::str(body.name)] =
+              py::dict(py::arg("nodes") = array(nodes), py::arg("quads") = quads,
+                       py::arg("mu") = array(params.fields[static_cast<size_t>(body.field)]),
+                       py::arg("phi") = array(phi), py::arg("mass") = mass,
+                       py::arg("mass_gradient") = array(grad));
         }
         return bodies;
       },

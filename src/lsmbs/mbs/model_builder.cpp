@@ -19,6 +19,46 @@ void ModelBuilder::fail(const Entity& e, const std::string& field, const std::st
   throw ModelError(e.kind.empty() ? std::string() : e.kind + " '" + e.name + "'", field, what);
 }
 
+// An options struct's validate() message "field: what" as the entity's ModelError.
+void ModelBuilder::check(const Entity& e, const std::string& validation) {
+  if (validation.empty()) return;
+  const auto colon = validation.find(": ");
+  fail(e, validation.substr(0, colon), validation.substr(colon + 2));
+}
+
+std::string RigidBodyOptions::validate() const {
+  if (!(mass >= 0)) return "mass: expected a non-negative mass";
+  if (!(inertia >= 0)) return "inertia: expected a non-negative inertia";
+  return {};
+}
+
+std::string FlexibleBodyOptions::validate() const {
+  if (!(E > 0)) return "material/E: expected a positive Young's modulus";
+  if (!(nu >= 0 && nu < 0.5)) return "material/nu: expected Poisson's ratio in [0, 0.5)";
+  if (!(rho > 0)) return "material/rho: expected a positive density";
+  if (!(thickness > 0)) return "thickness: expected a positive thickness";
+  return {};
+}
+
+std::string PrismaticOptions::validate() const {
+  if (through && !through->allFinite()) return "through: expected a finite point";
+  return {};
+}
+
+std::string SpringOptions::validate() const {
+  if (!(stiffness >= 0)) return "stiffness: expected a non-negative stiffness";
+  if (!(damping >= 0)) return "damping: expected a non-negative damping";
+  if (free_length && !(*free_length >= 0))
+    return "free_length: expected a non-negative free length";
+  return {};
+}
+
+std::string RotationalSpringOptions::validate() const {
+  if (!(stiffness >= 0)) return "stiffness: expected a non-negative stiffness";
+  if (!(damping >= 0)) return "damping: expected a non-negative damping";
+  return {};
+}
+
 void ModelBuilder::check_not_built() const {
   if (built_)
     throw std::logic_error("ModelBuilder: the model was built already (nothing can be added)");
@@ -180,8 +220,7 @@ void ModelBuilder::given_velocity(const std::string& body, int first, int rotati
 void ModelBuilder::rigid_body(const std::string& name, const RigidBodyOptions& o) {
   const Entity e{"rigid body", name};
   const Mark mark = begin(e);
-  if (!(o.mass >= 0)) fail(e, "mass", "expected a non-negative mass");
-  if (!(o.inertia >= 0)) fail(e, "inertia", "expected a non-negative inertia");
+  check(e, o.validate());
   RigidBody b;
   b.name = name;
   b.position0 = o.position;
@@ -205,10 +244,7 @@ void ModelBuilder::flexible_body(const std::string& name, Mesh2D mesh,
                                  const FlexibleBodyOptions& o) {
   const Entity e{"flexible body", name};
   const Mark mark = begin(e);
-  if (!(o.E > 0)) fail(e, "material/E", "expected a positive Young's modulus");
-  if (!(o.nu >= 0 && o.nu < 0.5)) fail(e, "material/nu", "expected Poisson's ratio in [0, 0.5)");
-  if (!(o.rho > 0)) fail(e, "material/rho", "expected a positive density");
-  if (!(o.thickness > 0)) fail(e, "thickness", "expected a positive thickness");
+  check(e, o.validate());
   for (const auto& [set, nodes] : mesh.node_sets) {
     if (nodes.empty()) fail(e, "node_sets/" + set, "node set '" + set + "' is empty");
     for (int n : nodes)
@@ -274,6 +310,7 @@ void ModelBuilder::prismatic(const std::string& name, const Point& a, const Vec2
   const PointRef pa = resolve(e, "a", a);
   if (pa.kind == PointRef::Kind::kGround) fail(e, "a", "the sliding point must be on a body");
   if (!(direction.norm() > 0)) fail(e, "direction", "expected a non-zero direction");
+  check(e, o.validate());
   const Vec2 x0 = o.through.value_or(initial_position(pa));
   // the rotation lock keeps the body's initial angle (a node has no angle: nothing to lock)
   double th0 = 0;
@@ -387,12 +424,9 @@ void ModelBuilder::spring_damper(const std::string& name, const Point& a, const 
   const Entity e{"spring", name};
   const Mark mark = begin(e);
   const PointRef pa = resolve(e, "a", a), pb = resolve(e, "b", b);
-  if (!(o.stiffness >= 0)) fail(e, "stiffness", "expected a non-negative stiffness");
-  if (!(o.damping >= 0)) fail(e, "damping", "expected a non-negative damping");
+  check(e, o.validate());
   // the free length defaults to the initial distance: the spring is unloaded at t = 0
   const double l_init = (initial_position(pb) - initial_position(pa)).norm();
-  if (o.free_length && !(*o.free_length >= 0))
-    fail(e, "free_length", "expected a non-negative free length");
   if (!(l_init > 0))
     fail(e, "", "the spring's end points coincide initially (direction undefined)");
   const int kp = param(e, "stiffness", o.stiffness);
@@ -432,8 +466,7 @@ void ModelBuilder::rotational_spring_damper(const std::string& name, const std::
     b_dof = rb.dof0 + 2;
     th_b = rb.angle0;
   }
-  if (!(o.stiffness >= 0)) fail(e, "stiffness", "expected a non-negative stiffness");
-  if (!(o.damping >= 0)) fail(e, "damping", "expected a non-negative damping");
+  check(e, o.validate());
   const int kp = param(e, "stiffness", o.stiffness);
   const int cp = param(e, "damping", o.damping);
   // the free angle defaults to the initial relative angle: no moment at t = 0

@@ -83,6 +83,9 @@ struct RigidBodyOptions {
   Vec2 com = Vec2::Zero();       ///< centre of mass in the body frame
   std::optional<Vec2> velocity;  ///< of the reference point at t = 0 (given: kept)
   std::optional<double> angular_velocity;  ///< θ̇ at t = 0 (given: kept)
+  /// Empty string when valid, otherwise "field: what is expected" (the builder reports it as a
+  /// ModelError naming the entity and the field).
+  std::string validate() const;
 };
 
 struct FlexibleBodyOptions {
@@ -96,21 +99,33 @@ struct FlexibleBodyOptions {
   /// Rigid velocity field at t = 0, v + ω × (x − origin); either given: the whole field is kept.
   std::optional<Vec2> velocity;
   std::optional<double> angular_velocity;
+  /// Empty string when valid, otherwise "field: what is expected" (the builder reports it as a
+  /// ModelError naming the entity and the field).
+  std::string validate() const;
 };
 
 struct PrismaticOptions {
   std::optional<Vec2> through;  ///< a point of the line (default: the initial position of a)
   bool lock_rotation = true;    ///< also θ_a = θ_a(0) (rigid-body points only)
+  /// Empty string when valid, otherwise "field: what is expected" (the builder reports it as a
+  /// ModelError naming the entity and the field).
+  std::string validate() const;
 };
 
 struct SpringOptions {
   double stiffness = 0, damping = 0;
   std::optional<double> free_length;  ///< default: the initial distance of the end points
+  /// Empty string when valid, otherwise "field: what is expected" (the builder reports it as a
+  /// ModelError naming the entity and the field).
+  std::string validate() const;
 };
 
 struct RotationalSpringOptions {
   double stiffness = 0, damping = 0;
   std::optional<double> free_angle;  ///< default: the initial relative angle θa − θb
+  /// Empty string when valid, otherwise "field: what is expected" (the builder reports it as a
+  /// ModelError naming the entity and the field).
+  std::string validate() const;
 };
 
 /// The argument of a pressure table: the time (angle_of empty) plus offset, or the angle of a
@@ -243,6 +258,7 @@ class ModelBuilder {
     size_t force = 0, constraint = 0;
   };
   [[noreturn]] static void fail(const Entity& e, const std::string& field, const std::string& what);
+  static void check(const Entity& e, const std::string& validation);
   // Every call checks everything (begin: the name) before it changes the model, and registers the
   // entity at the end (commit): a call that throws leaves the builder as it was.
   Mark begin(const Entity& e) const;

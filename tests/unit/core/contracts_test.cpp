@@ -18,6 +18,7 @@
 #include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/simulation_run.hpp"
 #include "lsmbs/io/verify_run.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 #include "lsmbs/optimization/mma_classic.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
 #include "lsmbs/sensitivity/direct_observer.hpp"
@@ -77,6 +78,20 @@ TEST(Contracts, EveryOptionsValidateNamesTheField) {
   expect_invalid<GeometryRunOptions>("image_width", [](auto& o) { o.image_width = 1; });
   expect_invalid<VerifyOptions>("tol_fd", [](auto& o) { o.tol_fd = 0; });
   expect_invalid<BenchOptions>("repetitions", [](auto& o) { o.repetitions = 0; });
+  // the model builder's option structs (defaults of a flexible body are not valid: E, ρ and the
+  // thickness have no sensible default)
+  expect_invalid<RigidBodyOptions>("inertia", [](auto& o) { o.inertia = -1; });
+  expect_invalid<SpringOptions>("free_length", [](auto& o) { o.free_length = -0.1; });
+  expect_invalid<RotationalSpringOptions>("damping", [](auto& o) { o.damping = NAN; });
+  expect_invalid<PrismaticOptions>("through", [](auto& o) { o.through = Vec2(INFINITY, 0); });
+  FlexibleBodyOptions f;
+  EXPECT_TRUE(starts_with(f.validate(), "material/E:")) << f.validate();
+  f.E = 70e9;
+  f.rho = 2700;
+  f.thickness = 1e-3;
+  EXPECT_EQ(f.validate(), "");
+  f.nu = 0.5;
+  EXPECT_TRUE(starts_with(f.validate(), "material/nu:")) << f.validate();
 }
 
 TEST(Contracts, RunStatusAndReportFollowTheFields) {
