@@ -58,7 +58,23 @@ py::object json_to_python(const nlohmann::json& j) {
 
 // A design point from Python: None (the case's current design), a sequence of numbers, or a dict
 // of variable name -> value over the initial design.
+std::string exact(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+// The case's options are checked before a run, as the loader checks the case file: an invalid
+// value raises lsmbs.Error at its JSON path (/simulation/<field>).
+void check_options(const Case& cs) {
+  if (auto msg = cs.simulation.validate(); !msg.empty()) {
+    const auto colon = msg.find(": ");
+    throw Error(cs.file, "/simulation/" + msg.substr(0, colon), msg.substr(colon + 2));
+  }
+}
+
 Vec design_point(const Case& cs, const py::object& design) {
+  check_options(cs);
   if (!cs.design) {
     if (!design.is_none()) throw Error(cs.file, "/design", "the case has no design variables");
     return Vec();
@@ -68,13 +84,32 @@ Vec design_point(const Case& cs, const py::object& design) {
   if (design.is_none()) return p;
   if (py::isinstance<py::dict>(design)) {
     for (const auto& [k, v] : design.cast<py::dict>()) {
+      if (!py::isinstance<py::str>(k))
+        throw py::type_error("design: expected variable names (str) as keys, got " +
+                             std::string(py::str(py::type::of(k))));
       const std::string name = py::cast<std::string>(k);
       const int i = d.variable_index(name);
       if (i < 0) throw py::key_error("unknown design variable '" + name + "'");
+      if (!py::isinstance<py::float_>(v) && !py::isinstance<py::int_>(v) &&
+          !py::isinstance(v, py::module_::import("numpy").attr("number")))
+        throw py::type_error("design['" + name + "']: expected a number, got " +
+                             std::string(py::str(py::type::of(v))));
       p[i] = py::cast<double>(v);
     }
   } else {
-    const auto v = design.cast<std::vector<double>>();
+    if (py::isinstance<py::str>(design) || py::isinstance<py::bytes>(design))
+      throw py::type_error("design: expected None, a sequence of numbers or {name: value}");
+    const py::array_t<double, py::array::c_style | py::array::forcecast> arr = [&] {
+      try {
+        return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(design);
+      } catch (const py::error_already_set&) {
+        return py::array_t<double, py::array::c_style | py::array::forcecast>();
+      }
+    }();
+    if (!arr || arr.ndim() != 1)
+      throw py::type_error("design: expected None, a sequence of numbers or {name: value}, got " +
+                           std::string(py::str(py::type::of(design))));
+    const std::vector<double> v(arr.data(), arr.data() + arr.size());
     if (static_cast<int>(v.size()) != d.size())
       throw py::value_error("design: expected " + std::to_string(d.size()) + " values, got " +
                             std::to_string(v.size()));
@@ -83,9 +118,9 @@ Vec design_point(const Case& cs, const py::object& design) {
   for (int i = 0; i < d.size(); ++i) {
     const auto& var = d.variables[static_cast<size_t>(i)];
     if (!(p[i] >= var.lower && p[i] <= var.upper))
-      throw py::value_error("design variable '" + var.name + "' = " + std::to_string(p[i]) +
-                            " is outside its bounds [" + std::to_string(var.lower) + ", " +
-                            std::to_string(var.upper) + "]");
+      throw py::value_error("design variable '" + var.name + "' = " + exact(p[i]) +
+                            " is outside its bounds [" + exact(var.lower) + ", " +
+                            exact(var.upper) + "]");
   }
   return p;
 }
@@ -169,6 +204,21 @@ struct Parameters {
   }
 };
 
+// The range of a model parameter by its property ("<entity>.<property>"), as the case format and
+// the model builder check it; "" when the value is admissible.
+std::string parameter_check(const std::string& name, double v) {
+  if (!std::isfinite(v)) return "expected a finite number";
+  const std::string prop = name.substr(name.rfind('.') + 1);
+  if (prop == "E" && !(v > 0)) return "expected a positive Young's modulus";
+  if (prop == "nu" && !(v >= 0 && v < 0.5)) return "expected Poisson's ratio in [0, 0.5)";
+  if ((prop == "rho" || prop == "thickness") && !(v > 0)) return "expected a positive value";
+  if ((prop == "mass" || prop == "inertia" || prop == "stiffness" || prop == "damping" ||
+       prop == "free_length") &&
+      !(v >= 0))
+    return "expected a non-negative value";
+  return {};
+}
+
 struct SensitivityRun {
   SensitivityResult result;
   std::vector<std::string> variables;
@@ -230,6 +280,37 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def_readwrite("k", &GeneralizedAlphaOptions::k,
                      "constraint scaling of eq. (7); 0: automatic")
       .def_readwrite("zeta", &GeneralizedAlphaOptions::zeta, "penalty of eq. (7); 0: automatic")
+      .def_property(
+          "newton",
+          [](const GeneralizedAlphaOptions& o) {
+            return std::string(GeneralizedAlphaOptions::newton_name(o.newton));
+          },
+          [](GeneralizedAlphaOptions& o, const std::string& n) {
+            using N = GeneralizedAlphaOptions::Newton;
+            if (n == "full")
+              o.newton = N::kFull;
+            else if (n == "modified")
+              o.newton = N::kModified;
+            else if (n == "modified_across_steps")
+              o.newton = N::kModifiedAcrossSteps;
+            else
+              throw py::value_error("newton '" + n +
+                                    "': expected full, modified or modified_across_steps");
+          })
+      .def_property(
+          "ordering",
+          [](const GeneralizedAlphaOptions& o) {
+            return std::string(SparseLU::ordering_name(o.ordering));
+          },
+          [](GeneralizedAlphaOptions& o, const std::string& n) {
+            if (n == "amd")
+              o.ordering = SparseLU::Ordering::kAmd;
+            else if (n == "nested_dissection")
+              o.ordering = SparseLU::Ordering::kNestedDissection;
+            else
+              throw py::value_error("ordering '" + n + "': expected amd or nested_dissection");
+          })
+      .def_readwrite("force_floor", &GeneralizedAlphaOptions::force_floor)
       .def("validate", &GeneralizedAlphaOptions::validate,
            "'' when valid, else 'field: what is expected'")
       .def("to_dict", [](const GeneralizedAlphaOptions& o) { return json_to_python(o); })
@@ -253,6 +334,9 @@ PYBIND11_MODULE(_lsmbs, m) {
                        "model parameter '" + name + "' is set by design variable '" +
                        p.cs->design->variables[static_cast<size_t>(b.variable)].name +
                        "': change the design instead (design=…)");
+             if (auto msg = parameter_check(name, value); !msg.empty())
+               throw py::value_error("model parameter '" + name + "' = " + exact(value) + ": " +
+                                     msg);
              p.cs->model->params().scalars[static_cast<size_t>(i)] = value;
            })
       .def("__contains__",
@@ -311,7 +395,11 @@ PYBIND11_MODULE(_lsmbs, m) {
       });
 
   m.def(
-      "load_case", [](const std::string& path) { return std::make_shared<Case>(load_case(path)); },
+      "load_case",
+      [](const py::object& path) {
+        return std::make_shared<Case>(
+            load_case(py::str(py::module_::import("os").attr("fspath")(path))));
+      },
       py::arg("path"), "Loads and validates a case file (raises lsmbs.Error naming the JSON path)");
 
   // ---------------------------------------------------------------- simulate
@@ -350,7 +438,7 @@ PYBIND11_MODULE(_lsmbs, m) {
         ro.progress = run.progress();
         return run([&] { return located(*cs, [&] { return run_simulation(*cs, ro); }); });
       },
-      py::arg("case"), py::arg("design") = py::none(), py::arg("out_dir") = "",
+      py::arg("case").none(false), py::arg("design") = py::none(), py::arg("out_dir") = "",
       py::arg("progress") = py::none(),
       "Generalized-α simulation (Algorithm 1); design: None, a sequence, or {name: value}");
 
@@ -419,10 +507,10 @@ PYBIND11_MODULE(_lsmbs, m) {
         for (const auto& v : cs->design->variables) out.variables.push_back(v.name);
         return out;
       },
-      py::arg("case"), py::arg("method") = "direct-analytic", py::arg("design") = py::none(),
-      py::arg("delta") = 1e-6, py::arg("relative") = true, py::arg("matrix") = "converged",
-      py::arg("threads") = 2, py::arg("rtol") = 1e-9, py::arg("atol") = 0.0,
-      py::arg("progress") = py::none(),
+      py::arg("case").none(false), py::arg("method") = "direct-analytic",
+      py::arg("design") = py::none(), py::arg("delta") = 1e-6, py::arg("relative") = true,
+      py::arg("matrix") = "converged", py::arg("threads") = 2, py::arg("rtol") = 1e-9,
+      py::arg("atol") = 0.0, py::arg("progress") = py::none(),
       "Responses and their design gradients (§4.3) by one method, as `lsmbs sensitivity`");
 
   // ---------------------------------------------------------------- design problem, optimize
@@ -441,7 +529,7 @@ PYBIND11_MODULE(_lsmbs, m) {
              });
              return pr;
            }),
-           py::arg("case"))
+           py::arg("case").none(false))
       .def_property_readonly("num_variables",
                              [](const Problem& p) { return p.problem->num_variables(); })
       .def_property_readonly("num_constraints",
@@ -468,6 +556,7 @@ PYBIND11_MODULE(_lsmbs, m) {
   m.def(
       "optimize",
       [](const CasePtr& cs, const std::string& out_dir, bool resume, const std::string& optimizer) {
+        check_options(*cs);
         PythonRun run{py::none()};
         return located(*cs, [&] {
           OptimizationSpec spec = parse_optimization(*cs);
@@ -488,7 +577,7 @@ PYBIND11_MODULE(_lsmbs, m) {
               py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations);
         });
       },
-      py::arg("case"), py::arg("out_dir") = "", py::arg("resume") = false,
+      py::arg("case").none(false), py::arg("out_dir") = "", py::arg("resume") = false,
       py::arg("optimizer") = "",
       "The fully coupled optimization of the case's design (as `lsmbs optimize`, without its "
       "gradient check)");
@@ -530,7 +619,7 @@ PYBIND11_MODULE(_lsmbs, m) {
         }
         return bodies;
       },
-      py::arg("case"), py::arg("design") = py::none(),
+      py::arg("case").none(false), py::arg("design") = py::none(),
       "Per designed body: mesh nodes and quads (body frame), μ_e, the nodal level set φ (material "
       "where φ > 0), the mass and its gradient");
 

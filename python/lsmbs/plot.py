@@ -47,6 +47,8 @@ def design(body, ax=None, cmap="Greys", contour=True, colorbar=True):
 def history(result, columns=None, ax=None):
     """Measured histories of a simulation (lsmbs.simulate) against time."""
     ax = _axes(ax)
+    if isinstance(columns, str):
+        columns = [columns]
     for c in columns or result.columns:
         ax.plot(result.times, result.column(c), label=c)
     ax.set_xlabel("t [s]")
@@ -81,7 +83,10 @@ def gradients(results, response, ax=None):
     width = 0.8 / len(labels)
     x = np.arange(len(variables))
     for i, lab in enumerate(labels):
-        g = np.atleast_1d(results[lab].gradients[response])
+        g = np.asarray(results[lab].gradients[response])
+        if g.ndim != 1:
+            raise ValueError(f"'{response}' is a per-step response: plot one step's gradient, "
+                             f"e.g. results[...].gradients['{response}'][k]")
         ax.bar(x + i * width, g, width, label=lab)
     ax.set_xticks(x + 0.4 - width / 2, variables)
     ax.set_ylabel(f"d {response} / d p")

@@ -61,12 +61,72 @@ def test_bad_types_raise_type_error():
         case.parameters["spring.stiffness"] = 1.0  # bound to a design variable
 
 
-def test_invalid_option_is_refused_at_run_time():
+def test_options_set_from_python_are_checked_as_the_case_file_is(spring_doc, write_case):
+    # the same value in the JSON: the command line's message and path
+    for h in (0.0, 1.0, 0.0011, float("inf")):
+        case = lsmbs.load_case(str(SPRING))
+        case.simulation.h = h
+        with pytest.raises(lsmbs.Error) as e:
+            lsmbs.simulate(case)
+        assert e.value.json_path == "/simulation/h", h
+        if h in (1.0, 0.0011):  # the loader's own message for the edited file
+            spring_doc["simulation"]["h"] = h
+            assert str(e.value).split(": ", 1)[1] == cli_error(write_case(spring_doc)).split(": ", 1)[1]
     case = lsmbs.load_case(str(SPRING))
-    case.simulation.h = 0.0
-    r = lsmbs.simulate(case)
-    assert r.status == "failed"
-    assert "h:" in r.report()
+    case.simulation.k = float("inf")
+    with pytest.raises(lsmbs.Error, match="/simulation/k"):
+        lsmbs.sensitivity(case)
+
+
+def test_none_and_wrong_types_are_type_errors():
+    for f in (lsmbs.simulate, lsmbs.sensitivity, lsmbs.geometry, lsmbs.optimize, lsmbs.DesignProblem):
+        with pytest.raises(TypeError):
+            f(None)
+    case = lsmbs.load_case(str(SPRING))
+    for bad in ("kc", {1: 2.0}, {"k": None}, [[4000, 20]], {"k", "c"}):
+        with pytest.raises(TypeError):
+            lsmbs.sensitivity(case, design=bad)
+
+
+def test_model_parameters_are_range_checked():
+    case = lsmbs.load_case(str(SPRING))
+    for name, v in (("piston.mass", -1.0), ("piston.mass", float("nan")), ("crank.inertia", -1e-3)):
+        with pytest.raises(ValueError, match="model parameter"):
+            case.parameters[name] = v
+    rod = lsmbs.load_case(str(SPRING.parents[1] / "slider_crank" / "slider_crank_1hole_coarse.json"))
+    for name, v in (("rod.E", 0.0), ("rod.nu", 0.5), ("rod.rho", -1.0), ("rod.thickness", -1e-3)):
+        with pytest.raises(ValueError, match="model parameter"):
+            rod.parameters[name] = v
+
+
+def test_unknown_optimizer_is_refused_at_its_path():
+    case = lsmbs.load_case(str(SPRING.parents[1] / "slider_crank" / "slider_crank_1hole_coarse.json"))
+    with pytest.raises(lsmbs.Error) as e:
+        lsmbs.optimize(case, optimizer="mmaa")
+    assert e.value.json_path == "/optimization/optimizer"
+
+
+def test_step_lost_in_round_off_is_refused():
+    case = lsmbs.load_case(str(SPRING))
+    for m in ("fd-forward", "semi-analytical"):
+        with pytest.raises(lsmbs.Error, match="delta"):
+            lsmbs.sensitivity(case, method=m, delta=1e-17)
+
+
+def test_failed_evaluation_is_nan_in_complete_shapes():
+    case = lsmbs.load_case(str(SPRING.parents[1] / "slider_crank" / "slider_crank_1hole_coarse.json"))
+    case.simulation.max_iter = 1
+    case.simulation.max_halvings = 0
+    prob = lsmbs.DesignProblem(case)
+    e = prob.evaluate([0.02])
+    assert not e["ok"]
+    m, n = prob.num_constraints, prob.num_variables
+    assert e["constraints"].shape == (m,) and e["upper"].shape == (m,)
+    assert e["constraint_gradient"].shape == (m, n) and e["objective_gradient"].shape == (n,)
+    import numpy as np
+    for k in ("constraints", "constraint_gradient", "objective_gradient"):
+        assert np.isnan(e[k]).all(), k
+    assert np.isfinite(e["upper"]).all()
 
 
 def test_progress_callback_sees_the_run():
@@ -92,6 +152,18 @@ def test_exception_in_callback_stops_the_run_and_the_next_run_is_clean():
     case.simulation.h = 1e-3
     r = lsmbs.sensitivity(case)
     assert r.status == "complete"
+
+
+def test_exception_in_callback_stops_an_idas_run():
+    case = lsmbs.load_case(str(SPRING))
+
+    def stop(p):  # at the first report (the only one the 50 ms throttle guarantees)
+        raise KeyboardInterrupt
+
+    for method in ("idas", "idas-adjoint"):
+        with pytest.raises(KeyboardInterrupt):
+            lsmbs.sensitivity(case, method=method, progress=stop)
+    assert lsmbs.sensitivity(case, method="idas").status == "complete"
 
 
 def test_ctrl_c_stops_a_run_cleanly(tmp_path):

@@ -31,8 +31,24 @@ AlphaCoefficients AlphaCoefficients::make(double rho, double h) {
 }
 
 std::string GeneralizedAlphaOptions::validate() const {
-  if (!(h > 0)) return "h: expected a positive time step";
-  if (!(t_end > 0)) return "t_end: expected a positive final time";
+  if (!(h > 0) || !std::isfinite(h)) return "h: expected a positive time step";
+  if (!(t_end > 0) || !std::isfinite(t_end)) return "t_end: expected a positive final time";
+  // the output grid t = 0, h, 2h, … must end on t_end: no silent overshoot, no run without a step
+  if (t_end / h > 1e8) return "h: more than 1e8 steps requested";
+  char msg[320];
+  if (h > t_end * (1 + 1e-9)) {  // zero steps: the run would end at t = 0 and report it complete
+    std::snprintf(msg, sizeof msg,
+                  "h: h = %g is longer than t_end = %g (the run would have no step)", h, t_end);
+    return msg;
+  }
+  if (const double n = t_end / h; std::abs(n - std::round(n)) > 1e-9 * std::max(1.0, n)) {
+    std::snprintf(msg, sizeof msg,
+                  "h: t_end = %.10g is not a multiple of h = %.10g (%.6g steps): the run would end "
+                  "after t_end; use h = %.10g (%ld steps) or t_end = %.10g",
+                  t_end, h, n, t_end / std::ceil(n), static_cast<long>(std::ceil(n)),
+                  std::ceil(n) * h);
+    return msg;
+  }
   if (!(rho_inf >= 0 && rho_inf <= 1)) return "rho_inf: expected a value in [0, 1]";
   if (!(tol_r > 0)) return "tol_r: expected a positive tolerance";
   if (!(tol_phi > 0)) return "tol_phi: expected a positive tolerance";
@@ -41,8 +57,9 @@ std::string GeneralizedAlphaOptions::validate() const {
   if (max_iter < 1) return "max_iter: expected at least 1";
   if (min_iter < 0 || min_iter > max_iter) return "min_iter: expected 0 <= min_iter <= max_iter";
   if (max_halvings < 0 || max_halvings > 30) return "max_halvings: expected 0..30";
-  if (!(k >= 0)) return "k: expected a non-negative value (0 = automatic)";
-  if (!(zeta >= 0)) return "zeta: expected a non-negative value (0 = automatic)";
+  if (!(k >= 0) || !std::isfinite(k)) return "k: expected a non-negative value (0 = automatic)";
+  if (!(zeta >= 0) || !std::isfinite(zeta))
+    return "zeta: expected a non-negative value (0 = automatic)";
   return {};
 }
 

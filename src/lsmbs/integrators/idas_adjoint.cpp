@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/integrators/idas_ggl_impl.hpp"
 
 // The adjoint driver of IdasGGL (run_adjoint): the right-hand sides of the adjoint GGL system
@@ -219,6 +220,9 @@ std::string backward_pass(IdasHandles& sd, IdasGGL::Impl& im, const std::vector<
   int flag = 0;
   for (size_t c = 0; c < stops.size() && flag >= 0; ++c) {
     const double tout = stops[c];
+    if (interrupted())  // SIGINT/SIGTERM (core/interrupt.hpp): stop between two chunks
+      return "interrupted (signal " + std::to_string(interrupted()) +
+             ") in the backward pass at t = " + std::to_string(tout) + " s";
     if (c > 0 && !sd.back.empty()) {
       flag = IDASolveB(sd.mem.get(), tout, IDA_NORMAL);
       if (flag < 0) break;

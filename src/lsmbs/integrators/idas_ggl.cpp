@@ -7,6 +7,7 @@
 #include <map>
 #include <vector>
 
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/integrators/idas_ggl_impl.hpp"
 #include "lsmbs/integrators/initial_state.hpp"
@@ -495,6 +496,12 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
     }
     emit(tout);
     t_last = tout;
+    if (interrupted()) {  // SIGINT/SIGTERM (core/interrupt.hpp): stop at this output time
+      st.ok = false;
+      st.message = "interrupted (signal " + std::to_string(interrupted()) +
+                   ") at t = " + std::to_string(tout) + " s";
+      break;
+    }
   }
   long v;
   IDAGetNumSteps(mem, &v), st.steps = v;

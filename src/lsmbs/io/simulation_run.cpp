@@ -117,6 +117,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
           if (ro.progress) ro.progress(Progress{"IDAS", s.t, io.t_end, 0, 0});
           res.final_state = s;
         });
+    if (!res.idas.ok && interrupted()) res.interrupted = true;
     res.integrator.ok = res.idas.ok;
     res.integrator.message = res.idas.message;
     res.integrator.steps = res.idas.steps;

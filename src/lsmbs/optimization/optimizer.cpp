@@ -211,6 +211,10 @@ std::string OptimizeOptions::validate() const {
 
 OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   if (auto msg = o.validate(); !msg.empty()) throw Error("optimize option " + msg);
+  const std::string& name = prob.spec().optimizer;
+  if (name != "mma" && name != "ccsaq" && name != "slsqp" && name != "mma-svanberg")
+    throw SetupError("optimization.optimizer", "unknown optimizer '" + name +
+                                                   "': expected mma, ccsaq, slsqp or mma-svanberg");
   const auto t0 = std::chrono::steady_clock::now();
   Study& cs = prob.study();
   const Design& d = *cs.design;

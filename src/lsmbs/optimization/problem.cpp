@@ -43,6 +43,7 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
     const auto& r = cs_.responses[constraint_index_[j]];
     if (r.kind != ResponseSpec::Kind::kPerStep) {
       ++num_constraints_;
+      constraint_upper_.push_back(spec_.constraints[j].upper);
       continue;
     }
     const double h = cs_.simulation.h;
@@ -53,6 +54,8 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
       if (t >= r.t0 - 1e-9 * h && t <= r.t1 + 1e-9 * h) ++count;
     }
     num_constraints_ += count;
+    constraint_upper_.insert(constraint_upper_.end(), static_cast<size_t>(count),
+                             spec_.constraints[j].upper);
   }
 }
 
@@ -96,9 +99,14 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
     e.message = "a per-step constraint produced " + std::to_string(row) + " values instead of " +
                 std::to_string(num_constraints_) + " (the run did not reach t_end?)";
   }
-  if (!e.ok) {  // the aggregates of a run that stopped early are not the responses of this design
+  if (!e.ok) {  // the aggregates of a run that stopped early are not the responses of this design:
+                // NaN everywhere, in the shapes of a complete evaluation (m constraints)
     e.objective = NAN;
     e.max_violation = NAN;
+    e.objective_gradient.setConstant(p.size(), NAN);
+    e.constraints.assign(static_cast<size_t>(num_constraints_), NAN);
+    e.upper = constraint_upper_;
+    e.constraint_gradient.setConstant(num_constraints_, p.size(), NAN);
   }
   e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (res.interrupted) {  // not a result of p: evaluated again when the run resumes

@@ -71,6 +71,8 @@ class DesignProblem {
   int objective_index_ = -1;
   std::vector<int> constraint_index_;
   int num_constraints_ = 0;
+  std::vector<double>
+      constraint_upper_;  // the bound of each scalar constraint (per-step: each step)
   std::map<std::vector<double>, Evaluation> cache_;
   Evaluation interrupted_;  // the last interrupted evaluation (not cached)
   long simulations_ = 0, cache_hits_ = 0;

@@ -58,10 +58,7 @@ const char* SensitivityOptions::matrix_name(Matrix m) {
 }
 
 std::string SensitivityOptions::validate() const {
-  const bool uses_delta = method == Method::kSemiAnalytical ||
-                          method == Method::kSemiAnalyticalCentral ||
-                          method == Method::kFdForward || method == Method::kFdCentral;
-  if (uses_delta && (!(delta > 0) || !std::isfinite(delta)))
+  if (uses_delta() && (!(delta > 0) || !std::isfinite(delta)))
     return "delta: expected a positive finite step";
   if (refinement_steps < 0) return "refinement_steps: expected a non-negative number of iterations";
   if (threads < 1 || threads > 2) return "threads: expected 1 or 2";
@@ -167,6 +164,17 @@ SensitivityResult SensitivityMethod::compute(Study& cs, const Vec& p) const {
   if (cs.responses.empty())
     throw SetupError("responses", "sensitivities need at least one response");
   if (auto msg = options_.validate(); !msg.empty()) throw Error("sensitivity option " + msg);
+  // a step lost in round-off gives an exact zero (forward) or noise: refused, not reported
+  if (options_.uses_delta())
+    for (int i = 0; i < cs.design->size(); ++i) {
+      const auto& v = cs.design->variables[static_cast<size_t>(i)];
+      const double h = options_.step(*cs.design, p, i);
+      const double scale = std::max(std::abs(p[i]), 1e-2 * (v.upper - v.lower));
+      if (!(h >= 1e-13 * scale))
+        throw Error("sensitivity option delta: the step of design variable '" + v.name + "' (" +
+                    std::to_string(h) + " at p = " + std::to_string(p[i]) +
+                    ") is below 1e-13 of its scale and lost in round-off; use a larger delta");
+    }
   const auto t0 = std::chrono::steady_clock::now();
   SensitivityResult res = run(cs, p);
   res.counts.wall_seconds =

@@ -38,6 +38,11 @@ struct SensitivityOptions {
     kIdasAdjoint
   };
   bool is_idas() const { return method == Method::kIdas || method == Method::kIdasAdjoint; }
+  /// Semi-analytical and finite-difference methods: they perturb p by `delta`.
+  bool uses_delta() const {
+    return method == Method::kSemiAnalytical || method == Method::kSemiAnalyticalCentral ||
+           method == Method::kFdForward || method == Method::kFdCentral;
+  }
   Method method = Method::kDirectAnalytic;
   /// Δp of the semi-analytical methods and step of the finite differences:
   /// relative: Δp_i = delta · max(|p_i|, 1e-2 (upper_i − lower_i)); absolute: Δp_i = delta.
