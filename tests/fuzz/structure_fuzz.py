@@ -443,9 +443,10 @@ MEMORY_LIMIT = 2 << 30
 
 @functools.lru_cache(maxsize=None)
 def sanitized(exe):
-    """AddressSanitizer reserves terabytes of address space: it gets its own allocation limit."""
+    """AddressSanitizer reserves terabytes of address space: it gets its own allocation limit.
+    The runtime is linked dynamically (libasan.so) or statically; either leaves __asan_init."""
     with open(exe, "rb") as f:
-        return b"AddressSanitizer" in f.read()
+        return b"__asan_init" in f.read()
 
 
 def limit_child(address_space=True):

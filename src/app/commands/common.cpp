@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -72,6 +73,10 @@ void claim_output_folder(const std::string& out, bool overwrite, bool resume) {
         "-o " + out + ": the folder holds an earlier run (" + ours.front().filename().string() +
         (ours.size() > 1 ? ", … " + std::to_string(ours.size()) + " entries" : std::string()) +
         "); give another folder, or --overwrite to replace that run");
+  // summary.json first: a run stopped while it removes the rest never leaves the earlier run's
+  // summary next to a half-removed folder
+  std::stable_partition(ours.begin(), ours.end(),
+                        [](const fs::path& p) { return p.filename() == "summary.json"; });
   for (const auto& p : ours) fs::remove_all(p);
 }
 
