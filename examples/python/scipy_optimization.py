@@ -1,11 +1,12 @@
 """The design loop driven from Python: SciPy's trust-constr on lsmbs.DesignProblem, compared with
 the built-in MMA (lsmbs.optimize) on the same case.
 
-    PYTHONPATH=build/python python3 examples/python/scipy_optimization.py [CASE.json]
+    PYTHONPATH=build/python python3 examples/python/scipy_optimization.py [CASE.json] [--h H]
 
 Default case: the robot arm with holes (data/robot_arm/robot_arm_holes.json, 15 variables,
 minimum mass with an average-tip-deviation constraint; minutes). ctest runs it on the coarse
-connecting rod (one variable, a few seconds per evaluation). DesignProblem.evaluate(p) runs one
+connecting rod (one variable) with --h 5e-4, twice the case's time step, so that the Python
+examples finish within a minute together; --h changes the case of both optimizers alike. DesignProblem.evaluate(p) runs one
 simulation with its sensitivities and caches it by p, so SciPy's separate calls for the
 objective, the constraints and their Jacobians cost one simulation per design.
 SLSQP stops on the connecting rod with "positive directional derivative for linesearch" at an
@@ -13,6 +14,7 @@ infeasible point (its per-step elongation constraints, one per time step, are no
 worst step changes); trust-constr, an interior-point/SQP trust-region method, handles them.
 Checks itself: trust-constr ends feasible, and within 1 % of MMA's objective.
 """
+import argparse
 import pathlib
 import sys
 
@@ -22,10 +24,21 @@ from scipy.optimize import Bounds, NonlinearConstraint, minimize
 import lsmbs
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data/robot_arm/robot_arm_holes.json")
+cli = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+cli.add_argument("case", nargs="?", default=str(ROOT / "data/robot_arm/robot_arm_holes.json"))
+cli.add_argument("--h", type=float, help="time step [s] instead of the case's")
+args = cli.parse_args()
+
+
+def load():
+    case = lsmbs.load_case(args.case)
+    if args.h:
+        case.simulation.h = args.h
+    return case
+
 
 # 1. The problem of the case's optimization section: objective and constraints g_j <= upper_j.
-case = lsmbs.load_case(path)
+case = load()
 problem = lsmbs.DesignProblem(case)
 lo, up = case.lower, case.upper
 scale = up - lo  # SLSQP on x in [0, 1]: p = lo + scale x
@@ -65,7 +78,7 @@ print(f"trust-constr: {res.message} after {res.nit} iterations, {problem.simulat
 print(f"  objective {first['objective']:.6g} -> {best['objective']:.6g}, max violation {best['max_violation']:.2e}")
 
 # 3. The built-in MMA on the same case, for comparison.
-mma = lsmbs.optimize(lsmbs.load_case(path))
+mma = lsmbs.optimize(load())
 print(f"MMA:   {mma['nlopt_status']}, {mma['evaluations']} evaluations; objective "
       f"{mma['final']['objective']:.6g}, max violation {mma['final']['max_violation']:.2e}")
 
