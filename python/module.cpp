@@ -12,14 +12,18 @@
 
 #include <chrono>
 #include <csignal>
+#include <filesystem>
 #include <memory>
 #include <optional>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/core/json_file.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/io/output_folder.hpp"
+#include "lsmbs/io/sha256.hpp"
 #include "lsmbs/io/simulation_run.hpp"
 #include "lsmbs/io/verify_run.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
@@ -33,6 +37,8 @@ using namespace lsmbs;
 namespace {
 
 using CasePtr = std::shared_ptr<Case>;
+
+PyObject* g_check_failed = nullptr;  // lsmbs.GradientCheckFailed (a NumericalFailure)
 
 // ------------------------------------------------------------------ NumPy copies (owning)
 py::array_t<double> array(const std::vector<double>& v) {
@@ -184,6 +190,28 @@ class PythonRun {
   std::chrono::steady_clock::time_point last_{};
 };
 
+// An output folder given from Python is checked and claimed as the command line's -o: a folder
+// that holds an earlier run is refused unless overwrite=True (resume: optimize continues it).
+void claim(const std::string& out_dir, bool overwrite, bool resume = false) {
+  if (out_dir.empty()) return;
+  const OutputFolderNames names{"out_dir", "overwrite=True"};
+  check_output_folder(out_dir, names);
+  claim_output_folder(out_dir, overwrite, resume, names);
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw Error("out_dir " + out_dir + ": cannot create it (" + ec.message() + ")");
+}
+
+GradientCheckOptions check_options_from(double delta, unsigned seed, double warn, double fail) {
+  GradientCheckOptions c;
+  c.delta = delta;
+  c.seed = seed;
+  c.warn = warn;
+  c.fail = fail;
+  if (auto msg = c.validate(); !msg.empty()) throw py::value_error("check_" + msg);
+  return c;
+}
+
 // Library errors by name (SetupError) located in the case file, as the command line reports them.
 template <class F>
 auto located(const Case& cs, F&& f) {
@@ -222,6 +250,7 @@ std::string parameter_check(const std::string& name, double v) {
 struct SensitivityRun {
   SensitivityResult result;
   std::vector<std::string> variables;
+  nlohmann::json gradient_check;  // null unless check=True
 };
 
 struct Problem {
@@ -250,6 +279,9 @@ PYBIND11_MODULE(_lsmbs, m) {
   // ---------------------------------------------------------------- errors
   static py::exception<Error> error_type(m, "Error", PyExc_ValueError);
   static py::exception<NumericalFailure> failure_type(m, "NumericalFailure", PyExc_RuntimeError);
+  g_check_failed =
+      PyErr_NewException("lsmbs._lsmbs.GradientCheckFailed", failure_type.ptr(), nullptr);
+  m.attr("GradientCheckFailed") = py::handle(g_check_failed);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -257,6 +289,10 @@ PYBIND11_MODULE(_lsmbs, m) {
       py::object exc = py::reinterpret_borrow<py::object>(error_type.ptr())(e.what());
       exc.attr("file") = e.file();
       exc.attr("json_path") = e.json_path();
+      std::string reason = e.what();  // without the "file: path: " prefix
+      for (const std::string& part : {e.file(), e.json_path()})
+        if (!part.empty() && reason.rfind(part + ": ", 0) == 0) reason.erase(0, part.size() + 2);
+      exc.attr("reason") = reason;
       PyErr_SetObject(error_type.ptr(), exc.ptr());
     } catch (const NumericalFailure& e) {
       PyErr_SetString(failure_type.ptr(), e.what());
@@ -402,6 +438,24 @@ PYBIND11_MODULE(_lsmbs, m) {
       },
       py::arg("path"), "Loads and validates a case file (raises lsmbs.Error naming the JSON path)");
 
+  m.def(
+      "_load_case_text",
+      [](const std::string& text, const std::string& label, const std::string& base_dir) {
+        check_json_depth(text, label);
+        nlohmann::json j;
+        try {
+          j = nlohmann::json::parse(text);
+        } catch (const nlohmann::json::exception& e) {
+          throw Error(label, "", std::string("invalid JSON: ") + e.what());
+        }
+        auto cs = std::make_shared<Case>(load_case_json(j, label, base_dir));
+        cs->sha256 = sha256_hex(text);  // as load_case hashes the file's bytes
+        return cs;
+      },
+      py::arg("text"), py::arg("label"), py::arg("base_dir"),
+      "A case from the text of a case document (lsmbs.ModelBuilder.build); the hash is the "
+      "text's, as if it were a file");
+
   // ---------------------------------------------------------------- simulate
   py::class_<SimulationResult>(m, "SimulationResult")
       .def_property_readonly("status",
@@ -427,9 +481,10 @@ PYBIND11_MODULE(_lsmbs, m) {
 
   m.def(
       "simulate",
-      [](const CasePtr& cs, const py::object& design, const std::string& out_dir,
+      [](const CasePtr& cs, const py::object& design, const std::string& out_dir, bool overwrite,
          const py::object& progress) {
         const Vec p = design_point(*cs, design);
+        claim(out_dir, overwrite);
         if (cs->design) cs->design->apply(p, cs->model->params());
         RunOptions ro;
         ro.out_dir = out_dir;
@@ -439,7 +494,7 @@ PYBIND11_MODULE(_lsmbs, m) {
         return run([&] { return located(*cs, [&] { return run_simulation(*cs, ro); }); });
       },
       py::arg("case").none(false), py::arg("design") = py::none(), py::arg("out_dir") = "",
-      py::arg("progress") = py::none(),
+      py::arg("overwrite") = false, py::arg("progress") = py::none(),
       "Generalized-α simulation (Algorithm 1); design: None, a sequence, or {name: value}");
 
   // ---------------------------------------------------------------- sensitivity
@@ -478,12 +533,18 @@ PYBIND11_MODULE(_lsmbs, m) {
                                return d;
                              })
       .def_property_readonly(
-          "counts", [](const SensitivityRun& r) { return json_to_python(r.result.counts); });
+          "counts", [](const SensitivityRun& r) { return json_to_python(r.result.counts); })
+      .def_property_readonly(
+          "gradient_check",
+          [](const SensitivityRun& r) { return json_to_python(r.gradient_check); },
+          "check=True: central differences along a seeded random direction against the "
+          "gradient (as `lsmbs sensitivity --check`); else None");
 
   m.def(
       "sensitivity",
       [](const CasePtr& cs, const std::string& method, const py::object& design, double delta,
          bool relative, const std::string& matrix, int threads, double rtol, double atol,
+         bool check, double check_delta, unsigned check_seed, double check_warn, double check_fail,
          const py::object& progress) {
         SensitivityOptions o;
         if (!SensitivityOptions::parse(method, o.method)) {
@@ -498,19 +559,30 @@ PYBIND11_MODULE(_lsmbs, m) {
         o.threads = threads;
         o.idas.rtol = rtol;
         o.idas.atol = atol > 0 ? atol : rtol;
+        const GradientCheckOptions co =
+            check_options_from(check_delta, check_seed, check_warn, check_fail);
         const Vec p = design_point(*cs, design);
         PythonRun run(progress);
         o.progress = run.progress();
         SensitivityRun out;
-        out.result =
-            run([&] { return located(*cs, [&] { return compute_sensitivities(*cs, p, o); }); });
+        std::optional<GradientCheckResult> checked;
+        out.result = run([&] {
+          return located(*cs, [&] {
+            auto r = compute_sensitivities(*cs, p, o);
+            if (check && r.ok) checked = check_gradients(*cs, p, r.responses, co);
+            return r;
+          });
+        });
+        if (checked) out.gradient_check = gradient_check_json(*checked, co);
         for (const auto& v : cs->design->variables) out.variables.push_back(v.name);
         return out;
       },
       py::arg("case").none(false), py::arg("method") = "direct-analytic",
       py::arg("design") = py::none(), py::arg("delta") = 1e-6, py::arg("relative") = true,
       py::arg("matrix") = "converged", py::arg("threads") = 2, py::arg("rtol") = 1e-9,
-      py::arg("atol") = 0.0, py::arg("progress") = py::none(),
+      py::arg("atol") = 0.0, py::arg("check") = false, py::arg("check_delta") = 1e-5,
+      py::arg("check_seed") = 20261122u, py::arg("check_warn") = 1e-3, py::arg("check_fail") = 5e-2,
+      py::arg("progress") = py::none(),
       "Responses and their design gradients (§4.3) by one method, as `lsmbs sensitivity`");
 
   // ---------------------------------------------------------------- design problem, optimize
@@ -555,14 +627,45 @@ PYBIND11_MODULE(_lsmbs, m) {
 
   m.def(
       "optimize",
-      [](const CasePtr& cs, const std::string& out_dir, bool resume, const std::string& optimizer) {
+      [](const CasePtr& cs, const std::string& out_dir, bool resume, bool overwrite,
+         const std::string& optimizer, bool check, double check_delta, unsigned check_seed,
+         double check_warn, double check_fail, const py::object& progress) {
         check_options(*cs);
-        PythonRun run{py::none()};
+        const GradientCheckOptions co =
+            check_options_from(check_delta, check_seed, check_warn, check_fail);
+        claim(out_dir, overwrite, resume);
+        PythonRun run(progress);
         return located(*cs, [&] {
           OptimizationSpec spec = parse_optimization(*cs);
           if (!optimizer.empty()) spec.optimizer = optimizer;
           spec.sensitivity.progress = run.progress();
           DesignProblem prob(*cs, spec);
+          // the check at the initial design of a new run, as `lsmbs optimize` runs it
+          nlohmann::json check_record;
+          if (check && !resume) {
+            const auto checked =
+                run([&] { return check_problem_gradients(prob, cs->design->initial(), co); });
+            if (checked) {
+              check_record = gradient_check_json(*checked, co);
+              const std::string verdict = checked->verdict(co);
+              const std::string what =
+                  checked->ok ? "response '" + checked->worst_response +
+                                    "': the gradient disagrees with central differences by " +
+                                    exact(checked->worst) + " (relative)"
+                              : checked->message;
+              if (verdict == "fail") {
+                py::object exc = py::reinterpret_borrow<py::object>(g_check_failed)(
+                    "gradient check at the initial design failed: " + what + " (above " +
+                    exact(co.fail) + "; check=False skips the check)");
+                exc.attr("gradient_check") = json_to_python(check_record);
+                PyErr_SetObject(g_check_failed, exc.ptr());
+                throw py::error_already_set();
+              }
+              if (verdict == "warn")
+                PyErr_WarnEx(PyExc_RuntimeWarning,
+                             ("gradient check at the initial design: " + what).c_str(), 1);
+            }
+          }
           OptimizeOptions o;
           o.out_dir = out_dir;
           o.resume = resume;
@@ -574,13 +677,17 @@ PYBIND11_MODULE(_lsmbs, m) {
               py::arg("status") = run_status_name(r.status()), py::arg("report") = r.report(),
               py::arg("p") = array(r.p), py::arg("final") = evaluation_dict(r.final),
               py::arg("history") = history, py::arg("converged") = r.converged,
-              py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations);
+              py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations,
+              py::arg("gradient_check") = json_to_python(check_record));
         });
       },
       py::arg("case").none(false), py::arg("out_dir") = "", py::arg("resume") = false,
-      py::arg("optimizer") = "",
-      "The fully coupled optimization of the case's design (as `lsmbs optimize`, without its "
-      "gradient check)");
+      py::arg("overwrite") = false, py::arg("optimizer") = "", py::arg("check") = true,
+      py::arg("check_delta") = 1e-5, py::arg("check_seed") = 20261122u,
+      py::arg("check_warn") = 1e-3, py::arg("check_fail") = 5e-2, py::arg("progress") = py::none(),
+      "The fully coupled optimization of the case's design (as `lsmbs optimize`): a gradient "
+      "check at the initial design of a new run first (check=False skips it; a warning above "
+      "check_warn, GradientCheckFailed above check_fail)");
 
   // ---------------------------------------------------------------- geometry
   m.def(
@@ -626,7 +733,9 @@ PYBIND11_MODULE(_lsmbs, m) {
   // ---------------------------------------------------------------- verify
   m.def(
       "verify",
-      [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study) {
+      [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study,
+         bool overwrite) {
+        claim(out_dir, overwrite);
         VerifyOptions o;
         o.out_dir = out_dir;
         o.idas = idas;
@@ -637,5 +746,6 @@ PYBIND11_MODULE(_lsmbs, m) {
         return json_to_python(r.summary);
       },
       py::arg("path"), py::arg("out_dir"), py::arg("idas") = true, py::arg("mesh_study") = true,
+      py::arg("overwrite") = false,
       "The verification report of a case file (as `lsmbs verify`); returns its summary");
 }

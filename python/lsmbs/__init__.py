@@ -1,6 +1,7 @@
 """lsmbs: level-set structural optimization of flexible multibody system components.
 
     import lsmbs
+    case = lsmbs.ModelBuilder(...) ... .build()   # a model built in Python (lsmbs.builder), or
     case = lsmbs.load_case("data/slider_crank_rigid/slider_crank_spring.json")
     case.simulation.h = 5e-4                      # any option of the case
     r = lsmbs.sensitivity(case, method="direct-analytic")
@@ -15,6 +16,7 @@ from ._lsmbs import (  # noqa: F401
     Case,
     DesignProblem,
     Error,
+    GradientCheckFailed,
     NumericalFailure,
     Parameters,
     SensitivityResult,
@@ -32,4 +34,22 @@ from ._lsmbs import (  # noqa: F401
 
 METHODS = ("semi-analytical", "semi-analytical-central", "direct-analytic", "fd-forward",
            "fd-central", "idas", "idas-adjoint")
+from .builder import (  # noqa: E402,F401
+    ModelBuilder,
+    Variable,
+    at,
+    at_global,
+    circle,
+    constant,
+    ellipse,
+    gmsh,
+    ground,
+    nearest,
+    node,
+    ramp,
+    rectangle,
+    super_ellipse,
+    table,
+    trapezoid,
+)
 from . import plot  # noqa: E402,F401  (matplotlib is imported when a plot is drawn)

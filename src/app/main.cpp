@@ -22,6 +22,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/io/output_folder.hpp"
 
 namespace {
 
@@ -253,8 +254,8 @@ int main(int argc, char** argv) {
   bool started = false;  // the output folder is ours: a failure from here on is flagged in it
   try {
     if (*sim || *geo || *opt || *ben || *ver || *sen) {
-      lsmbs::app::check_output_folder(out);
-      lsmbs::app::claim_output_folder(out, overwrite, *opt && opt_args.resume);
+      lsmbs::check_output_folder(out);
+      lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);
       started = true;
     }
     common.command_line = joined_args(argc, argv);

@@ -13,10 +13,6 @@ namespace lsmbs::app {
 std::pair<std::string, double> parse_set(const std::string& s);
 /// The case's initial design with the --set overrides (each checked against its bounds).
 Vec design_point(const Case& cs, const std::vector<std::string>& sets);
-/// The output folder (-o) must be a folder that exists or can be created, and be writable.
-void check_output_folder(const std::string& out);
-/// Refuses a folder that holds an earlier run unless `overwrite` (which removes that run's files).
-void claim_output_folder(const std::string& out, bool overwrite, bool resume);
 /// A run that failed with an exception once started leaves summary.json with status partial.
 void flag_failed_run(const std::string& out, const std::string& cmdline,
                      const std::string& case_file, const std::string& what);

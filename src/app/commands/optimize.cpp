@@ -113,16 +113,8 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   // Gradient check at the initial design (not on resume: the first run did it)
   std::optional<lsmbs::GradientCheckResult> checked;
   if (check && !resume) {
-    const lsmbs::Vec p0 = d.initial();
-    const auto sres = lsmbs::compute_sensitivities(cs, p0, spec.sensitivity);
-    if (sres.ok) {
-      std::vector<lsmbs::ResponseSensitivity> used;
-      for (const auto& r : sres.responses) {
-        bool use = r.name == spec.objective;
-        for (const auto& c : spec.constraints) use |= r.name == c.response;
-        if (use) used.push_back(r);
-      }
-      checked = lsmbs::check_gradients(cs, p0, used, *check);
+    checked = lsmbs::check_problem_gradients(prob, d.initial(), *check);
+    if (checked) {
       line.clear();
       const std::string verdict = checked->verdict(*check);
       if (verdict != "pass") {

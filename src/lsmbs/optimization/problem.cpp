@@ -179,4 +179,18 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
   return e;
 }
 
+std::optional<GradientCheckResult> check_problem_gradients(DesignProblem& problem, const Vec& p,
+                                                           const GradientCheckOptions& o) {
+  const OptimizationSpec& spec = problem.spec();
+  const auto sres = compute_sensitivities(problem.study(), p, spec.sensitivity);
+  if (!sres.ok) return std::nullopt;
+  std::vector<ResponseSensitivity> used;
+  for (const auto& r : sres.responses) {
+    bool use = r.name == spec.objective;
+    for (const auto& c : spec.constraints) use |= r.name == c.response;
+    if (use) used.push_back(r);
+  }
+  return check_gradients(problem.study(), p, used, o);
+}
+
 }  // namespace lsmbs

@@ -7,9 +7,11 @@
 // the same point, and a resumed run replays its earlier evaluations from the cache.
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/sensitivity/study.hpp"
 
@@ -77,6 +79,12 @@ class DesignProblem {
   Evaluation interrupted_;  // the last interrupted evaluation (not cached)
   long simulations_ = 0, cache_hits_ = 0;
 };
+
+/// The gradient check (sensitivity/gradient_check.hpp) of the problem's objective and constraints
+/// at p, with the problem's sensitivity options: what `optimize` runs at the initial design of a
+/// new run. nullopt when the sensitivity run itself failed (the first evaluation then reports it).
+std::optional<GradientCheckResult> check_problem_gradients(DesignProblem& problem, const Vec& p,
+                                                           const GradientCheckOptions& o);
 
 /// Evaluation to/from JSON (checkpoints): exact doubles via their bit patterns in hex.
 nlohmann::json evaluation_to_json(const Evaluation& e);

@@ -1,0 +1,584 @@
+"""Models built in Python: bodies, joints, forces, meshes, features, design variables, responses.
+
+    import lsmbs
+    from lsmbs import at, ground, trapezoid
+
+    m = lsmbs.ModelBuilder("pendulum", gravity=(0, -9.81))
+    m.rigid_body("bob", position=(1, 0), mass=1, inertia=0.1)
+    m.revolute("pin", at("bob", (-1, 0)))           # b defaults to the ground
+    m.measure("bob", "position", point=at("bob"))
+    m.response("lowest_y", "bob.y", "min")
+    m.simulation(t_end=2, h=0.01)
+    case = m.build()                                 # an lsmbs.Case, as load_case returns
+
+The builder speaks the case format's vocabulary (docs/case-format.md) with Python names and
+keyword arguments; `build()` hands its document to the same loader that reads case files, so a
+model built here is checked exactly as a case file is (every range, reference, node set, the rank
+of the constraints, the initial velocities), and `save(path)` writes a case file that the command
+line runs to the same numbers, bit for bit. Mistakes the builder can see alone (a name taken
+twice, a wrong type, a point that is not a point) raise at the call; the rest raise lsmbs.Error
+at build() naming the call that made the entry, e.g.
+    rigid_body('bob'): mass: expected a non-negative number
+with the entry's JSON path in `json_path`. A builder can be changed and built again (a parameter
+study rebuilds it); each build() returns a new, independent Case.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import numbers
+import os
+import pathlib
+
+from . import _lsmbs
+
+__all__ = [
+    "ModelBuilder", "Variable", "ground", "at", "at_global", "node", "nearest", "rectangle",
+    "gmsh", "trapezoid", "ramp", "constant", "table", "ellipse", "super_ellipse", "circle",
+]
+
+
+# ---------------------------------------------------------------- values
+def _number(value, what):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{what}: expected a number, got {type(value).__name__}")
+    return float(value)
+
+
+def _integer(value, what):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{what}: expected an integer, got {type(value).__name__}")
+    return int(value)
+
+
+def _vec2(value, what):
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise TypeError(f"{what}: expected a pair (x, y), got {value!r}")
+    return [_number(value[0], what + "[0]"), _number(value[1], what + "[1]")]
+
+
+def _name(value, what):
+    if not isinstance(value, str) or not value:
+        raise TypeError(f"{what}: expected a non-empty str, got {value!r}")
+    return value
+
+
+def _plain(value, what):
+    """A JSON value from Python: numbers (NumPy's too), str, bool, None, lists and dicts."""
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, Variable):
+        return value._binding()
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        return float(value)
+    if isinstance(value, dict):
+        return {_name(k, what): _plain(v, f"{what}.{k}") for k, v in value.items()}
+    if hasattr(value, "tolist"):  # NumPy arrays
+        return _plain(value.tolist(), what)
+    if isinstance(value, (list, tuple)):
+        return [_plain(v, f"{what}[{i}]") for i, v in enumerate(value)]
+    raise TypeError(f"{what}: {type(value).__name__} is not a case value")
+
+
+class _Point(dict):
+    """A material point (a dict in the case format's form); made by ground, at, node, … ."""
+
+
+def ground(xy):
+    """The fixed point at xy."""
+    return _Point(ground=_vec2(xy, "ground"))
+
+
+def at(body, xy=(0.0, 0.0)):
+    """The point of rigid body `body` at xy in its body frame."""
+    return _Point(body=_name(body, "at: body"), at=_vec2(xy, "at"))
+
+
+def at_global(body, xy):
+    """The point of rigid body `body` that is at xy at t = 0."""
+    return _Point(body=_name(body, "at_global: body"), at_global=_vec2(xy, "at_global"))
+
+
+def node(body, index):
+    """Node `index` of flexible body `body`."""
+    return _Point(body=_name(body, "node: body"), node=_integer(index, "node"))
+
+
+def nearest(body, xy):
+    """The node of flexible body `body` nearest to xy (mesh frame)."""
+    return _Point(body=_name(body, "nearest: body"), nearest=_vec2(xy, "nearest"))
+
+
+def _point(p, what, allow_ground_word=False):
+    if allow_ground_word and p == "ground":
+        return "ground"
+    if not isinstance(p, _Point):
+        raise TypeError(f"{what}: expected a point (lsmbs.ground, at, at_global, node, nearest), "
+                        f"got {p!r}")
+    return dict(p)
+
+
+# ---------------------------------------------------------------- meshes
+def rectangle(origin, size, elements, node_sets=None):
+    """A structured quad mesh of the rectangle [origin, origin + size], elements = (nx, ny); node
+    sets 'left', 'right', 'bottom' and 'top' are predefined, `node_sets` adds selectors
+    ({'tip': {'line_x': 0.8}}, docs/case-format.md)."""
+    nx, ny = elements
+    m = {"type": "rectangle", "origin": _vec2(origin, "rectangle: origin"),
+         "size": _vec2(size, "rectangle: size"),
+         "elements": [_integer(nx, "rectangle: elements[0]"), _integer(ny, "rectangle: elements[1]")]}
+    return _Mesh(m, node_sets)
+
+
+def gmsh(file, scale=1.0, node_sets=None):
+    """A Gmsh 4.x ASCII quad mesh; physical groups of dimension 0 and 1 become node sets."""
+    m = {"type": "gmsh", "file": os.fspath(file), "scale": _number(scale, "gmsh: scale")}
+    return _Mesh(m, node_sets)
+
+
+class _Mesh:
+    def __init__(self, mesh, node_sets):
+        self.mesh = mesh
+        self.node_sets = _plain(node_sets, "node_sets") if node_sets else None
+
+
+# ---------------------------------------------------------------- time laws
+def trapezoid(s0, s1, acceleration, speed, start=0.0):
+    """From s0 to s1 with a trapezoidal speed profile (phases accelerate, constant, decelerate)."""
+    return {"type": "trapezoid", "from": _number(s0, "trapezoid: s0"),
+            "to": _number(s1, "trapezoid: s1"),
+            "acceleration": _number(acceleration, "trapezoid: acceleration"),
+            "speed": _number(speed, "trapezoid: speed"), "start": _number(start, "trapezoid: start")}
+
+
+def ramp(speed, ramp_time, s0=0.0, start=0.0):
+    """From s0, the speed ramped up over ramp_time, then constant (phases ramp, constant)."""
+    return {"type": "ramp", "from": _number(s0, "ramp: s0"), "speed": _number(speed, "ramp: speed"),
+            "ramp_time": _number(ramp_time, "ramp: ramp_time"), "start": _number(start, "ramp: start")}
+
+
+def constant(value):
+    return {"type": "constant", "value": _number(value, "constant: value")}
+
+
+def table(points=None, file=None, interpolation="cubic", period=None, x_scale=None, y_scale=None):
+    """A tabulated law s(t) or pressure P(s): points [(x, y), ...] or a CSV file."""
+    t = {"type": "table", "interpolation": interpolation}
+    if points is not None:
+        t["points"] = [_vec2(p, f"table: points[{i}]") for i, p in enumerate(points)]
+    if file is not None:
+        t["file"] = os.fspath(file)
+    for k, v in (("period", period), ("x_scale", x_scale), ("y_scale", y_scale)):
+        if v is not None:
+            t[k] = _number(v, "table: " + k)
+    return t
+
+
+# ---------------------------------------------------------------- design
+class Variable:
+    """A design variable; `scale * v + offset` binds a feature or model parameter linearly."""
+
+    def __init__(self, name, scale=1.0, offset=0.0):
+        self.name, self.scale, self.offset = name, scale, offset
+
+    def __mul__(self, k):
+        return Variable(self.name, self.scale * _number(k, self.name + " * k"),
+                        self.offset * float(k))
+
+    __rmul__ = __mul__
+
+    def __neg__(self):
+        return self * -1.0
+
+    def __add__(self, c):
+        return Variable(self.name, self.scale, self.offset + _number(c, self.name + " + c"))
+
+    __radd__ = __add__
+
+    def __sub__(self, c):
+        return self + (-_number(c, self.name + " - c"))
+
+    def _binding(self):
+        if self.scale == 1.0 and self.offset == 0.0:
+            return self.name
+        return {"variable": self.name, "scale": self.scale, "offset": self.offset}
+
+    def __repr__(self):
+        return f"Variable({self.name!r}, scale={self.scale}, offset={self.offset})"
+
+
+def _param(v, what):
+    if isinstance(v, Variable):
+        return v._binding()
+    if isinstance(v, str):
+        return v
+    return _number(v, what)
+
+
+def ellipse(name, cx, cy, a, b, d=1.0, angle=None, hole=True):
+    """Eq. (41): semi-axes a·d and b·d; each parameter a number, a Variable or a variable name."""
+    f = {"name": _name(name, "ellipse: name"), "type": "ellipse", "hole": bool(hole)}
+    for k, v in (("cx", cx), ("cy", cy), ("a", a), ("b", b), ("d", d), ("angle", angle)):
+        if v is not None:
+            f[k] = _param(v, f"ellipse '{name}': {k}")
+    return f
+
+
+def super_ellipse(name, cx, cy, a, b, xi=5.0, eta=5.0, angle=None, hole=True):
+    """Eq. (43) with exponents xi and eta."""
+    f = {"name": _name(name, "super_ellipse: name"), "type": "super_ellipse", "hole": bool(hole)}
+    for k, v in (("cx", cx), ("cy", cy), ("a", a), ("b", b), ("xi", xi), ("eta", eta),
+                 ("angle", angle)):
+        if v is not None:
+            f[k] = _param(v, f"super_ellipse '{name}': {k}")
+    return f
+
+
+def circle(name, cx, cy, r, hole=True):
+    f = {"name": _name(name, "circle: name"), "type": "circle", "hole": bool(hole)}
+    for k, v in (("cx", cx), ("cy", cy), ("r", r)):
+        f[k] = _param(v, f"circle '{name}': {k}")
+    return f
+
+
+# ---------------------------------------------------------------- the builder
+class ModelBuilder:
+    """Builds a case in Python (see the module's documentation)."""
+
+    def __init__(self, name, gravity=(0.0, 0.0), description=None, base_dir=None):
+        self._doc = {"name": _name(name, "name"), "gravity": _vec2(gravity, "gravity"),
+                     "bodies": [], "joints": [], "forces": []}
+        if description is not None:
+            self._doc["description"] = str(description)
+        self._base_dir = os.fspath(base_dir) if base_dir is not None else None
+        self._calls = {}  # JSON path of an entry -> the call that made it
+        self._names = set()
+        self._variables = {}
+
+    # ------------------------------------------------------------ bookkeeping
+    def _add(self, section, entry, call, body=False):
+        name = entry["name"]
+        if name in self._names:
+            raise _error(self, f"/{section}/{len(self._doc[section])}/name",
+                         f"{call}: the name '{name}' is taken (bodies, joints and forces share one "
+                         "namespace)")
+        if body and name == "ground":
+            raise _error(self, f"/{section}/{len(self._doc[section])}/name",
+                         f"{call}: 'ground' is not a body name")
+        path = f"/{section}/{len(self._doc[section])}"
+        self._doc[section].append(entry)
+        self._calls[path] = call
+        self._names.add(name)
+        return name
+
+    @staticmethod
+    def _options(entry, what, **kw):
+        for k, v in kw.items():
+            if v is not None:
+                entry[k] = _plain(v, f"{what}: {k}")
+        return entry
+
+    # ------------------------------------------------------------ bodies
+    def rigid_body(self, name, *, position=(0.0, 0.0), angle=0.0, mass=0.0, inertia=0.0, com=None,
+                   velocity=None, angular_velocity=None):
+        """A rigid body: position and angle of its reference point at t = 0, mass and inertia
+        (about the centre of mass `com`, body frame); parameters '<name>.mass', '<name>.inertia'."""
+        call = f"rigid_body({name!r})"
+        e = {"name": _name(name, "rigid_body: name"), "type": "rigid",
+             "position": _vec2(position, call + ": position"),
+             "angle": _number(angle, call + ": angle"), "mass": _number(mass, call + ": mass"),
+             "inertia": _number(inertia, call + ": inertia")}
+        if com is not None:
+            e["com"] = _vec2(com, call + ": com")
+        if velocity is not None:
+            e["velocity"] = _vec2(velocity, call + ": velocity")
+        if angular_velocity is not None:
+            e["angular_velocity"] = _number(angular_velocity, call + ": angular_velocity")
+        return self._add("bodies", e, call, body=True)
+
+    def flexible_body(self, name, mesh, *, E, nu, rho, thickness, origin=(0.0, 0.0), angle=0.0,
+                      integration=None, velocity=None, angular_velocity=None):
+        """A plane-stress body on `mesh` (lsmbs.rectangle or lsmbs.gmsh, in the body's design
+        frame), placed at t = 0 by `origin` and `angle`; parameters '<name>.E', '.nu', '.rho',
+        '.thickness'."""
+        call = f"flexible_body({name!r})"
+        if not isinstance(mesh, _Mesh):
+            raise TypeError(f"{call}: mesh: expected lsmbs.rectangle(...) or lsmbs.gmsh(...), "
+                            f"got {type(mesh).__name__}")
+        e = {"name": _name(name, "flexible_body: name"), "type": "flexible",
+             "mesh": copy.deepcopy(mesh.mesh),
+             "placement": {"origin": _vec2(origin, call + ": origin"),
+                           "angle": _number(angle, call + ": angle")},
+             "material": {"E": _number(E, call + ": E"), "nu": _number(nu, call + ": nu"),
+                          "rho": _number(rho, call + ": rho")},
+             "thickness": _number(thickness, call + ": thickness")}
+        if mesh.node_sets:
+            e["node_sets"] = copy.deepcopy(mesh.node_sets)
+        self._options(e, call, integration=integration)
+        if velocity is not None:
+            e["velocity"] = _vec2(velocity, call + ": velocity")
+        if angular_velocity is not None:
+            e["angular_velocity"] = _number(angular_velocity, call + ": angular_velocity")
+        return self._add("bodies", e, call, body=True)
+
+    # ------------------------------------------------------------ joints and drivers
+    def revolute(self, name, a, b=None):
+        """p_a = p_b; b defaults to the ground point at a's initial position."""
+        call = f"revolute({name!r})"
+        e = {"name": _name(name, "revolute: name"), "type": "revolute",
+             "a": _point(a, call + ": a")}
+        if b is not None:
+            e["b"] = _point(b, call + ": b", allow_ground_word=True)
+        return self._add("joints", e, call)
+
+    def prismatic(self, name, a, direction, *, through=None, lock_rotation=None):
+        call = f"prismatic({name!r})"
+        e = {"name": _name(name, "prismatic: name"), "type": "prismatic",
+             "a": _point(a, call + ": a"), "direction": _vec2(direction, call + ": direction")}
+        if through is not None:
+            e["through"] = _vec2(through, call + ": through")
+        if lock_rotation is not None:
+            e["lock_rotation"] = bool(lock_rotation)
+        return self._add("joints", e, call)
+
+    def rigid_connection(self, name, rigid, flexible, node_set):
+        """Every node of `node_set` of the flexible body keeps its offset in the rigid body."""
+        call = f"rigid_connection({name!r})"
+        return self._add("joints", {
+            "name": _name(name, "rigid_connection: name"), "type": "rigid_connection",
+            "rigid": _name(rigid, call + ": rigid"), "flexible": _name(flexible, call + ": flexible"),
+            "node_set": _name(node_set, call + ": node_set")}, call)
+
+    def clamp(self, name, flexible, node_set):
+        call = f"clamp({name!r})"
+        return self._add("joints", {
+            "name": _name(name, "clamp: name"), "type": "clamp",
+            "flexible": _name(flexible, call + ": flexible"),
+            "node_set": _name(node_set, call + ": node_set")}, call)
+
+    def rotation_driver(self, name, body, law, relative_to=None):
+        """θ_body − θ_relative_to − s(t) = 0 (relative_to: a rigid body, default the ground)."""
+        call = f"rotation_driver({name!r})"
+        e = {"name": _name(name, "rotation_driver: name"), "type": "rotation_driver",
+             "body": _name(body, call + ": body"), "law": _plain(law, call + ": law")}
+        if relative_to is not None:
+            e["relative_to"] = _name(relative_to, call + ": relative_to")
+        return self._add("joints", e, call)
+
+    def translation_driver(self, name, point, direction, law, through=None):
+        call = f"translation_driver({name!r})"
+        e = {"name": _name(name, "translation_driver: name"), "type": "translation_driver",
+             "point": _point(point, call + ": point"),
+             "direction": _vec2(direction, call + ": direction"), "law": _plain(law, call + ": law")}
+        if through is not None:
+            e["through"] = _vec2(through, call + ": through")
+        return self._add("joints", e, call)
+
+    # ------------------------------------------------------------ forces
+    def point_mass(self, name, point, mass):
+        call = f"point_mass({name!r})"
+        return self._add("forces", {"name": _name(name, "point_mass: name"), "type": "point_mass",
+                                    "point": _point(point, call + ": point"),
+                                    "mass": _number(mass, call + ": mass")}, call)
+
+    def point_force(self, name, point, force=None, *, fx=None, fy=None, scale=None):
+        """A constant force (Fx, Fy), or time laws fx and fy, times `scale`."""
+        call = f"point_force({name!r})"
+        e = {"name": _name(name, "point_force: name"), "type": "point_force",
+             "point": _point(point, call + ": point")}
+        if force is not None:
+            e["force"] = _vec2(force, call + ": force")
+        return self._add("forces", self._options(e, call, fx=fx, fy=fy, scale=scale), call)
+
+    def spring_damper(self, name, a, b, *, stiffness, damping=None, free_length=None):
+        call = f"spring_damper({name!r})"
+        e = {"name": _name(name, "spring_damper: name"), "type": "spring_damper",
+             "a": _point(a, call + ": a"), "b": _point(b, call + ": b", allow_ground_word=True),
+             "stiffness": _number(stiffness, call + ": stiffness")}
+        return self._add("forces", self._options(e, call, damping=damping, free_length=free_length),
+                         call)
+
+    def torque(self, name, body, torque=None, *, law=None, scale=None):
+        """The moment scale · T on a rigid body's angle: a constant `torque` or a time `law`."""
+        call = f"torque({name!r})"
+        e = {"name": _name(name, "torque: name"), "type": "torque",
+             "body": _name(body, call + ": body")}
+        return self._add("forces", self._options(e, call, torque=torque, law=law, scale=scale),
+                         call)
+
+    def rotational_spring_damper(self, name, a, b="ground", *, stiffness, damping=None,
+                                 free_angle=None):
+        call = f"rotational_spring_damper({name!r})"
+        e = {"name": _name(name, "rotational_spring_damper: name"),
+             "type": "rotational_spring_damper", "a": _name(a, call + ": a"),
+             "b": _name(b, call + ": b"), "stiffness": _number(stiffness, call + ": stiffness")}
+        return self._add("forces", self._options(e, call, damping=damping, free_angle=free_angle),
+                         call)
+
+    def pressure(self, name, point, direction, area, table, argument=None, time_offset=None):
+        """Pressure P(s) × area along a fixed direction; s the time or {'angle_of': body, …}."""
+        call = f"pressure({name!r})"
+        e = {"name": _name(name, "pressure: name"), "type": "pressure",
+             "point": _point(point, call + ": point"),
+             "direction": _vec2(direction, call + ": direction"),
+             "area": _number(area, call + ": area"), "table": _plain(table, call + ": table")}
+        return self._add("forces", self._options(e, call, argument=argument,
+                                                 time_offset=time_offset), call)
+
+    # ------------------------------------------------------------ simulation and output
+    def simulation(self, t_end, h, **options):
+        """Generalized-α options (t_end, h, rho_inf, tol_r, newton, …: the case's 'simulation')."""
+        self._doc["simulation"] = {"t_end": _number(t_end, "simulation: t_end"),
+                                   "h": _number(h, "simulation: h"),
+                                   **_plain(options, "simulation")}
+        self._calls["/simulation"] = "simulation()"
+
+    def measure(self, name, type, **keys):
+        """A measure recorded every step (history columns): type 'position', 'velocity', 'angle',
+        'angular_velocity', 'distance', 'elongation', 'path_deviation', 'constraint_force',
+        'kinetic_energy', 'strain_energy' or 'mass', with that type's keys (point=…, body=…, a=…,
+        b=…, joint=…, path=…)."""
+        call = f"measure({name!r})"
+        e = {"name": _name(name, "measure: name"), "type": _name(type, call + ": type")}
+        for k, v in keys.items():
+            e[k] = dict(v) if isinstance(v, _Point) else _plain(v, f"{call}: {k}")
+        out = self._doc.setdefault("output", {})
+        ms = out.setdefault("measures", [])
+        self._calls[f"/output/measures/{len(ms)}"] = call
+        ms.append(e)
+        return name
+
+    def response(self, name, measure, aggregate, *, window=None, ks=None):
+        """A response: a measure column ('tip.x') aggregated ('average', 'average_eq45', 'max',
+        'min', 'final', 'integral', 'rms', 'per_step', 'ks') over a window ((t0, t1), or
+        {'driver': …, 'phase': …}; default the whole run)."""
+        call = f"response({name!r})"
+        e = {"name": _name(name, "response: name"), "measure": _name(measure, call + ": measure"),
+             "aggregate": _name(aggregate, call + ": aggregate")}
+        if window is not None:
+            if isinstance(window, dict):
+                e["window"] = _plain(window, call + ": window")
+            else:
+                t0, t1 = _vec2(window, call + ": window")
+                e["window"] = {"t0": t0, "t1": t1}
+        if ks is not None:
+            e["ks"] = _number(ks, call + ": ks")
+        out = self._doc.setdefault("output", {})
+        rs = out.setdefault("responses", [])
+        self._calls[f"/output/responses/{len(rs)}"] = call
+        rs.append(e)
+        return name
+
+    def output(self, csv_stride=None, vtu_stride=None):
+        """Strides of history.csv and of the VTU files (0: none)."""
+        out = self._doc.setdefault("output", {})
+        self._options(out, "output", csv_stride=csv_stride, vtu_stride=vtu_stride)
+
+    # ------------------------------------------------------------ design
+    def variable(self, name, initial, lower, upper):
+        """A design variable; returns a Variable for feature parameters (v, 2 * v + 0.1, …)."""
+        call = f"variable({name!r})"
+        d = self._doc.setdefault("design", {})
+        vs = d.setdefault("variables", [])
+        if name in self._variables:
+            raise _error(self, f"/design/variables/{len(vs)}/name",
+                         f"{call}: duplicate design variable '{name}'")
+        self._calls[f"/design/variables/{len(vs)}"] = call
+        vs.append({"name": _name(name, "variable: name"),
+                   "initial": _number(initial, call + ": initial"),
+                   "lower": _number(lower, call + ": lower"), "upper": _number(upper, call + ": upper")})
+        self._variables[name] = Variable(name)
+        return self._variables[name]
+
+    def features(self, body, features, *, region=None, mu_min=None, subgrid=None, band=None):
+        """Level-set features on a flexible body (lsmbs.ellipse, super_ellipse, circle): by default
+        the material is where every hole feature is positive (the paper's); `region` combines
+        feature names with {'and': [...]}, {'or': [...]}, {'not': ...}."""
+        call = f"features({body!r})"
+        d = self._doc.setdefault("design", {})
+        gs = d.setdefault("geometry", [])
+        g = {"body": _name(body, call + ": body"), "features": [_plain(f, call) for f in features]}
+        self._options(g, call, region=region, mu_min=mu_min, subgrid=subgrid, band=band)
+        self._calls[f"/design/geometry/{len(gs)}"] = call
+        gs.append(g)
+
+    def bind_parameter(self, parameter, variable, scale=1.0, offset=0.0):
+        """Model parameter ('spring.stiffness', 'plate.E', …) = offset + scale · variable."""
+        call = f"bind_parameter({parameter!r})"
+        if isinstance(variable, Variable):
+            variable, scale, offset = (variable.name, variable.scale * scale,
+                                       variable.offset * scale + offset)
+        d = self._doc.setdefault("design", {})
+        ps = d.setdefault("parameters", [])
+        self._calls[f"/design/parameters/{len(ps)}"] = call
+        ps.append({"parameter": _name(parameter, call + ": parameter"),
+                   "variable": _name(variable, call + ": variable"),
+                   "scale": _number(scale, call + ": scale"), "offset": _number(offset, call + ": offset")})
+
+    # ------------------------------------------------------------ optimization
+    def optimization(self, objective, constraints=(), **options):
+        """The design problem: minimize `objective` (a response) subject to constraints, each
+        (response, upper) or {'response': …, 'upper': …}; options as the case's 'optimization'
+        (optimizer, sensitivity, stop, …)."""
+        cons = []
+        for c in constraints:
+            if isinstance(c, dict):
+                cons.append(_plain(c, "optimization: constraints"))
+            else:
+                r, up = c
+                cons.append({"response": _name(r, "optimization: constraint response"),
+                             "upper": _number(up, "optimization: constraint upper")})
+        self._doc["optimization"] = {"objective": _name(objective, "optimization: objective"),
+                                     "constraints": cons, **_plain(options, "optimization")}
+        self._calls["/optimization"] = "optimization()"
+
+    # ------------------------------------------------------------ results
+    def document(self):
+        """The case document (a dict in the case format; a deep copy)."""
+        doc = copy.deepcopy(self._doc)
+        for k in ("joints", "forces"):
+            if not doc[k]:
+                del doc[k]
+        return doc
+
+    def text(self):
+        """The case file's text (what save() writes and build() hashes)."""
+        return json.dumps(self.document(), indent=1, allow_nan=False) + "\n"
+
+    def save(self, path):
+        """Writes the case file (relative mesh and table files resolve against its folder)."""
+        pathlib.Path(path).write_text(self.text())
+
+    def build(self):
+        """The Case (lsmbs.Case), checked by the case-file loader; raises lsmbs.Error naming the
+        call at fault."""
+        if "simulation" not in self._doc:
+            raise _error(self, "/simulation", "simulation(t_end=…, h=…) was not called")
+        base = self._base_dir if self._base_dir is not None else os.getcwd()
+        label = f"<ModelBuilder {self._doc['name']!r}>"
+        try:
+            return _lsmbs._load_case_text(self.text(), label, base)
+        except _lsmbs.Error as e:
+            raise _located(self, e) from None
+
+
+def _error(builder, path, message):
+    e = _lsmbs.Error(f"<ModelBuilder {builder._doc['name']!r}>: {path}: {message}")
+    e.file, e.json_path, e.reason = f"<ModelBuilder {builder._doc['name']!r}>", path, message
+    return e
+
+
+def _located(builder, e):
+    """The loader's error with the builder call that made the entry in front."""
+    path = getattr(e, "json_path", "") or ""
+    reason = getattr(e, "reason", str(e))
+    best = ""
+    for p in builder._calls:
+        if (path == p or path.startswith(p + "/")) and len(p) > len(best):
+            best = p
+    if not best:
+        return _error(builder, path, reason)
+    rest = path[len(best):].lstrip("/")
+    return _error(builder, path, f"{builder._calls[best]}: {rest + ': ' if rest else ''}{reason}")

@@ -1,0 +1,219 @@
+"""Models built in Python (lsmbs.ModelBuilder), the gradient check and output folders from Python.
+
+References: the closed-form solution of a mass on a spring, central differences of plain
+simulations, and the command line run on the saved case file (bit for bit)."""
+import json
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import lsmbs
+from lsmbs import at, ground, rectangle
+
+from conftest import ROOT, SPRING, run_cli
+
+M, K0, A, L0 = 2.0, 200.0, 0.01, 0.5  # mass [kg], stiffness [N/m], amplitude [m], free length [m]
+T_END, H = 1.0, 1e-3
+
+
+def oscillator(k=K0, h=H, design=True):
+    """A block on a frictionless slide, held by a spring to the ground, released at x = L0 + A
+    from rest: x(t) = L0 + A cos(ω t), ω = sqrt(k / m)."""
+    m = lsmbs.ModelBuilder("oscillator")
+    m.rigid_body("block", position=(L0 + A, 0), mass=M)
+    m.prismatic("slide", at("block"), (1, 0))
+    m.spring_damper("spring", at("block"), ground((0, 0)), stiffness=k, free_length=L0)
+    m.measure("block", "position", point=at("block"))
+    m.response("x_end", "block.x", "final")
+    m.response("x_mean", "block.x", "average")
+    m.simulation(t_end=T_END, h=h, rho_inf=0.9)
+    if design:
+        v = m.variable("k", initial=k, lower=50, upper=400)
+        m.bind_parameter("spring.stiffness", v)
+    return m
+
+
+def x_exact(k, t):
+    return L0 + A * math.cos(math.sqrt(k / M) * t)
+
+
+def test_built_oscillator_follows_the_closed_form():
+    r = lsmbs.simulate(oscillator().build())
+    x = r.column("block.x")
+    exact = np.array([x_exact(K0, t) for t in r.times])
+    # generalized-α is second order: the phase error after 1.6 periods is (ω h)² ω T / 24 ≈ 4e-5 rad
+    assert np.max(np.abs(x - exact)) < 2e-3 * A
+    assert r.times[-1] == pytest.approx(T_END, abs=1e-12)
+
+
+def test_gradient_of_a_built_model_agrees_with_the_closed_form_and_central_differences():
+    case = oscillator().build()
+    s = lsmbs.sensitivity(case, method="direct-analytic")
+    g = s.gradients["x_end"][0]
+    w = math.sqrt(K0 / M)
+    closed = -A * math.sin(w * T_END) * T_END / (2 * math.sqrt(K0 * M))  # d x(T) / dk
+    assert g == pytest.approx(closed, rel=5e-3)
+    # central differences of two plain simulations of rebuilt models (no sensitivity code)
+    d = 1e-3
+    fd = (lsmbs.simulate(oscillator(K0 + d, design=False).build()).responses["x_end"]
+          - lsmbs.simulate(oscillator(K0 - d, design=False).build()).responses["x_end"]) / (2 * d)
+    assert g == pytest.approx(fd, rel=1e-6)
+
+
+def test_a_saved_model_runs_on_the_command_line_to_the_same_numbers_bit_for_bit(tmp_path):
+    b = oscillator()
+    case = b.build()
+    b.save(tmp_path / "osc.json")
+    s = lsmbs.sensitivity(case, method="direct-analytic")
+    S = run_cli("sensitivity", tmp_path / "osc.json", "--method", "direct-analytic",
+                "-o", tmp_path / "out")
+    assert S["case_sha256"] == case.sha256  # build() hashes the text save() writes
+    for name, value in s.values.items():
+        assert S["responses"][name] == value  # exact
+        assert [S["gradients"][name][v] for v in s.variables] == list(s.gradients[name])
+
+
+def test_a_flexible_model_with_features_builds_and_matches_the_same_case_file(tmp_path):
+    """A clamped plate with one design hole built in Python equals the case file written by hand
+    from docs/case-format.md (same responses and gradients bit for bit)."""
+    m = lsmbs.ModelBuilder("plate")
+    m.flexible_body("plate", rectangle((0, -0.025), (0.3, 0.05), (24, 4)),
+                    E=70e9, nu=0.3, rho=2700, thickness=0.002)
+    m.clamp("root", "plate", "left")
+    m.point_force("load", lsmbs.nearest("plate", (0.3, 0.0)), (0, -50))
+    r = m.variable("r", initial=0.01, lower=0.002, upper=0.02)
+    m.features("plate", [lsmbs.circle("hole", 0.15, 0.0, r)])
+    m.measure("tip", "position", point=lsmbs.nearest("plate", (0.3, 0.0)))
+    m.measure("mass", "mass", body="plate")
+    m.response("tip_y", "tip.y", "final")
+    m.response("plate_mass", "mass", "final")
+    m.simulation(t_end=0.02, h=0.002)
+    by_hand = {
+        "name": "plate", "gravity": [0, 0],
+        "bodies": [{"name": "plate", "type": "flexible",
+                    "mesh": {"type": "rectangle", "origin": [0, -0.025], "size": [0.3, 0.05],
+                             "elements": [24, 4]},
+                    "material": {"E": 70e9, "nu": 0.3, "rho": 2700}, "thickness": 0.002}],
+        "joints": [{"name": "root", "type": "clamp", "flexible": "plate", "node_set": "left"}],
+        "forces": [{"name": "load", "type": "point_force",
+                    "point": {"body": "plate", "nearest": [0.3, 0.0]}, "force": [0, -50]}],
+        "design": {"variables": [{"name": "r", "initial": 0.01, "lower": 0.002, "upper": 0.02}],
+                   "geometry": [{"body": "plate", "features": [
+                       {"name": "hole", "type": "circle", "cx": 0.15, "cy": 0, "r": "r"}]}]},
+        "simulation": {"t_end": 0.02, "h": 0.002},
+        "output": {"measures": [
+            {"name": "tip", "type": "position", "point": {"body": "plate", "nearest": [0.3, 0.0]}},
+            {"name": "mass", "type": "mass", "body": "plate"}],
+            "responses": [{"name": "tip_y", "measure": "tip.y", "aggregate": "final"},
+                          {"name": "plate_mass", "measure": "mass", "aggregate": "final"}]}}
+    (tmp_path / "by_hand.json").write_text(json.dumps(by_hand))
+    built = lsmbs.sensitivity(m.build())
+    hand = lsmbs.sensitivity(lsmbs.load_case(tmp_path / "by_hand.json"))
+    for name in ("tip_y", "plate_mass"):
+        assert built.values[name] == hand.values[name]
+        assert np.array_equal(built.gradients[name], hand.gradients[name])
+    # the hole's area: the mass falls by ρ t π r² (to the mapping's resolution)
+    g = lsmbs.geometry(m.build())["plate"]
+    assert g["mass"] == pytest.approx(2700 * 0.002 * (0.3 * 0.05 - math.pi * 0.01**2), rel=2e-3)
+
+
+def test_builder_errors_name_the_call():
+    b = oscillator()
+    b.rigid_body("loose", mass=-1.0)
+    with pytest.raises(lsmbs.Error) as e:
+        b.build()
+    assert e.value.json_path == "/bodies/1/mass"
+    assert "rigid_body('loose'): mass: expected a non-negative number" in str(e.value)
+
+    b = oscillator()
+    b.revolute("pin", at("nobody"))
+    with pytest.raises(lsmbs.Error) as e:
+        b.build()
+    assert "revolute('pin')" in str(e.value) and "nobody" in str(e.value)
+
+    b = oscillator()
+    with pytest.raises(lsmbs.Error, match="taken"):
+        b.rigid_body("spring", mass=1)  # a force has that name
+    with pytest.raises(TypeError, match="expected a point"):
+        b.revolute("pin", (0, 0))
+    with pytest.raises(TypeError, match="expected a number"):
+        b.rigid_body("x", mass="heavy")
+    with pytest.raises(TypeError, match=r"expected a pair"):
+        b.rigid_body("y", position=(1, 2, 3))
+    b2 = lsmbs.ModelBuilder("no_sim")
+    b2.rigid_body("a", mass=1)
+    with pytest.raises(lsmbs.Error, match="simulation"):
+        b2.build()
+
+
+def test_built_case_is_independent_of_later_builder_changes():
+    b = oscillator()
+    first = b.build()
+    b.spring_damper("stiffer", at("block"), ground((1, 0)), stiffness=1e3)
+    assert lsmbs.simulate(first).responses["x_end"] == pytest.approx(x_exact(K0, T_END), abs=2e-3 * A)
+
+
+def test_gradient_check_from_python():
+    case = lsmbs.load_case(SPRING)
+    s = lsmbs.sensitivity(case, method="direct-analytic", check=True)
+    gc = s.gradient_check
+    assert gc is not None and gc["verdict"] == "pass"
+    assert gc["worst"] < 1e-3 and gc["simulations"] == 2
+    assert lsmbs.sensitivity(case).gradient_check is None
+    with pytest.raises(ValueError, match="check_delta"):
+        lsmbs.sensitivity(case, check=True, check_delta=2.0)
+
+
+def test_optimize_checks_the_initial_gradient_and_refuses_above_check_fail(tmp_path):
+    b = oscillator()
+    b.optimization("x_mean", stop={"max_evaluations": 3})
+    case = b.build()
+    # a threshold no gradient meets: the refusal, with the check's record attached
+    with pytest.raises(lsmbs.GradientCheckFailed) as e:
+        lsmbs.optimize(case, check_warn=1e-300, check_fail=1e-300)
+    assert "gradient check at the initial design failed" in str(e.value)
+    assert e.value.gradient_check["verdict"] == "fail"
+    assert isinstance(e.value, lsmbs.NumericalFailure)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the default thresholds: no warning on this exact gradient
+        r = lsmbs.optimize(case, out_dir=str(tmp_path / "opt"))
+    assert r["gradient_check"]["verdict"] == "pass"
+    assert lsmbs.optimize(case, check=False)["gradient_check"] is None
+
+
+def test_an_output_folder_with_an_earlier_run_is_refused_unless_overwrite(tmp_path):
+    case = oscillator().build()
+    out = tmp_path / "run"
+    lsmbs.simulate(case, out_dir=str(out))
+    with pytest.raises(lsmbs.Error, match=r"earlier run.*overwrite=True"):
+        lsmbs.simulate(case, out_dir=str(out))
+    lsmbs.simulate(case, out_dir=str(out), overwrite=True)
+    assert json.loads((out / "summary.json").read_text())["status"] == "complete"
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(lsmbs.Error, match="out_dir .*not a folder"):
+        lsmbs.simulate(case, out_dir=str(tmp_path / "file"))
+
+
+def test_the_readme_python_section_runs_and_plots_an_exact_gradient(tmp_path, monkeypatch):
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("## Python"):]
+    code = section[section.index("```python") + 9:section.index("```\n", section.index("```python") + 9)]
+    assert len(code.strip().splitlines()) <= 10
+    monkeypatch.chdir(tmp_path)
+    scope = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    r = scope["r"]
+    assert r["direct-analytic"].gradients["x_end"][0] == pytest.approx(
+        r["fd-central"].gradients["x_end"][0], rel=1e-5)
+    assert (tmp_path / "gradient.png").stat().st_size > 1000
+
+
+def test_the_builder_example_of_docs_python_md_builds_a_flexible_arm_with_a_checked_gradient():
+    text = (ROOT / "docs" / "python.md").read_text()
+    start = text.index("```python", text.index("## Models built in Python")) + 9
+    scope = {}
+    exec(compile(text[start:text.index("```", start)], "docs/python.md", "exec"), scope)
+    s = lsmbs.sensitivity(scope["case"], check=True)
+    assert s.gradient_check["verdict"] == "pass", s.gradient_check
