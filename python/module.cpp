@@ -22,10 +22,13 @@
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/io/output.hpp"
 #include "lsmbs/io/output_folder.hpp"
 #include "lsmbs/io/sha256.hpp"
 #include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/io/static_run.hpp"
 #include "lsmbs/io/verify_run.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
 #include "lsmbs/records/json.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
@@ -232,21 +235,6 @@ struct Parameters {
   }
 };
 
-// The range of a model parameter by its property ("<entity>.<property>"), as the case format and
-// the model builder check it; "" when the value is admissible.
-std::string parameter_check(const std::string& name, double v) {
-  if (!std::isfinite(v)) return "expected a finite number";
-  const std::string prop = name.substr(name.rfind('.') + 1);
-  if (prop == "E" && !(v > 0)) return "expected a positive Young's modulus";
-  if (prop == "nu" && !(v >= 0 && v < 0.5)) return "expected Poisson's ratio in [0, 0.5)";
-  if ((prop == "rho" || prop == "thickness") && !(v > 0)) return "expected a positive value";
-  if ((prop == "mass" || prop == "inertia" || prop == "stiffness" || prop == "damping" ||
-       prop == "free_length") &&
-      !(v >= 0))
-    return "expected a non-negative value";
-  return {};
-}
-
 struct SensitivityRun {
   SensitivityResult result;
   std::vector<std::string> variables;
@@ -370,7 +358,7 @@ PYBIND11_MODULE(_lsmbs, m) {
                        "model parameter '" + name + "' is set by design variable '" +
                        p.cs->design->variables[static_cast<size_t>(b.variable)].name +
                        "': change the design instead (design=…)");
-             if (auto msg = parameter_check(name, value); !msg.empty())
+             if (auto msg = ModelBuilder::check_parameter_value(name, value); !msg.empty())
                throw py::value_error("model parameter '" + name + "' = " + exact(value) + ": " +
                                      msg);
              p.cs->model->params().scalars[static_cast<size_t>(i)] = value;
@@ -475,7 +463,19 @@ PYBIND11_MODULE(_lsmbs, m) {
                              })
       .def("column",
            [](const SimulationResult& r, const std::string& name) { return array(r.column(name)); })
-      .def_property_readonly("responses", [](const SimulationResult& r) { return r.responses; })
+      .def_property_readonly(
+          "responses",
+          [](const SimulationResult& r) {
+            py::dict d;  // NaN when the run did not reach t_end; per-step responses as arrays
+            for (const auto& [name, v] : r.responses) {
+              const auto ps = r.per_step.find(name);
+              d[py::str(name)] = ps != r.per_step.end() ? py::object(array(ps->second))
+                                                        : py::object(py::float_(v));
+            }
+            return d;
+          },
+          "{response: value}: a float, or an array over the window's steps for a per-step "
+          "response; NaN when the run did not reach t_end")
       .def_property_readonly("summary",
                              [](const SimulationResult& r) { return json_to_python(r.summary); });
 
@@ -496,6 +496,46 @@ PYBIND11_MODULE(_lsmbs, m) {
       py::arg("case").none(false), py::arg("design") = py::none(), py::arg("out_dir") = "",
       py::arg("overwrite") = false, py::arg("progress") = py::none(),
       "Generalized-α simulation (Algorithm 1); design: None, a sequence, or {name: value}");
+
+  // ---------------------------------------------------------------- static equilibrium
+  py::class_<StaticRunResult>(m, "StaticResult")
+      .def_property_readonly("status",
+                             [](const StaticRunResult& r) { return run_status_name(r.status()); })
+      .def("report", &StaticRunResult::report)
+      .def_property_readonly("iterations",
+                             [](const StaticRunResult& r) { return r.solver.iterations; })
+      .def_property_readonly("columns", [](const StaticRunResult& r) { return r.columns; })
+      .def_property_readonly("measures",
+                             [](const StaticRunResult& r) {
+                               py::dict d;
+                               for (size_t i = 0; i < r.columns.size(); ++i)
+                                 d[py::str(r.columns[i])] = r.measures[i];
+                               return d;
+                             })
+      .def_property_readonly("responses", [](const StaticRunResult& r) { return r.responses; })
+      .def_property_readonly("q", [](const StaticRunResult& r) { return array(r.state.q); })
+      .def_property_readonly("summary",
+                             [](const StaticRunResult& r) { return json_to_python(r.summary); });
+
+  m.def(
+      "static",
+      [](const CasePtr& cs, const py::object& design, double t, int max_iter,
+         const std::string& out_dir, bool overwrite) {
+        const Vec p = design_point(*cs, design);
+        if (cs->design) cs->design->apply(p, cs->model->params());
+        claim(out_dir, overwrite);
+        StaticRunOptions o;
+        o.out_dir = out_dir;
+        o.t = t;
+        o.max_iter = max_iter;
+        o.design_point = p;
+        o.command_line = "lsmbs.static (Python)";
+        PythonRun run{py::none()};
+        return run([&] { return located(*cs, [&] { return run_static(*cs, o); }); });
+      },
+      py::arg("case").none(false), py::arg("design") = py::none(), py::arg("t") = 0.0,
+      py::arg("max_iter") = 50, py::arg("out_dir") = "", py::arg("overwrite") = false,
+      "Static equilibrium at time t (drivers and loads at t; no inertia), as `lsmbs static`");
 
   // ---------------------------------------------------------------- sensitivity
   py::class_<SensitivityRun>(m, "SensitivityResult")
@@ -669,8 +709,39 @@ PYBIND11_MODULE(_lsmbs, m) {
           OptimizeOptions o;
           o.out_dir = out_dir;
           o.resume = resume;
-          o.input_sha256 = cs->sha256;
+          // a resumed run must see the same problem: the file, its overrides, and what Python
+          // changed since (simulation options, model parameters)
+          std::string state =
+              cs->sha256 + cs->overrides.dump() + nlohmann::json(cs->simulation).dump();
+          const auto& scalars = cs->model->params().scalars;
+          for (size_t i = 0; i < scalars.size(); ++i) {  // those the design sets excepted
+            bool bound = false;
+            for (const auto& b : cs->design->bindings) bound |= b.parameter == static_cast<int>(i);
+            state += bound ? std::string("design,") : exact(scalars[i]) + ",";
+          }
+          o.input_sha256 = sha256_hex(state);
           const OptimizeResult r = run([&] { return optimize(prob, o); });
+          if (!out_dir.empty()) {  // every output folder carries a summary.json
+            nlohmann::json S = provenance("lsmbs.optimize (Python)", cs->file, cs->sha256);
+            S["case_name"] = cs->name;
+            S["overrides"] = cs->overrides;
+            S["status"] = run_status_name(r.status());
+            S["report"] = r.report();
+            S["options"] = {{"optimization", spec.to_json()},
+                            {"generalized_alpha", nlohmann::json(cs->simulation)}};
+            nlohmann::json pf = nlohmann::json::object();
+            for (int i = 0; i < cs->design->size(); ++i)
+              pf[cs->design->variables[static_cast<size_t>(i)].name] = r.p[i];
+            S["final"] = {{"design", pf},
+                          {"objective", r.final.objective},
+                          {"max_violation", r.final.max_violation}};
+            S["nlopt_status"] = r.nlopt_status;
+            S["converged"] = r.converged;
+            S["evaluations"] = r.evaluations;
+            S["gradient_check"] = check_record;
+            S["files"] = {"summary.json", "checkpoint.json", "history.csv"};
+            write_json_atomic(out_dir + "/summary.json", S);
+          }
           py::list history;
           for (const auto& e : r.history) history.append(evaluation_dict(e));
           return py::dict(

@@ -12,6 +12,7 @@ t_end, step, newton_iterations) and stop cleanly on Ctrl-C (KeyboardInterrupt on
 Errors: ``lsmbs.Error`` (a ValueError with ``file`` and ``json_path``) for invalid input,
 ``lsmbs.NumericalFailure`` when a run fails. Plots: ``lsmbs.plot`` (matplotlib).
 """
+from ._lsmbs import static  # noqa: F401  (lsmbs.static(case): static equilibrium)
 from ._lsmbs import (  # noqa: F401
     Case,
     DesignProblem,
@@ -22,6 +23,7 @@ from ._lsmbs import (  # noqa: F401
     SensitivityResult,
     SimulationOptions,
     SimulationResult,
+    StaticResult,
     __version__,
     geometry,
     git_commit,

@@ -24,8 +24,10 @@ study rebuilds it); each build() returns a new, independent Case.
 """
 from __future__ import annotations
 
+import collections.abc
 import copy
 import json
+import math
 import numbers
 import os
 import pathlib
@@ -40,8 +42,13 @@ __all__ = [
 
 # ---------------------------------------------------------------- values
 def _number(value, what):
+    if isinstance(value, Variable):
+        raise TypeError(f"{what}: a design variable acts on a model parameter through "
+                        f"bind_parameter('<entity>.<property>', {value.name!r}), or on a feature")
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{what}: expected a number, got {type(value).__name__}")
+    if not math.isfinite(value):
+        raise ValueError(f"{what}: expected a finite number, got {value}")
     return float(value)
 
 
@@ -52,7 +59,8 @@ def _integer(value, what):
 
 
 def _vec2(value, what):
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+    if (isinstance(value, (str, bytes, collections.abc.Mapping)) or not hasattr(value, "__len__")
+            or len(value) != 2):
         raise TypeError(f"{what}: expected a pair (x, y), got {value!r}")
     return [_number(value[0], what + "[0]"), _number(value[1], what + "[1]")]
 
@@ -67,12 +75,10 @@ def _plain(value, what):
     """A JSON value from Python: numbers (NumPy's too), str, bool, None, lists and dicts."""
     if value is None or isinstance(value, (bool, str)):
         return value
-    if isinstance(value, Variable):
-        return value._binding()
     if isinstance(value, numbers.Integral):
         return int(value)
-    if isinstance(value, numbers.Real):
-        return float(value)
+    if isinstance(value, (numbers.Real, Variable)):
+        return _number(value, what)
     if isinstance(value, dict):
         return {_name(k, what): _plain(v, f"{what}.{k}") for k, v in value.items()}
     if hasattr(value, "tolist"):  # NumPy arrays
@@ -199,6 +205,12 @@ class Variable:
 
     def __sub__(self, c):
         return self + (-_number(c, self.name + " - c"))
+
+    def __rsub__(self, c):
+        return (-self) + c
+
+    def __truediv__(self, k):
+        return self * (1.0 / _number(k, self.name + " / k"))
 
     def _binding(self):
         if self.scale == 1.0 and self.offset == 0.0:
@@ -480,15 +492,16 @@ class ModelBuilder:
     def variable(self, name, initial, lower, upper):
         """A design variable; returns a Variable for feature parameters (v, 2 * v + 0.1, …)."""
         call = f"variable({name!r})"
-        d = self._doc.setdefault("design", {})
-        vs = d.setdefault("variables", [])
+        entry = {"name": _name(name, "variable: name"),
+                 "initial": _number(initial, call + ": initial"),
+                 "lower": _number(lower, call + ": lower"), "upper": _number(upper, call + ": upper")}
+        vs = self._doc.get("design", {}).get("variables", [])
         if name in self._variables:
             raise _error(self, f"/design/variables/{len(vs)}/name",
                          f"{call}: duplicate design variable '{name}'")
+        vs = self._doc.setdefault("design", {}).setdefault("variables", [])
         self._calls[f"/design/variables/{len(vs)}"] = call
-        vs.append({"name": _name(name, "variable: name"),
-                   "initial": _number(initial, call + ": initial"),
-                   "lower": _number(lower, call + ": lower"), "upper": _number(upper, call + ": upper")})
+        vs.append(entry)
         self._variables[name] = Variable(name)
         return self._variables[name]
 
@@ -507,15 +520,15 @@ class ModelBuilder:
     def bind_parameter(self, parameter, variable, scale=1.0, offset=0.0):
         """Model parameter ('spring.stiffness', 'plate.E', …) = offset + scale · variable."""
         call = f"bind_parameter({parameter!r})"
+        scale, offset = _number(scale, call + ": scale"), _number(offset, call + ": offset")
         if isinstance(variable, Variable):
             variable, scale, offset = (variable.name, variable.scale * scale,
                                        variable.offset * scale + offset)
-        d = self._doc.setdefault("design", {})
-        ps = d.setdefault("parameters", [])
+        entry = {"parameter": _name(parameter, call + ": parameter"),
+                 "variable": _name(variable, call + ": variable"), "scale": scale, "offset": offset}
+        ps = self._doc.setdefault("design", {}).setdefault("parameters", [])
         self._calls[f"/design/parameters/{len(ps)}"] = call
-        ps.append({"parameter": _name(parameter, call + ": parameter"),
-                   "variable": _name(variable, call + ": variable"),
-                   "scale": _number(scale, call + ": scale"), "offset": _number(offset, call + ": offset")})
+        ps.append(entry)
 
     # ------------------------------------------------------------ optimization
     def optimization(self, objective, constraints=(), **options):
@@ -548,8 +561,26 @@ class ModelBuilder:
         return json.dumps(self.document(), indent=1, allow_nan=False) + "\n"
 
     def save(self, path):
-        """Writes the case file (relative mesh and table files resolve against its folder)."""
-        pathlib.Path(path).write_text(self.text())
+        """Writes the case file. Relative mesh and table file names are rewritten relative to the
+        file's folder, so that the saved case reads the files build() reads (the text, and so
+        the hash, then differs from build()'s when the folders differ)."""
+        path = pathlib.Path(path)
+        base = pathlib.Path(self._base_dir if self._base_dir is not None else os.getcwd())
+        doc = self.document()
+
+        def rebase(x):
+            if isinstance(x, dict):
+                for k, v in x.items():
+                    if k == "file" and isinstance(v, str) and not os.path.isabs(v):
+                        x[k] = os.path.relpath((base / v).resolve(), path.parent.resolve())
+                    else:
+                        rebase(v)
+            elif isinstance(x, list):
+                for v in x:
+                    rebase(v)
+
+        rebase(doc)
+        path.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
 
     def build(self):
         """The Case (lsmbs.Case), checked by the case-file loader; raises lsmbs.Error naming the

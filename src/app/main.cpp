@@ -1,6 +1,7 @@
 // lsmbs — command line of the level-set flexible-multibody testbed.
 //
 //   lsmbs simulate CASE.json -o OUT      generalized-α simulation (Algorithm 1 of the paper)
+//   lsmbs static CASE.json -o OUT        static equilibrium at one time (measures, responses, VTU)
 //   lsmbs geometry CASE.json -o OUT      level-set design mapped on the mesh (μ_e VTU + PNG, mass)
 //   lsmbs sensitivity CASE.json --method NAME -o OUT   responses and design gradients (§4.3)
 //   lsmbs optimize CASE.json -o OUT [--resume]         fully coupled optimization (NLopt MMA)
@@ -38,6 +39,10 @@ std::string joined_args(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  static const char* kSetHelp =
+      "override a value of the case by JSON path, /simulation/h=1e-3 or "
+      "/bodies/1/material/E=70e9, or a design variable, name=value (repeatable; recorded in "
+      "summary.json)";
   CLI::App app{"lsmbs — level-set structural optimization of flexible multibody system components"};
   app.require_subcommand(0, 1);
   bool version = false;
@@ -52,6 +57,7 @@ int main(int argc, char** argv) {
   std::vector<std::string>& sets = common.sets;
   lsmbs::app::SimulateArgs sim_args;
   lsmbs::app::GeometryArgs geo_args;
+  lsmbs::app::StaticArgs static_args;
   lsmbs::app::SensitivityArgs sen_args;
   lsmbs::app::OptimizeArgs opt_args;
   lsmbs::app::VerifyArgs ver_args;
@@ -84,7 +90,21 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "positions", "positions+velocities"}))
       ->capture_default_str();
 
-  sim->add_option("--set", sets, "design variable override name=value (repeatable)");
+  sim->add_option("--set", sets, kSetHelp);
+  auto* sta = app.add_subcommand(
+      "static", "static equilibrium at one time: measures, responses and VTU at equilibrium");
+  sta->add_option("case", case_file, "case file (JSON)")->required()->check(CLI::ExistingFile);
+  sta->add_option("-o,--output", out, "output folder")->capture_default_str();
+  sta->add_flag(
+      "--overwrite", overwrite,
+      "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
+  sta->add_option("--set", sets, kSetHelp);
+  sta->add_option("--t", static_args.t, "time at which drivers and loads are evaluated [s]")
+      ->capture_default_str();
+  sta->add_option("--max-iter", static_args.max_iter, "Newton iterations")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  sta->add_flag("-q,--quiet", quiet, "print nothing but errors");
   auto* geo = app.add_subcommand(
       "geometry", "map the level-set design onto the mesh: μ_e (VTU, PNG), mass and its gradient");
   geo->add_option("case", case_file, "case file (JSON) with a design section")
@@ -94,7 +114,7 @@ int main(int argc, char** argv) {
   geo->add_flag(
       "--overwrite", overwrite,
       "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
-  geo->add_option("--set", sets, "design variable override name=value (repeatable)");
+  geo->add_option("--set", sets, kSetHelp);
   geo->add_option("--width", geo_args.width, "PNG width in pixels")
       ->capture_default_str()
       ->check(CLI::Range(16, 20000));
@@ -132,7 +152,7 @@ int main(int argc, char** argv) {
          "Newton "
          "iteration's, Algorithm 2 literally; not exact where a step converged in one iteration)")
       ->capture_default_str();
-  sen->add_option("--set", sets, "design variable override name=value (repeatable)");
+  sen->add_option("--set", sets, kSetHelp);
   sen->add_option("--rtol", sen_args.rtol, "--method idas, idas-adjoint: IDAS relative tolerance")
       ->capture_default_str();
   sen->add_option("--atol", sen_args.atol,
@@ -176,6 +196,9 @@ int main(int argc, char** argv) {
   opt->add_option("--optimizer", opt_args.optimizer, "override the case's optimizer")
       ->check(CLI::IsMember({"mma", "ccsaq", "slsqp", "mma-svanberg"}));
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
+  opt->add_option("--set", sets,
+                  "override a value of the case by JSON path, /simulation/h=1e-3 (repeatable); "
+                  "name=value sets a design variable's initial value");
   bool no_check = false;
   lsmbs::GradientCheckOptions& opt_check = opt_args.check_options;
   opt->add_flag(
@@ -214,7 +237,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   ver->add_option("--tol-semi", vo.tol_semi, "threshold semi-analytical-central vs direct-analytic")
       ->capture_default_str();
-  ver->add_option("--set", sets, "design variable override name=value (repeatable)");
+  ver->add_option("--set", sets, kSetHelp);
 
   lsmbs::BenchOptions& bo = ben_args.options;
   auto* ben = app.add_subcommand("bench",
@@ -253,7 +276,7 @@ int main(int argc, char** argv) {
   }
   bool started = false;  // the output folder is ours: a failure from here on is flagged in it
   try {
-    if (*sim || *geo || *opt || *ben || *ver || *sen) {
+    if (*sim || *sta || *geo || *opt || *ben || *ver || *sen) {
       lsmbs::check_output_folder(out);
       lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);
       started = true;
@@ -261,6 +284,7 @@ int main(int argc, char** argv) {
     common.command_line = joined_args(argc, argv);
     if (*sim) return lsmbs::app::simulate_command(common, sim_args);
     if (*geo) return lsmbs::app::geometry_command(common, geo_args);
+    if (*sta) return lsmbs::app::static_command(common, static_args);
     if (*opt) {
       opt_args.check = !no_check;
       return lsmbs::app::optimize_command(common, opt_args);

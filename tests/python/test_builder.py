@@ -180,6 +180,9 @@ def test_optimize_checks_the_initial_gradient_and_refuses_above_check_fail(tmp_p
         warnings.simplefilter("error")  # the default thresholds: no warning on this exact gradient
         r = lsmbs.optimize(case, out_dir=str(tmp_path / "opt"))
     assert r["gradient_check"]["verdict"] == "pass"
+    S = json.loads((tmp_path / "opt" / "summary.json").read_text())
+    assert S["status"] == r["status"] and S["final"]["objective"] == r["final"]["objective"]
+    assert S["case_sha256"] == case.sha256 and S["gradient_check"]["verdict"] == "pass"
     assert lsmbs.optimize(case, check=False)["gradient_check"] is None
 
 
@@ -217,3 +220,93 @@ def test_the_builder_example_of_docs_python_md_builds_a_flexible_arm_with_a_chec
     exec(compile(text[start:text.index("```", start)], "docs/python.md", "exec"), scope)
     s = lsmbs.sensitivity(scope["case"], check=True)
     assert s.gradient_check["verdict"] == "pass", s.gradient_check
+
+
+def test_parameters_bound_to_design_variables_are_range_checked_over_the_bounds():
+    b = oscillator(design=False)
+    v = b.variable("m", initial=1.0, lower=0.5, upper=2.0)
+    b.bind_parameter("block.mass", v, offset=-1.0)  # -0.5 kg at the lower bound
+    with pytest.raises(lsmbs.Error, match=r"bind_parameter\('block.mass'\).*-0.5 at m = 0.5"):
+        b.build()
+
+
+def test_per_step_responses_of_a_simulation_are_arrays_and_a_failed_run_has_none():
+    b = oscillator()
+    b.response("x_steps", "block.x", "per_step", window=(0.5, 0.6))
+    case = b.build()
+    r = lsmbs.simulate(case)
+    s = lsmbs.sensitivity(case)
+    assert np.array_equal(r.responses["x_steps"], s.values["x_steps"])
+    assert len(r.responses["x_steps"]) == 101
+    assert r.summary["responses"]["x_steps"] == list(s.values["x_steps"])
+    # a pendulum released horizontally, one Newton iteration per step allowed and no step
+    # halving: the first step cannot converge, the run fails
+    p = lsmbs.ModelBuilder("pendulum", gravity=(0, -9.81))
+    p.rigid_body("bob", position=(1, 0), mass=1, inertia=0.1)
+    p.revolute("pin", at("bob", (-1, 0)))
+    p.measure("bob", "position", point=at("bob"))
+    p.response("lowest_y", "bob.y", "min")
+    p.response("y_steps", "bob.y", "per_step")
+    p.simulation(t_end=1, h=0.05, max_iter=1, max_halvings=0)
+    f = lsmbs.simulate(p.build())
+    assert f.status != "complete"
+    assert math.isnan(f.responses["lowest_y"]) and np.all(np.isnan(f.responses["y_steps"]))
+
+
+def test_resume_from_python_refuses_a_case_changed_since_the_checkpoint(tmp_path):
+    b = oscillator()
+    b.optimization("x_mean", stop={"max_evaluations": 2})
+    case = b.build()
+    out = str(tmp_path / "opt")
+    lsmbs.optimize(case, out_dir=out, check=False)
+    case.parameters["block.mass"] = 3.0
+    with pytest.raises(lsmbs.Error, match="changed since the checkpoint"):
+        lsmbs.optimize(case, out_dir=out, resume=True)
+    case.parameters["block.mass"] = M
+    case.simulation.h = 2e-3
+    with pytest.raises(lsmbs.Error, match="changed since the checkpoint"):
+        lsmbs.optimize(case, out_dir=out, resume=True)
+    case.simulation.h = H
+    assert lsmbs.optimize(case, out_dir=out, resume=True)["status"] == "complete"
+
+
+def test_builder_edge_inputs():
+    b = oscillator()
+    with pytest.raises(ValueError, match="finite"):
+        b.rigid_body("n", mass=float("nan"))
+    with pytest.raises(TypeError):
+        b.variable(3, 1, 0, 2)
+    assert "design" in b.document()  # the oscillator's own variable is still there, alone
+    assert [v["name"] for v in b.document()["design"]["variables"]] == ["k"]
+    with pytest.raises(TypeError, match="pair"):
+        b.rigid_body("d", position={"x": 1, "y": 2})
+    with pytest.raises(TypeError, match="bind_parameter"):
+        b.torque("tq", "block", lsmbs.Variable("k"))
+    with pytest.raises(TypeError):
+        b.bind_parameter("spring.damping", "k", scale=True)
+    v = lsmbs.Variable("r")
+    assert (1 - v)._binding() == {"variable": "r", "scale": -1.0, "offset": 1.0}
+    assert (v / 2)._binding() == {"variable": "r", "scale": 0.5, "offset": 0.0}
+
+
+def test_save_elsewhere_keeps_relative_mesh_files(tmp_path, monkeypatch):
+    mesh_dir = ROOT / "data" / "slider_crank"
+    monkeypatch.chdir(mesh_dir)
+    m = lsmbs.ModelBuilder("rod")
+    m.flexible_body("rod", lsmbs.gmsh("rod_coarse.msh", scale=1e-3), E=210e9, nu=0.3, rho=7800,
+                    thickness=0.01)
+    m.measure("mass", "mass", body="rod")
+    m.response("rod_mass", "mass", "final")
+    m.clamp("fix", "rod", "bore_small")
+    m.simulation(t_end=1e-3, h=1e-3)
+    built = lsmbs.simulate(m.build()).responses["rod_mass"]
+    (tmp_path / "elsewhere").mkdir()
+    m.save(tmp_path / "elsewhere" / "rod.json")
+    saved = lsmbs.simulate(lsmbs.load_case(tmp_path / "elsewhere" / "rod.json")).responses["rod_mass"]
+    assert saved == built
+
+
+def test_the_forward_semi_analytical_method_says_it_is_not_exact():
+    case = oscillator().build()
+    assert any("not exact" in w for w in lsmbs.sensitivity(case, method="semi-analytical").warnings)
+    assert lsmbs.sensitivity(case).warnings == []

@@ -29,6 +29,11 @@ struct SimulateArgs {
   std::string error_test = "auto";               ///< IDAS error test
 };
 
+struct StaticArgs {
+  double t = 0;       ///< time at which drivers and loads are evaluated
+  int max_iter = 50;  ///< Newton iterations
+};
+
 struct GeometryArgs {
   int width = 1600;  ///< PNG width [pixels]
 };
@@ -63,6 +68,7 @@ struct BenchArgs {
 
 int simulate_command(const CommonArgs& c, const SimulateArgs& a);
 int geometry_command(const CommonArgs& c, const GeometryArgs& a);
+int static_command(const CommonArgs& c, const StaticArgs& a);
 int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a);
 int optimize_command(const CommonArgs& c, const OptimizeArgs& a);
 int verify_command(const CommonArgs& c, VerifyArgs a);

@@ -53,12 +53,60 @@ void check_idas_tolerances(double rtol, double atol) {
                        ": expected a non-negative absolute tolerance (0: rtol)");
 }
 
+// --set /pointer=value: a value of the case document by JSON path; the value is JSON (a number,
+// true, [1, 2], "text") or else taken as a string (--set /simulation/newton=modified).
+lsmbs::CaseOverride parse_override(const std::string& s) {
+  const auto eq = s.find('=');
+  if (eq == std::string::npos) throw lsmbs::Error("--set " + s + ": expected /json/path=value");
+  lsmbs::CaseOverride o;
+  o.pointer = s.substr(0, eq);
+  o.origin = "--set " + s;
+  const std::string v = s.substr(eq + 1);
+  if (v.empty()) throw lsmbs::Error("--set " + s + ": expected a value after '='");
+  try {
+    o.value = nlohmann::json::parse(v);
+  } catch (const nlohmann::json::exception&) {
+    o.value = v;
+  }
+  return o;
+}
+
+lsmbs::Case load_case_with_sets(const std::string& file, const std::vector<std::string>& sets,
+                                bool design_as_initial) {
+  std::vector<lsmbs::CaseOverride> overrides;
+  nlohmann::json doc;  // read only to find design variables by name (design_as_initial)
+  for (const auto& s : sets) {
+    if (!s.empty() && s[0] == '/') {
+      overrides.push_back(parse_override(s));
+      continue;
+    }
+    if (!design_as_initial) continue;  // a design point: design_point()
+    const auto [name, value] = parse_set(s);
+    if (doc.is_null()) doc = lsmbs::load_case(file).raw;  // validates the case as it is
+    int k = -1;
+    if (doc.contains("design"))
+      for (size_t i = 0; i < doc["design"]["variables"].size(); ++i)
+        if (doc["design"]["variables"][i]["name"] == name) k = static_cast<int>(i);
+    if (k < 0)
+      throw lsmbs::Error(
+          "--set " + s + ": unknown design variable '" + name + "'" +
+          (name.find('/') != std::string::npos ? " (a JSON path starts with /)" : ""));
+    overrides.push_back(
+        {"/design/variables/" + std::to_string(k) + "/initial", value, "--set " + s});
+  }
+  return lsmbs::load_case(file, overrides);
+}
+
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets) {
   lsmbs::Vec p = cs.design->initial();
   for (const auto& s : sets) {
+    if (!s.empty() && s[0] == '/') continue;  // a JSON-path override (load_case_with_sets)
     const auto [name, value] = parse_set(s);
     const int k = cs.design->variable_index(name);
-    if (k < 0) throw lsmbs::Error("--set " + s + ": unknown design variable '" + name + "'");
+    if (k < 0)
+      throw lsmbs::Error(
+          "--set " + s + ": unknown design variable '" + name + "'" +
+          (name.find('/') != std::string::npos ? " (a JSON path starts with /)" : ""));
     const auto& v = cs.design->variables[k];
     if (!(value >= v.lower && value <= v.upper))
       throw lsmbs::Error("--set " + s + ": outside the bounds [" + std::to_string(v.lower) + ", " +

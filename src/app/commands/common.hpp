@@ -11,6 +11,13 @@ namespace lsmbs::app {
 
 /// "name=value" override of a design variable.
 std::pair<std::string, double> parse_set(const std::string& s);
+/// "--set /json/pointer=value" (the value parsed as JSON, else a string).
+CaseOverride parse_override(const std::string& s);
+/// The case file with the --set /json/pointer=value overrides applied. The short form name=value
+/// sets a design variable: the design point (design_point) or, with `design_as_initial`
+/// (optimize), the variable's initial value.
+Case load_case_with_sets(const std::string& file, const std::vector<std::string>& sets,
+                         bool design_as_initial = false);
 /// The case's initial design with the --set overrides (each checked against its bounds).
 Vec design_point(const Case& cs, const std::vector<std::string>& sets);
 /// A run that failed with an exception once started leaves summary.json with status partial.

@@ -12,7 +12,7 @@ namespace lsmbs::app {
 int geometry_command(const CommonArgs& c, const GeometryArgs& a) {
   const std::string& case_file = c.case_file;
   const std::string& out = c.out;
-  lsmbs::Case cs = lsmbs::load_case(case_file);
+  lsmbs::Case cs = load_case_with_sets(case_file, c.sets);
   if (!cs.design)
     throw lsmbs::Error(case_file, "/design", "the case has no design section (nothing to map)");
   const lsmbs::Vec p = design_point(cs, c.sets);

@@ -22,6 +22,7 @@
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
+#include "lsmbs/io/sha256.hpp"
 #include "lsmbs/optimization/kkt.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
 #include "lsmbs/records/json.hpp"
@@ -63,7 +64,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const bool quiet = c.quiet, verbose = c.verbose, resume = a.resume;
   const std::string& optimizer = a.optimizer;
   const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
-  lsmbs::Case cs = lsmbs::load_case(case_file);
+  lsmbs::Case cs = load_case_with_sets(case_file, c.sets, /*design_as_initial=*/true);
   lsmbs::OptimizationSpec spec =
       lsmbs::parse_optimization(cs);  // validated before anything is written
   // Testing hook (docs/verification.md): LSMBS_STOP_AFTER_EVALUATIONS=N ends the run after N
@@ -94,7 +95,9 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   lsmbs::DesignProblem prob(cs, spec);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
-  o.input_sha256 = cs.sha256;
+  // a resumed run must see the same case: the file's hash, and the overrides' when there are any
+  o.input_sha256 =
+      cs.overrides.empty() ? cs.sha256 : lsmbs::sha256_hex(cs.sha256 + cs.overrides.dump());
   o.out_dir = out;
   o.resume = resume;
   o.stop_after = stop_after;
@@ -125,6 +128,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                         : checked->message;
         if (verdict == "fail") {
           nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+          S["overrides"] = cs.overrides;
           S["case_name"] = cs.name;
           S["status"] = "refused";
           S["failure"] = "gradient check at the initial design failed: " + what;
@@ -157,6 +161,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const auto geo = lsmbs::run_geometry(cs, res.p, go);
   const bool plotted = plot_history(out);
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+  S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = !res.failure.empty() ? "partial"
                 : res.interrupted    ? "interrupted"

@@ -46,7 +46,7 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   so.idas.rtol = a.rtol;
   so.idas.atol = a.atol > 0 ? a.atol : a.rtol;
   so.full_residual = a.full_residual;
-  lsmbs::Case cs = lsmbs::load_case(case_file);
+  lsmbs::Case cs = load_case_with_sets(case_file, c.sets);
   if (!cs.design)
     throw lsmbs::Error(case_file, "/design",
                        "sensitivities need a design section (design variables)");
@@ -95,6 +95,7 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
     }
   }
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+  S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = res.ok ? "complete" : res.interrupted ? "interrupted" : "partial";
   if (!res.ok) S["failure"] = res.message;

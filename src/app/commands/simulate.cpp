@@ -1,6 +1,7 @@
 // lsmbs simulate: generalized-α (Algorithm 1) or IDAS on the GGL form; history, VTU, summary.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "app/commands/commands.hpp"
@@ -18,9 +19,10 @@ int simulate_command(const CommonArgs& c, const SimulateArgs& a) {
   const std::string& out = c.out;
   const bool quiet = c.quiet;
   check_idas_tolerances(a.rtol, a.atol);
-  lsmbs::Case cs = lsmbs::load_case(case_file);  // validates everything before writing
+  lsmbs::Case cs = load_case_with_sets(case_file, c.sets);  // validates everything before writing
   lsmbs::RunOptions ro;
-  if (!c.sets.empty()) {
+  if (std::any_of(c.sets.begin(), c.sets.end(),
+                  [](const std::string& s) { return s.empty() || s[0] != '/'; })) {
     if (!cs.design)
       throw lsmbs::Error(case_file, "/design", "--set needs a design section (design variables)");
     ro.design_point = design_point(cs, c.sets);

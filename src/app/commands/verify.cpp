@@ -11,7 +11,12 @@ int verify_command(const CommonArgs& c, VerifyArgs a) {
   VerifyOptions& vo = a.options;
   vo.out_dir = c.out;
   vo.command_line = c.command_line;
-  for (const auto& st : c.sets) vo.design_overrides.push_back(parse_set(st));
+  for (const auto& st : c.sets) {
+    if (!st.empty() && st[0] == '/')
+      vo.case_overrides.push_back(parse_override(st));
+    else
+      vo.design_overrides.push_back(parse_set(st));
+  }
   const auto r = run_verify(c.case_file, vo);
   for (const auto& v : r.summary["verdicts"]) std::printf("  %s\n", v.get<std::string>().c_str());
   std::printf("lsmbs verify: %s — report in %s/report.md\n",

@@ -35,6 +35,19 @@ struct Case : Study {
   std::map<std::string, std::shared_ptr<const TimeLaw>> drivers;  ///< by driver name
   std::map<std::string, std::vector<int>> joint_rows;             ///< constraint rows by joint name
   nlohmann::json optimization;  ///< the "optimization" section (parsed by parse_optimization)
+  /// Values changed before loading (--set /pointer=value): JSON pointer -> value; an empty object
+  /// when none. `sha256` stays the file's; summaries record both.
+  nlohmann::json overrides = nlohmann::json::object();
+};
+
+/// A change of one value of the case document before it is loaded: `lsmbs … --set
+/// /simulation/h=1e-3`, `--set /bodies/1/material/E=70e9`. The pointer's parent must exist (an
+/// object, or an array holding that index); the loader then checks the changed document as any
+/// case file, and an error at the changed value says it came from the override.
+struct CaseOverride {
+  std::string pointer;   ///< JSON pointer (RFC 6901)
+  nlohmann::json value;  ///< any JSON value
+  std::string origin;    ///< how it was given, for messages ("--set /simulation/h=1e-3")
 };
 
 /// The error of the library (by subject) located in the case file: "design" → /design,
@@ -43,6 +56,8 @@ Error locate(const std::string& case_file, const SetupError& e);
 
 /// Loads and validates a case file (paths inside are relative to its folder).
 Case load_case(const std::string& path);
+/// Same, with values of the document changed first (in order).
+Case load_case(const std::string& path, const std::vector<CaseOverride>& overrides);
 /// Same from an already parsed document (tests); `base_dir` resolves relative file names.
 Case load_case_json(const nlohmann::json& j, const std::string& file_label,
                     const std::string& base_dir);

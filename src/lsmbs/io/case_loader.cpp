@@ -742,6 +742,14 @@ struct Loader {
       pb.scale = b.number("scale", 1.0);
       pb.offset = b.number("offset", 0.0);
       b.finish();
+      // the parameter stays admissible over the variable's bounds (it is linear in it)
+      const DesignVariable& dv = d->variables[static_cast<size_t>(pb.variable)];
+      for (const double x : {dv.lower, dv.upper}) {
+        const double value = pb.offset + pb.scale * x;
+        if (auto msg = ModelBuilder::check_parameter_value(pname, value); !msg.empty())
+          b.fail("parameter '" + pname + "' = " + format_g(value) + " at " + vname + " = " +
+                 format_g(x) + " (a bound of the variable): " + msg);
+      }
       for (const auto& o : d->bindings)
         if (o.parameter == pb.parameter)
           b.fail("parameter", "parameter '" + pname + "' is bound twice");
@@ -1018,7 +1026,9 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
   return cs;
 }
 
-Case load_case(const std::string& path) {
+Case load_case(const std::string& path) { return load_case(path, {}); }
+
+Case load_case(const std::string& path, const std::vector<CaseOverride>& overrides) {
   if (const auto why = unreadable_file_reason(path); !why.empty())
     throw Error(path, "", "case file: " + why);
   std::ifstream f(path, std::ios::binary);
@@ -1036,9 +1046,56 @@ Case load_case(const std::string& path) {
                e) {  // e.g. out_of_range: a number like 1e999 (found by fuzzing)
     throw Error(path, "", std::string("invalid JSON: ") + e.what());
   }
-  Case cs = load_case_json(j, path, fs::path(path).parent_path().string());
-  cs.sha256 = sha256_hex(text);
-  return cs;
+  nlohmann::json applied = nlohmann::json::object();
+  for (const auto& o : overrides) {
+    nlohmann::json::json_pointer ptr;
+    try {
+      ptr = nlohmann::json::json_pointer(o.pointer);
+    } catch (const nlohmann::json::exception&) {
+      throw Error(o.origin + ": '" + o.pointer +
+                  "' is not a JSON pointer (expected /key/index/…, e.g. /simulation/h)");
+    }
+    if (ptr.empty())
+      throw Error(o.origin + ": expected a path below the document, e.g. /simulation/h");
+    const auto parent = ptr.parent_pointer();
+    if (!j.contains(parent))
+      throw Error(path, parent.to_string(),
+                  o.origin + ": the case has no " + parent.to_string() + " to set a value in");
+    const nlohmann::json& holder = j.at(parent);
+    if (holder.is_array()) {
+      const std::string& key = ptr.back();
+      const bool index = !key.empty() && key.find_first_not_of("0123456789") == std::string::npos;
+      if (!index || key.size() > 9 || std::stoul(key) >= holder.size())
+        throw Error(path, o.pointer,
+                    o.origin + ": " + parent.to_string() + " is an array of " +
+                        std::to_string(holder.size()) + " entries; expected an index below " +
+                        std::to_string(holder.size()));
+    } else if (!holder.is_object()) {
+      throw Error(path, parent.to_string(),
+                  o.origin + ": " + parent.to_string() + " holds a " + holder.type_name() +
+                      ", not an object or array");
+    }
+    j[ptr] = o.value;
+    applied[o.pointer] = o.value;
+  }
+  try {
+    Case cs = load_case_json(j, path, fs::path(path).parent_path().string());
+    cs.sha256 = sha256_hex(text);
+    cs.overrides = std::move(applied);
+    return cs;
+  } catch (const Error& e) {  // an error at an overridden value names the override
+    for (const auto& o : overrides) {
+      const std::string& at = e.json_path();
+      if (!at.empty() && (at == o.pointer || at.rfind(o.pointer + "/", 0) == 0 ||
+                          o.pointer.rfind(at + "/", 0) == 0)) {
+        std::string reason = e.what();  // without the "file: path: " prefix
+        for (const std::string& part : {e.file(), at})
+          if (!part.empty() && reason.rfind(part + ": ", 0) == 0) reason.erase(0, part.size() + 2);
+        throw Error(e.file(), at, reason + " (the value was set by " + o.origin + ")");
+      }
+    }
+    throw;
+  }
 }
 
 }  // namespace lsmbs

@@ -69,6 +69,7 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
   for (int k = 0; k < d.size(); ++k) vars[d.variables[k].name] = p[k];
   nlohmann::json S =
       provenance(o.command_line.empty() ? "geometry" : o.command_line, cs.file, cs.sha256);
+  S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = "complete";
   S["design"] = vars;

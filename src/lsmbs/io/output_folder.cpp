@@ -25,8 +25,7 @@ void check_output_folder(const std::string& out, const OutputFolderNames& names)
   // the nearest existing ancestor must be a writable folder
   fs::path q = p;
   while (!fs::exists(q, ec) && q.has_parent_path() && q.parent_path() != q) q = q.parent_path();
-  if (!fs::is_directory(q, ec))
-    throw Error(o + " " + out + ": " + q.string() + " is not a folder");
+  if (!fs::is_directory(q, ec)) throw Error(o + " " + out + ": " + q.string() + " is not a folder");
   if (::access(q.c_str(), W_OK) != 0 || q.string().rfind("/proc", 0) == 0 ||
       q.string().rfind("/sys", 0) == 0)
     throw Error(o + " " + out + ": cannot create or write in " + q.string());
@@ -55,7 +54,8 @@ void claim_output_folder(const std::string& out, bool overwrite, bool resume,
   if (ours.empty()) return;
   if (!overwrite)
     throw Error(
-        names.folder + " " + out + ": the folder holds an earlier run (" + ours.front().filename().string() +
+        names.folder + " " + out + ": the folder holds an earlier run (" +
+        ours.front().filename().string() +
         (ours.size() > 1 ? ", … " + std::to_string(ours.size()) + " entries" : std::string()) +
         "); give another folder, or " + names.overwrite + " to replace that run");
   // summary.json first: a run stopped while it removes the rest never leaves the earlier run's

@@ -1,5 +1,6 @@
 #include "lsmbs/io/simulation_run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -148,11 +149,22 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     const Aggregate a = aggregate(r, res.times, v);
     const double val = a.scalar();
     const int n = a.count;
-    res.responses[r.name] = val;
-    res.response_counts[r.name] = n;
     // a run that did not reach t_end has no responses (its aggregates cover part of the run)
-    responses[r.name] =
-        std::isfinite(val) && res.integrator.ok ? nlohmann::json(val) : nlohmann::json(nullptr);
+    const bool reached = res.integrator.ok;
+    res.responses[r.name] = reached ? val : NAN;
+    res.response_counts[r.name] = n;
+    if (r.kind == ResponseSpec::Kind::kPerStep) {
+      res.per_step[r.name] = a.values;
+      res.per_step_times[r.name] = a.times;
+      if (!reached) std::fill(res.per_step[r.name].begin(), res.per_step[r.name].end(), NAN);
+      nlohmann::json arr = nlohmann::json::array();
+      for (double x : res.per_step[r.name])
+        arr.push_back(std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr));
+      responses[r.name] = arr;
+    } else {
+      responses[r.name] =
+          std::isfinite(val) && reached ? nlohmann::json(val) : nlohmann::json(nullptr);
+    }
     windows[r.name] = {{"measure", res.columns[r.column]},
                        {"aggregate", ResponseSpec::kind_name(r.kind)},
                        {"window", r.window_text},
@@ -169,6 +181,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
                       {"mass", b->mass(m.params())}});
   nlohmann::json& S = res.summary;
   S = provenance(ro.command_line.empty() ? "simulate" : ro.command_line, cs.file, cs.sha256);
+  S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = res.integrator.ok ? "complete" : "partial";
   if (!res.integrator.ok) S["failure"] = res.integrator.message;

@@ -22,7 +22,11 @@ struct SimulationResult {
   std::vector<double> times;                 ///< grid times, starting at t0
   std::vector<std::vector<double>> history;  ///< per grid time: measure columns
   std::vector<std::string> columns;
+  /// Each response as one number (a per-step response: its largest value); NaN when the run did
+  /// not reach t_end.
   std::map<std::string, double> responses;
+  /// Per-step responses: every value of the window, and the step times (NaN: not reached).
+  std::map<std::string, std::vector<double>> per_step, per_step_times;
   std::map<std::string, int> response_counts;  ///< steps in each response's window
   State final_state;
   bool interrupted = false;  ///< stopped by SIGINT/SIGTERM (partial)

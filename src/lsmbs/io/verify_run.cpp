@@ -56,8 +56,8 @@ std::string VerifyOptions::validate() const {
 VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   if (auto msg = o.validate(); !msg.empty()) throw Error("verify option " + msg);
   const auto t0 = std::chrono::steady_clock::now();
-  Case cs =
-      load_case(file);  // validates everything (nesting depth included) before anything is written
+  Case cs = load_case(file, o.case_overrides);  // validates everything (nesting depth included)
+                                                // before anything is written
   const json base = cs.raw;
   if (!cs.design) throw Error(file, "/design", "verification needs design variables");
   if (cs.responses.empty()) throw Error(file, "/output/responses", "verification needs responses");
@@ -97,7 +97,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   };
   std::vector<Run> runs;
   auto sens = [&](Method m, double delta, bool absolute, SensitivityOptions::Matrix mx) {
-    Case c = load_case(file);
+    Case c = load_case(file, o.case_overrides);
     SensitivityOptions so;
     so.method = m;
     so.delta = delta;
@@ -118,7 +118,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
                   sens(Method::kDirectAnalytic, 1e-6, false, M::kLastIteration)});
   if (o.idas) runs.push_back({"idas", sens(Method::kIdas, 1e-6, false, M::kLastIteration)});
   {  // what a user gets without options: checked against fd-central like the reference
-    Case c = load_case(file);
+    Case c = load_case(file, o.case_overrides);
     runs.push_back(
         {"default options (" + std::string(SensitivityOptions::name(SensitivityOptions{}.method)) +
              ", --matrix " + SensitivityOptions::matrix_name(SensitivityOptions{}.matrix) + ")",
@@ -392,6 +392,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   md << "\nWall time of the verification: " << fmt("%.1f", wall) << " s.\n";
   write_file_atomic(o.out_dir + "/report.md", md.str());
   json S = provenance(o.command_line, file, cs.sha256);
+  S["overrides"] = cs.overrides;
   S["status"] = "complete";
   S["pass"] = vr.pass;
   S["verdicts"] = verdicts;

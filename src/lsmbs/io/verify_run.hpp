@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "lsmbs/io/case.hpp"
+
 namespace lsmbs {
 
 struct VerifyOptions {
@@ -22,6 +24,7 @@ struct VerifyOptions {
   /// Design point as name=value overrides of the initial design (e.g. an interior point where
   /// a tiny start hole has negligible gradients).
   std::vector<std::pair<std::string, double>> design_overrides;
+  std::vector<CaseOverride> case_overrides;  ///< values of the case document (--set /pointer=v)
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
 };

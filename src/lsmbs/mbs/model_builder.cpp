@@ -2,6 +2,7 @@
 // docs/library.md). Every call checks its arguments before it changes the model.
 #include "lsmbs/mbs/model_builder.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace lsmbs {
@@ -566,6 +567,19 @@ const std::vector<int>& ModelBuilder::joint_rows(const std::string& joint) const
   auto it = joint_rows_.find(joint);
   if (it == joint_rows_.end()) throw ModelError("", "", "unknown joint '" + joint + "'");
   return it->second;
+}
+
+std::string ModelBuilder::check_parameter_value(const std::string& name, double v) {
+  if (!std::isfinite(v)) return "expected a finite number";
+  const std::string prop = name.substr(name.rfind('.') + 1);
+  if (prop == "E" && !(v > 0)) return "expected a positive Young's modulus";
+  if (prop == "nu" && !(v >= 0 && v < 0.5)) return "expected Poisson's ratio in [0, 0.5)";
+  if ((prop == "rho" || prop == "thickness") && !(v > 0)) return "expected a positive value";
+  if ((prop == "mass" || prop == "inertia" || prop == "stiffness" || prop == "damping" ||
+       prop == "free_length") &&
+      !(v >= 0))
+    return "expected a non-negative value";
+  return {};
 }
 
 }  // namespace lsmbs

@@ -206,6 +206,12 @@ class ModelBuilder {
   void pressure(const std::string& name, const Point& point, const Vec2& direction, double area,
                 Table1D table, const PressureArgument& argument = {});
 
+  /// The admissible range of a model parameter by its property ("<entity>.<property>": E > 0,
+  /// 0 ≤ nu < 0.5, rho and thickness > 0, mass, inertia, stiffness, damping and free_length ≥ 0,
+  /// every value finite): "" when `value` is admissible, else what is expected. The case loader
+  /// checks parameters bound to design variables with it over the variables' bounds.
+  static std::string check_parameter_value(const std::string& name, double value);
+
   // ------------------------------------------------------------ queries by name
   /// Throws the ModelError (field "name") that adding an entity of that name would meet: the name
   /// is taken, or, for a body, it is "ground". Every add checks it; a reader may check it early.

@@ -241,8 +241,10 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
     if (!j.is_object())
       throw Error(path, "/", "cannot resume: damaged checkpoint (expected an object)");
     if (!j.contains("case_sha256") || j["case_sha256"] != o.input_sha256)
-      throw Error(path, "/case_sha256",
-                  "cannot resume: the case file changed since the checkpoint was written");
+      throw Error(
+          path, "/case_sha256",
+          "cannot resume: the case changed since the checkpoint was written (its file, its --set "
+          "overrides, or from Python its options or parameters)");
     if (!j.contains("spec") || j["spec"] != c.spec_json)
       throw Error(
           path, "/spec",

@@ -105,6 +105,12 @@ SensitivityResult DirectSensitivity::run(Study& cs, const Vec& p) const {
                            "the predictor's matrix (q̈ = 0, "
                            "λ = 0): the gradients are not the derivative of the discrete solution "
                            "(the default --matrix converged is)");
+  if (o.method == SensitivityOptions::Method::kSemiAnalytical)
+    res.warnings.push_back(
+        "semi-analytical (the paper's forward-difference pseudo-loads) is not exact: its "
+        "truncation grows with the state sensitivities and is large on free chains of rigid "
+        "bodies (docs/verification.md); direct-analytic (the default) and "
+        "semi-analytical-central are exact to round-off; --check judges a gradient");
   return res;
 }
 

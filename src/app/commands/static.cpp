@@ -1,0 +1,31 @@
+// lsmbs static: the static equilibrium of a case at one time (measures, responses, VTU, summary).
+#include <cstdio>
+
+#include "app/commands/commands.hpp"
+#include "app/commands/common.hpp"
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/io/static_run.hpp"
+
+namespace lsmbs::app {
+
+int static_command(const CommonArgs& c, const StaticArgs& a) {
+  lsmbs::Case cs = load_case_with_sets(c.case_file, c.sets);
+  lsmbs::StaticRunOptions o;
+  o.out_dir = c.out;
+  o.command_line = c.command_line;
+  o.t = a.t;
+  o.max_iter = a.max_iter;
+  if (cs.design) {
+    o.design_point = design_point(cs, c.sets);
+    cs.design->apply(o.design_point, cs.model->params());
+  }
+  const auto r = lsmbs::run_static(cs, o);
+  if (!c.quiet) std::printf("lsmbs static: %s\n  results in %s\n", r.report().c_str(), c.out.c_str());
+  if (!r.solver.ok) {
+    std::fprintf(stderr, "lsmbs static: no equilibrium found: %s\n", r.solver.message.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace lsmbs::app

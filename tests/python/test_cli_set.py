@@ -1,0 +1,73 @@
+"""`--set /json/pointer=value` on the command line. Reference: the same case file edited by hand
+(the override must give the very numbers of the edited file, bit for bit)."""
+import json
+import subprocess
+
+import pytest
+
+from conftest import CLI, SPRING, run_cli
+
+
+def cli(*args):
+    return subprocess.run([CLI, *[str(a) for a in args], "-q"], capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("pointer,value,edit", [
+    ("/simulation/h", "5e-4", lambda d: d["simulation"].__setitem__("h", 5e-4)),
+    ("/bodies/2/mass", "0.6", lambda d: d["bodies"][2].__setitem__("mass", 0.6)),
+    ("/simulation/newton", "modified", lambda d: d["simulation"].__setitem__("newton", "modified")),
+])
+def test_a_json_path_override_equals_the_edited_file(tmp_path, spring_doc, write_case, pointer,
+                                                     value, edit):
+    edit(spring_doc)
+    edited = write_case(spring_doc)
+    S = run_cli("sensitivity", SPRING, "--set", f"{pointer}={value}", "-o", tmp_path / "set")
+    R = run_cli("sensitivity", edited, "-o", tmp_path / "edited")
+    assert S["responses"] == R["responses"] and S["gradients"] == R["gradients"]
+    assert S["overrides"] == {pointer: json.loads(value) if value[0].isdigit() else value}
+    assert R["overrides"] == {}
+
+
+def test_design_and_json_path_overrides_combine_and_simulate_records_them(tmp_path, spring_doc,
+                                                                         write_case):
+    spring_doc["simulation"]["h"] = 2e-3
+    edited = write_case(spring_doc)
+    S = run_cli("simulate", SPRING, "--set", "/simulation/h=2e-3", "--set", "k=5000",
+                "-o", tmp_path / "a")
+    R = run_cli("simulate", edited, "--set", "k=5000", "-o", tmp_path / "b")
+    assert S["responses"] == R["responses"]
+    assert S["overrides"] == {"/simulation/h": 2e-3}
+
+
+@pytest.mark.parametrize("arg,words", [
+    ("/simulation/hh=1e-3", ["/simulation/hh", "unknown key", "set by --set /simulation/hh=1e-3"]),
+    ("/simulation/h=-1", ["/simulation/h", "positive", "set by --set /simulation/h=-1"]),
+    ("/bodies/7/mass=1", ["/bodies/7", "has no /bodies/7"]),
+    ("/bodies/x/mass=1", ["/bodies/x", "has no /bodies/x"]),
+    ("/simulation/h/x=1", ["/simulation/h", "holds a number"]),
+    ("/simulation/h=", ["expected a value"]),
+    ("simulation/h=1", ["unknown design variable", "a JSON path starts with /"]),
+])
+def test_bad_overrides_are_input_errors_that_name_them(tmp_path, arg, words):
+    p = cli("simulate", SPRING, "--set", arg, "-o", tmp_path / "out")
+    assert p.returncode == 2, p.stderr
+    for w in words:
+        assert w in p.stderr, p.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_optimize_takes_overrides_and_its_resume_refuses_other_overrides(tmp_path, spring_doc,
+                                                                        write_case):
+    spring_doc["optimization"] = {"objective": "mean_piston_x", "constraints": [],
+                                  "stop": {"max_evaluations": 2}}
+    case = write_case(spring_doc)
+    out = tmp_path / "opt"
+    S = run_cli("optimize", case, "--no-check", "--set", "k=6000", "--set",
+                "/simulation/h=2e-3", "-o", out)
+    assert S["overrides"] == {"/design/variables/0/initial": 6000.0, "/simulation/h": 2e-3}
+    assert S["initial"]["design"]["k"] == 6000.0
+    p = cli("optimize", case, "--resume", "--set", "k=6000", "-o", out)
+    assert p.returncode == 2 and "changed" in p.stderr, p.stderr
+    p = cli("optimize", case, "--resume", "--no-check", "--set", "k=6000", "--set",
+            "/simulation/h=2e-3", "-o", out)
+    assert p.returncode == 0, p.stderr
