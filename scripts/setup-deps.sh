@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages lsmbs builds and tests with, only those missing.
 # Idempotent, non-interactive, quiet when everything is present.
+#   scripts/setup-deps.sh [--with-gmsh]
 set -euo pipefail
 
 packages=(
@@ -11,6 +12,15 @@ packages=(
   clang-format
   pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-scipy python3-matplotlib
 )
+
+# --with-gmsh: also the Gmsh command line, to re-mesh data/slider_crank/rod.geo (the shipped
+# .msh files are committed; lsmbs itself reads .msh and needs no Gmsh)
+for arg in "$@"; do
+  case $arg in
+    --with-gmsh) packages+=(gmsh) ;;
+    *) echo "setup-deps: unknown option $arg (expected --with-gmsh)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
