@@ -10,7 +10,7 @@ packages=(
   gnuplot-nox
   clang-format
   pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-scipy python3-matplotlib
-  python3-pandas python3-yaml
+  python3-pandas python3-yaml python3-pil
 )
 
 missing=()
