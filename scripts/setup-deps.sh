@@ -7,10 +7,11 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsundials-dev libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev
-  nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
+  nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev zlib1g-dev
   gnuplot-nox
   clang-format
   pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-scipy python3-matplotlib
+  python3-pandas python3-yaml python3-pil
 )
 
 # --with-gmsh: also the Gmsh command line, to re-mesh data/slider_crank/rod.geo (the shipped

@@ -456,11 +456,11 @@ def limit_child(address_space=True):
 
 
 def files_promised(summary, out):
-    """Files a complete summary names (optimize: files{}; every run: the summary itself)."""
+    """Files a complete summary names (files: every file the run wrote; every run: the summary itself)."""
     missing = []
     files = summary.get("files") if isinstance(summary, dict) else None
-    if isinstance(files, dict):
-        for v in files.values():
+    if isinstance(files, (dict, list)):  # a list of every file written since issue 23
+        for v in files.values() if isinstance(files, dict) else files:
             if isinstance(v, str):
                 p = os.path.join(out, v)
                 if not os.path.exists(p) or (os.path.isfile(p) and os.path.getsize(p) == 0):

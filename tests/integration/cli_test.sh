@@ -85,7 +85,9 @@ w, h = struct.unpack(">II", png[16:24])
 idat = b"".join(png[i + 8:i + 8 + struct.unpack(">I", png[i:i + 4])[0]] for i in [png.index(b"IDAT") - 4])
 raw = zlib.decompress(idat)
 assert w == 600 and len(raw) == h * (w + 1), (w, h, len(raw))
-print("geometry ok")
+assert len(png) < len(raw) / 20, (len(png), len(raw))  # deflated by zlib (was stored blocks)
+assert s["files"] == ["plate.png", "plate.vtu", "summary.json"], s["files"]
+print("geometry ok: PNG", len(png), "bytes for", len(raw), "bytes of scanlines")
 PY
 "$exe" geometry "$case_file" -o "$tmp/nogeo" 2> "$tmp/err3.txt"; rc=$?
 [ $rc -eq 2 ] || fail "geometry without design returned $rc"
@@ -101,8 +103,11 @@ g = s["gradients"]["final_crank_angle"]
 assert set(g) == {"k", "c"} and all(isinstance(v, float) for v in g.values()), g
 assert len(s["gradients"]["piston_x_per_step"]["k"]) == len(s["responses"]["piston_x_per_step"]) == 51
 assert s["options"]["sensitivity"]["method"] == "direct-analytic" and s["counts"]["back_solves"] > 0
-rows = list(csv.reader(l for l in open(os.path.join(out, "gradients.csv")) if not l.startswith("#")))
-assert rows[0][:4] == ["response", "index", "t", "value"] and rows[0][4:] == ["d/dk", "d/dc"]
+rows = list(csv.DictReader(open(os.path.join(out, "gradients.csv"))))  # long form, plain header
+assert list(rows[0]) == ["response", "variable", "step", "t", "value", "derivative"], list(rows[0])
+fc = {r["variable"]: float(r["derivative"]) for r in rows if r["response"] == "final_crank_angle"}
+assert fc == g, (fc, g)  # the same doubles as summary.json
+assert len([r for r in rows if r["response"] == "piston_x_per_step"]) == 2 * 51
 print("sensitivity ok")
 PY
 # The default matrix is the exact one; --check adds a directional central difference (2 runs).

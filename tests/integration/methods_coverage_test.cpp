@@ -264,28 +264,33 @@ TEST(MethodsCoverage, CliGradientsCsvAndSummaryHoldTheLibraryNumbers) {
       }
     }
   }
-  // gradients.csv: "# responses: 0=energy …", a header, then response index, step index, t, value,
-  // d/dm1, d/dm2 — numbers written so that they read back as the same doubles
+  // gradients.csv in long form: response, variable, step, t, value, derivative — numbers
+  // written so that they read back as the same doubles
   std::ifstream csv(out + "/gradients.csv");
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, "# responses: 0=energy 1=spread 2=spread_steps");
-  std::getline(csv, line);
-  EXPECT_EQ(line, "response,index,t,value,d/dm1,d/dm2");
+  EXPECT_EQ(line, "response,variable,step,t,value,derivative");
   size_t rows = 0;
   while (std::getline(csv, line)) {
-    std::vector<double> x;
+    std::vector<std::string> f;
     std::stringstream ss(line);
-    for (std::string f; std::getline(ss, f, ',');) x.push_back(std::stod(f));
-    ASSERT_EQ(x.size(), 6u) << line;
-    const auto& rs = lib.responses.at(static_cast<size_t>(x[0]));
-    const auto k = static_cast<Eigen::Index>(x[1]);
-    EXPECT_EQ(x[3], rs.values[k]) << line;
-    EXPECT_EQ(x[4], rs.gradient(k, 0)) << line;
-    EXPECT_EQ(x[5], rs.gradient(k, 1)) << line;
-    if (!rs.times.empty()) EXPECT_EQ(x[2], rs.times[k]) << line;
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    ASSERT_EQ(f.size(), 6u) << line;
+    const lsmbs::ResponseSensitivity* rs = nullptr;
+    for (const auto& r : lib.responses)
+      if (r.name == f[0]) rs = &r;
+    ASSERT_NE(rs, nullptr) << line;
+    const int i = f[1] == vars[0] ? 0 : 1;
+    EXPECT_EQ(f[1], vars[i]) << line;
+    const auto k = static_cast<Eigen::Index>(std::stol(f[2]));
+    EXPECT_EQ(std::stod(f[4]), rs->values[k]) << line;
+    EXPECT_EQ(std::stod(f[5]), rs->gradient(k, i)) << line;
+    if (!rs->times.empty())
+      EXPECT_EQ(std::stod(f[3]), rs->times[k]) << line;
+    else
+      EXPECT_EQ(f[3], "nan") << line;
     ++rows;
   }
-  EXPECT_EQ(rows, 2u + 6u);  // two scalar responses, six steps in [0.5, 1.0]
+  EXPECT_EQ(rows, 2u * (2u + 6u));  // (two scalar responses, six steps in [0.5, 1.0]) x 2 variables
   EXPECT_EQ(compared, 2 * 2 + 2 * 6);
 }

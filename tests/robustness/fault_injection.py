@@ -102,8 +102,8 @@ def run_and_signal(exe, args, delay, sig):
 
 
 def check_files(out, S):
-    files = S.get("files") or {}
-    for v in files.values():
+    files = S.get("files") or []
+    for v in files.values() if isinstance(files, dict) else files:  # a list since issue 23
         if isinstance(v, str):
             p = os.path.join(out, v)
             if not os.path.exists(p) or (os.path.isfile(p) and os.path.getsize(p) == 0):

@@ -135,6 +135,8 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
           S["options"] = {{"optimization", spec.to_json()},
                           {"generalized_alpha", nlohmann::json(cs.simulation)}};
           S["gradient_check"] = lsmbs::gradient_check_json(*checked, *check);
+          S["units"] = lsmbs::units_json(cs);
+          S["files"] = lsmbs::file_list({"summary.json"});
           lsmbs::write_json_atomic(out + "/summary.json", S);
           std::fprintf(
               stderr,
@@ -204,11 +206,14 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                  {"cache_hits", prob.cache_hits()}};
   S["wall_seconds"] = res.wall_seconds;
   S["final_design_mass"] = geo["bodies"];
-  S["files"] = {
-      {"history", "history.csv"},
-      {"checkpoint", "checkpoint.json"},
-      {"final_design", "final_design/"},
-      {"convergence_plot", plotted ? nlohmann::json("convergence.png") : nlohmann::json(nullptr)}};
+  S["units"] = lsmbs::units_json(cs);
+  std::vector<std::string> files = {"history.csv", "summary.json"};
+  std::error_code ec;
+  // none when the first evaluation was interrupted (resumed runs: the earlier run's, rewritten)
+  if (std::filesystem::exists(out + "/checkpoint.json", ec)) files.push_back("checkpoint.json");
+  if (plotted) files.push_back("convergence.png");
+  for (const auto& f : geo["files"]) files.push_back("final_design/" + f.get<std::string>());
+  S["files"] = lsmbs::file_list(std::move(files));
   lsmbs::write_json_atomic(out + "/summary.json", S);
   if (!quiet) {
     std::printf("lsmbs optimize: %s after %ld evaluations (%ld simulations in this run), %.1f s\n",

@@ -66,10 +66,9 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   const auto& d = *cs.design;
   // summary.json and gradients.csv
   nlohmann::json responses = nlohmann::json::object(), grads = nlohmann::json::object();
-  std::vector<std::string> header = {"response", "index", "t", "value"};
-  for (const auto& v : d.variables) header.push_back("d/d" + v.name);
-  std::vector<std::vector<double>> rows;
-  std::vector<std::string> row_names;
+  // gradients.csv in long form, one row per response value and design variable: a plain CSV with
+  // a header that names every column (csv.DictReader and pandas.read_csv read it as is)
+  std::string csv = "response,variable,step,t,value,derivative\n";
   for (size_t r = 0; r < res.responses.size(); ++r) {
     const auto& rs = res.responses[r];
     const bool per_step = !rs.times.empty();
@@ -86,13 +85,12 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
     responses[rs.name] = per_step ? nlohmann::json(rs.values)
                                   : nlohmann::json(rs.values.empty() ? NAN : rs.values[0]);
     grads[rs.name] = g;
-    for (size_t k = 0; k < rs.values.size(); ++k) {
-      std::vector<double> row = {static_cast<double>(r), static_cast<double>(k),
-                                 per_step ? rs.times[k] : NAN, rs.values[k]};
+    for (size_t k = 0; k < rs.values.size(); ++k)
       for (int i = 0; i < d.size(); ++i)
-        row.push_back(rs.gradient(static_cast<Eigen::Index>(k), i));
-      rows.push_back(row);
-    }
+        csv += lsmbs::csv_field(rs.name) + "," + lsmbs::csv_field(d.variables[i].name) + "," +
+               std::to_string(k) + "," + lsmbs::csv_number(per_step ? rs.times[k] : NAN) + "," +
+               lsmbs::csv_number(rs.values[k]) + "," +
+               lsmbs::csv_number(rs.gradient(static_cast<Eigen::Index>(k), i)) + "\n";
   }
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;
@@ -130,25 +128,11 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   }
   if (so.is_idas()) S["idas"] = nlohmann::json(res.idas);
   std::filesystem::create_directories(out);
-  {
-    // the CSV names responses by index (numbers only); the mapping is in the header comment
-    std::string csv = "# responses:";
-    for (size_t r = 0; r < res.responses.size(); ++r)
-      csv += " " + std::to_string(r) + "=" + res.responses[r].name;
-    csv += "\n";
-    for (size_t i = 0; i < header.size(); ++i) csv += (i ? "," : "") + header[i];
-    csv += "\n";
-    char buf[64];
-    for (const auto& row : rows) {
-      for (size_t i = 0; i < row.size(); ++i) {
-        std::snprintf(buf, sizeof buf, "%.17g", row[i]);
-        csv += (i ? "," : "") + std::string(buf);
-      }
-      csv += "\n";
-    }
-    if (res.ok)
-      lsmbs::write_file_atomic(out + "/gradients.csv", csv);  // a failed run has no gradients
-  }
+  if (res.ok)
+    lsmbs::write_file_atomic(out + "/gradients.csv", csv);  // a failed run has no gradients
+  S["units"] = lsmbs::units_json(cs);
+  S["files"] = res.ok ? lsmbs::file_list({"gradients.csv", "summary.json"})
+                      : lsmbs::file_list({"summary.json"});
   lsmbs::write_json_atomic(out + "/summary.json", S);
   if (!quiet) {
     std::printf(

@@ -152,6 +152,7 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
                   {"matrices", o.matrices},
                   {"threads", o.threads}};
   J["responses"] = nlohmann::json::object();
+  J["files"] = file_list({"bench.json", "summary.json"});
   write_json_atomic(o.out_dir + "/bench.json", J);
   write_json_atomic(o.out_dir + "/summary.json", J);
   return J;

@@ -990,7 +990,18 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
   for (auto& m : cs.measures) {
     if (m) continue;
     const auto& [nm, jn] = L.pending_forces[pi++];
-    m = std::make_unique<ConstraintForceMeasure>(nm, builder.joint_rows(jn));
+    const std::vector<int>& rows = builder.joint_rows(jn);
+    std::vector<bool> angular;  // per row: an angle equation (a moment) or a length one (a force)
+    const auto& cons = cs.model->constraints();
+    for (int row : rows)
+      for (size_t k = 0; k < cons.size(); ++k) {
+        const int first = cs.model->constraint_offset(static_cast<int>(k));
+        if (row >= first && row < first + cons[k]->size()) {
+          angular.push_back(cons[k]->angular_equation(row - first));
+          break;
+        }
+      }
+    m = std::make_unique<ConstraintForceMeasure>(nm, rows, std::move(angular));
   }
   cs.joint_rows = builder.joint_rows();
   for (const auto& [name, d] : builder.drivers()) cs.drivers[name] = d.law;

@@ -30,6 +30,7 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
   d.apply(p, params, &dmu);
   if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
   nlohmann::json bodies = nlohmann::json::array();
+  std::vector<std::string> files = {"summary.json"};
   for (size_t b = 0; b < d.bodies.size(); ++b) {
     const BodyDesign& bd = d.bodies[b];
     Vec grad;
@@ -62,6 +63,8 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
       const auto px = render_element_field(bd.body->mesh, mu, mu_min, o.image_width, h);
       write_png_gray(base + ".png", o.image_width, h, px);
       jb["files"] = {{"vtu", bd.body->name + ".vtu"}, {"png", bd.body->name + ".png"}};
+      files.push_back(bd.body->name + ".vtu");
+      files.push_back(bd.body->name + ".png");
     }
     bodies.push_back(jb);
   }
@@ -76,8 +79,14 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
   S["bodies"] = bodies;
   S["responses"] = nlohmann::json::object();
   for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
+  S["units"] = {{"responses", nlohmann::json::object()}};
+  for (const auto& b : bodies)
+    S["units"]["responses"]["mass." + b["body"].get<std::string>()] = "kg";
   S["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!o.out_dir.empty()) write_json_atomic(o.out_dir + "/summary.json", S);
+  if (!o.out_dir.empty()) {
+    S["files"] = file_list(std::move(files));
+    write_json_atomic(o.out_dir + "/summary.json", S);
+  }
   return S;
 }
 

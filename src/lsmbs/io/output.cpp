@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -15,14 +16,28 @@
 
 namespace lsmbs {
 
+nlohmann::json units_json(const Study& s) {
+  nlohmann::json m = nlohmann::json::object(), r = nlohmann::json::object();
+  const auto cols = s.measure_columns();
+  const auto units = s.measure_units();
+  for (size_t i = 0; i < cols.size(); ++i) m[cols[i]] = units[i];
+  for (size_t i = 0; i < s.responses.size(); ++i) r[s.responses[i].name] = s.response_unit(i);
+  return {{"t", "s"}, {"measures", m}, {"responses", r}};
+}
+
+nlohmann::json file_list(std::vector<std::string> files) {
+  std::sort(files.begin(), files.end());
+  files.erase(std::unique(files.begin(), files.end()), files.end());
+  return files;
+}
+
 void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<std::vector<double>>& rows) {
   std::ostringstream os;
-  os << std::setprecision(15);
-  for (size_t i = 0; i < header.size(); ++i) os << (i ? "," : "") << header[i];
+  for (size_t i = 0; i < header.size(); ++i) os << (i ? "," : "") << csv_field(header[i]);
   os << "\n";
   for (const auto& r : rows) {
-    for (size_t i = 0; i < r.size(); ++i) os << (i ? "," : "") << r[i];
+    for (size_t i = 0; i < r.size(); ++i) os << (i ? "," : "") << csv_number(r[i]);
     os << "\n";
   }
   write_file_atomic(path, os.str());

@@ -1,7 +1,9 @@
 #pragma once
 // Output writers. Every file is written atomically (core/json_file.hpp: write_file_atomic,
 // write_json_atomic), so an interrupted run never leaves a half-written file that looks complete.
-//  * write_csv: a header and rows;
+//  * write_csv: a header and rows (names quoted where RFC 4180 needs it, so that any CSV reader,
+//    pandas.read_csv without options included, reads the columns back; numbers that read back as
+//    the same doubles);
 //  * write_vtu: one flexible body at one instant (ParaView), with displacement, μ_e and the
 //    von Mises stress of the Cauchy stress at the element centre;
 //  * write_pvd: the time series of VTU files.
@@ -10,8 +12,10 @@
 #include <utility>
 #include <vector>
 
+#include "lsmbs/core/csv.hpp"
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
 
@@ -20,6 +24,14 @@ void write_csv(const std::string& path, const std::vector<std::string>& header,
 void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q,
                const ModelParams& p);
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
+
+/// summary.json["units"]: the SI unit of the time column ("t": "s"), of every measure column
+/// ("measures", as in history.csv) and of every response ("responses"); docs/case-format.md.
+nlohmann::json units_json(const Study& s);
+
+/// summary.json["files"]: the files a command wrote, relative to its output folder, sorted and
+/// without duplicates (summary.json itself included by the caller).
+nlohmann::json file_list(std::vector<std::string> files);
 
 /// Provenance block of every summary.json: version, git commit, case file and hash.
 nlohmann::json provenance(const std::string& command, const std::string& case_file,

@@ -1,28 +1,15 @@
 #include "lsmbs/io/png.hpp"
 
+#include <zlib.h>
+
 #include <algorithm>
-#include <array>
 #include <cmath>
 
+#include "lsmbs/core/error.hpp"
 #include "lsmbs/io/output.hpp"
 
 namespace lsmbs {
 namespace {
-
-uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0) {
-  static const auto table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  crc = ~crc;
-  for (size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xff] ^ (crc >> 8);
-  return ~crc;
-}
 
 void put32(std::string& s, uint32_t v) {
   for (int i = 3; i >= 0; --i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
@@ -32,36 +19,29 @@ void chunk(std::string& out, const char* type, const std::string& data) {
   put32(out, static_cast<uint32_t>(data.size()));
   std::string td = std::string(type, 4) + data;
   out += td;
-  put32(out, crc32(reinterpret_cast<const uint8_t*>(td.data()), td.size()));
+  put32(out, static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(td.data()),
+                                         static_cast<uInt>(td.size()))));
 }
 
 }  // namespace
 
 void write_png_gray(const std::string& path, int w, int h, const std::vector<uint8_t>& px) {
-  std::string raw;  // scanlines with filter byte 0
+  if (w < 1 || h < 1 || px.size() != static_cast<size_t>(w) * static_cast<size_t>(h))
+    throw Error("write_png_gray(" + path + "): " + std::to_string(px.size()) +
+                " pixels for an image of " + std::to_string(w) + " x " + std::to_string(h));
+  std::string raw;  // scanlines, each with filter byte 0 (none): flat regions deflate well as is
   raw.reserve(static_cast<size_t>(h) * (w + 1));
   for (int y = 0; y < h; ++y) {
     raw.push_back(0);
     raw.append(reinterpret_cast<const char*>(px.data()) + static_cast<size_t>(y) * w, w);
   }
-  std::string z = "\x78\x01";  // zlib header, stored blocks
-  uint32_t a = 1, b = 0;
-  for (unsigned char c : raw) {
-    a = (a + c) % 65521;
-    b = (b + a) % 65521;
-  }
-  for (size_t off = 0; off < raw.size() || off == 0; off += 65535) {
-    const size_t n = std::min<size_t>(65535, raw.size() - off);
-    const bool last = off + n >= raw.size();
-    z.push_back(last ? 1 : 0);
-    z.push_back(static_cast<char>(n & 0xff));
-    z.push_back(static_cast<char>(n >> 8));
-    z.push_back(static_cast<char>(~n & 0xff));
-    z.push_back(static_cast<char>((~n >> 8) & 0xff));
-    z.append(raw, off, n);
-    if (last) break;
-  }
-  put32(z, (b << 16) | a);
+  // the zlib stream of the IDAT chunk (PNG: deflate inside a zlib wrapper), best compression
+  uLongf zn = compressBound(static_cast<uLong>(raw.size()));
+  std::string z(zn, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(z.data()), &zn, reinterpret_cast<const Bytef*>(raw.data()),
+                static_cast<uLong>(raw.size()), Z_BEST_COMPRESSION) != Z_OK)
+    throw Error("write_png_gray(" + path + "): zlib compress2 failed");
+  z.resize(zn);
   std::string png = "\x89PNG\r\n\x1a\n";
   std::string ihdr;
   put32(ihdr, w);

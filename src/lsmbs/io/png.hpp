@@ -1,5 +1,5 @@
 #pragma once
-// Minimal PNG output (8-bit greyscale, uncompressed deflate blocks — no zlib needed) and a
+// Minimal PNG output (8-bit greyscale, deflated by zlib at its best compression) and a
 // rasterizer that draws element values of a quad mesh as grey levels, the way the paper shows
 // designs (Figs. 1(d), 6, 13): μ = 1 black (material), μ = μ_min white (void).
 #include <cstdint>

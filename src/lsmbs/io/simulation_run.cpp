@@ -208,6 +208,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["wall_seconds"] = res.integrator.wall_seconds;
   S["responses"] = responses;
   S["response_definitions"] = windows;
+  S["units"] = units_json(cs);
 
   if (!ro.out_dir.empty()) {
     std::vector<std::string> header = {"t"};
@@ -224,9 +225,13 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     if (!res.history.empty() && (res.history.size() - 1) % stride != 0)
       add_row(res.history.size() - 1);
     write_csv(ro.out_dir + "/history.csv", header, rows);
-    for (const auto& [body, entries] : rec.pvd_)
+    std::vector<std::string> files = {"history.csv", "summary.json"};
+    for (const auto& [body, entries] : rec.pvd_) {
       write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
-    S["files"] = {{"history", "history.csv"}};
+      files.push_back(body + ".pvd");
+      for (const auto& e : entries) files.push_back(e.second);
+    }
+    S["files"] = file_list(std::move(files));
     write_json_atomic(ro.out_dir + "/summary.json", S);
   }
   return res;

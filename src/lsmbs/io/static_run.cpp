@@ -1,5 +1,6 @@
 #include "lsmbs/io/static_run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -103,6 +104,7 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
         files.push_back(b->name + ".vtu");
       }
     }
+    std::sort(files.begin(), files.end());
     S["files"] = files;
     write_json_atomic(o.out_dir + "/summary.json", S);
   }

@@ -41,6 +41,18 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
+// "worst 2.1e-07 < tolerance 1e-05" when it passes, "worst 6.2e-05 >= tolerance 1e-05" when not:
+// the line states the comparison that holds
+std::string below(double worst, double tolerance) {
+  return "worst " + fmt("%.2e", worst) + (worst < tolerance ? " < " : " >= ") + "tolerance " +
+         fmt("%.0e", tolerance);
+}
+
+// "within 1 ± 0.2" or "outside 1 ± 0.2", as the value lies
+std::string within(bool ok, const std::string& range) {
+  return (ok ? "within " : "outside ") + range;
+}
+
 }  // namespace
 
 std::string VerifyOptions::validate() const {
@@ -140,10 +152,13 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         "variables; for a per-step response ‖g_ref‖∞ over all steps) and the agreeing digits "
         "−log10 of it. fd-central step: "
      << o.fd_delta << (o.fd_absolute ? " (absolute)" : " (relative)") << ".\n\n";
-  std::ofstream gcsv(o.out_dir + "/gradients.csv");
-  gcsv << "response,variable";
-  for (const auto& r : runs) gcsv << "," << r.name;
+  // gradients.csv: one row per response and variable (a per-step response: its worst step, the
+  // table's), one column per method; method names hold commas, hence csv_field
+  std::ostringstream gcsv;
+  gcsv << "response,variable,step";
+  for (const auto& r : runs) gcsv << "," << csv_field(r.name);
   gcsv << "\n";
+  std::vector<std::string> files = {"gradients.csv", "report.md", "summary.json"};
   for (size_t k = 0; k < ref.responses.size(); ++k) {
     const auto& rr = ref.responses[k];
     const bool per_step = !rr.times.empty();
@@ -166,26 +181,26 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     const double n = std::max(scale_of(rr.gradient), 1e-300);
     for (int i = 0; i < d.size(); ++i) {
       md << "| " << d.variables[i].name << " | " << fmt("%.8e", rr.gradient(row, i)) << " |";
-      gcsv << rr.name << "," << d.variables[i].name << "," << fmt("%.15e", rr.gradient(row, i));
+      gcsv << csv_field(rr.name) << "," << csv_field(d.variables[i].name) << "," << row << ","
+           << csv_number(rr.gradient(row, i));
       for (size_t m = 1; m < runs.size(); ++m) {
         const double g = runs[m].r.responses[k].gradient(row, i),
                      e = std::abs(g - rr.gradient(row, i)) / n;
         md << " " << fmt("%.1e", e) << " (" << fmt("%.1f", e > 0 ? -std::log10(e) : 16.0) << ") |";
-        gcsv << "," << fmt("%.15e", g);
+        gcsv << "," << csv_number(g);
       }
       md << "\n";
       gcsv << "\n";
     }
     md << "\n";
   }
+  write_file_atomic(o.out_dir + "/gradients.csv", gcsv.str());
   const double e_fd = worst(ref, runs[3].r), e_semi = worst(runs[2].r, ref),
                e_def = worst(defaults, runs[3].r);
-  verdict(e_fd < o.tol_fd, "direct-analytic vs fd-central: worst " + fmt("%.2e", e_fd) + " < " +
-                               fmt("%.0e", o.tol_fd));
-  verdict(e_def < o.tol_fd, "default sensitivity options vs fd-central: worst " +
-                                fmt("%.2e", e_def) + " < " + fmt("%.0e", o.tol_fd));
-  verdict(e_semi < o.tol_semi, "semi-analytical-central vs direct-analytic: worst " +
-                                   fmt("%.2e", e_semi) + " < " + fmt("%.0e", o.tol_semi));
+  verdict(e_fd < o.tol_fd, "direct-analytic vs fd-central: " + below(e_fd, o.tol_fd));
+  verdict(e_def < o.tol_fd, "default sensitivity options vs fd-central: " + below(e_def, o.tol_fd));
+  verdict(e_semi < o.tol_semi,
+          "semi-analytical-central vs direct-analytic: " + below(e_semi, o.tol_semi));
 
   // ---- 2. cost table
   md << "## 2. Cost\n\nPrimal simulation alone: " << fmt("%.3f", primal)
@@ -219,6 +234,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
          << fmt("%.2e", ec.back()) << " |\n";
     }
     c.close();
+    files.push_back("dp_study.csv");
     const double slope_f = std::log10(ef[3] / ef[4]), slope_c = std::log10(ec[2] / ec[3]);
     PlotSpec ps;
     ps.png = o.out_dir + "/dp_study.png";
@@ -235,18 +251,21 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     ps.functions = {fmt("%.6e", ef[4] / 1e-6) + "*x with lines dt 2 title 'slope 1'",
                     fmt("%.6e", ec[3] / 1e-10) + "*x**2 with lines dt 3 title 'slope 2'"};
     const bool plotted = plot(ps);
+    if (plotted) files.push_back("dp_study.png");
     md << "\n"
        << (plotted ? "![dp study](dp_study.png)\n\n"
                    : "(gnuplot unavailable: see dp_study.csv)\n\n");
-    verdict(std::abs(slope_f - 1) < 0.2,
-            "forward slope " + fmt("%.2f", slope_f) + " (1e-5 → 1e-6) within 1 ± 0.2");
+    const bool ok_f = std::abs(slope_f - 1) < 0.2;
+    verdict(ok_f,
+            "forward slope " + fmt("%.2f", slope_f) + " (1e-5 → 1e-6) " + within(ok_f, "1 ± 0.2"));
     if (ec[2] < 1e-9 && ec[3] < 1e-9)
       verdict(true, "central differences exact to round-off (" + fmt("%.1e", ec[2]) + ", " +
                         fmt("%.1e", ec[3]) +
                         "): the residual is at most quadratic in the perturbation");
     else
-      verdict(std::abs(slope_c - 2) < 0.3,
-              "central slope " + fmt("%.2f", slope_c) + " (1e-4 → 1e-5) within 2 ± 0.3");
+      verdict(std::abs(slope_c - 2) < 0.3, "central slope " + fmt("%.2f", slope_c) +
+                                               " (1e-4 → 1e-5) " +
+                                               within(std::abs(slope_c - 2) < 0.3, "2 ± 0.3"));
   }
 
   // ---- 4. h study against IDAS
@@ -299,6 +318,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
          << " |\n";
     }
     c.close();
+    files.push_back("h_study.csv");
     // order from the finest halving whose two differences both stand 1000× above IDAS's rtol
     const double fit_floor = 1e3 * kIdasRtol;
     auto fit = [&](const std::vector<double>& e, double& order, double& h_fit) {
@@ -330,16 +350,19 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     ps.logx = ps.logy = true;
     ps.series = {{o.out_dir + "/h_study.csv", 1, 2, "responses"},
                  {o.out_dir + "/h_study.csv", 1, 3, "gradients"}};
-    md << (plot(ps) ? "![h study](h_study.png)\n\n" : "(gnuplot unavailable: see h_study.csv)\n\n");
+    const bool plotted = plot(ps);
+    if (plotted) files.push_back("h_study.png");
+    md << (plotted ? "![h study](h_study.png)\n\n" : "(gnuplot unavailable: see h_study.csv)\n\n");
+    const bool ok_r = order_r > 1.8 && order_r<2.2, ok_g = order_g> 1.8 && order_g < 2.2;
     if (fit_r)
-      verdict(order_r > 1.8 && order_r < 2.2,
-              "responses converge to IDAS at order " + fmt("%.2f", order_r) + " (1.8–2.2)");
+      verdict(ok_r, "responses converge to IDAS at order " + fmt("%.2f", order_r) + " (" +
+                        within(ok_r, "1.8–2.2") + ")");
     else
       md << "Responses: every difference is within 1000 × IDAS's tolerance — agreement, no order "
             "to fit.\n\n";
     if (fit_g)
-      verdict(order_g > 1.8 && order_g < 2.2,
-              "gradients converge to IDAS at order " + fmt("%.2f", order_g) + " (1.8–2.2)");
+      verdict(ok_g, "gradients converge to IDAS at order " + fmt("%.2f", order_g) + " (" +
+                        within(ok_g, "1.8–2.2") + ")");
     else
       md << "Gradients: every difference is within 1000 × IDAS's tolerance — agreement, no order "
             "to fit.\n\n";
@@ -400,6 +423,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
                   {"tol_fd", o.tol_fd}, {"tol_semi", o.tol_semi}, {"mesh_study", rect}};
   S["wall_seconds"] = wall;
   S["responses"] = json::object();
+  S["units"] = units_json(cs);
+  S["files"] = file_list(std::move(files));
   write_json_atomic(o.out_dir + "/summary.json", S);
   vr.summary = S;
   return vr;

@@ -36,6 +36,7 @@ class Prismatic : public ConstraintElement {
   void evaluate(double t, const LocalVec& q, const ModelParams& p, LocalEqVec& phi,
                 LocalJac* J) const override;
   void hessian(double t, const LocalVec& q, const LocalEqVec& w, LocalMat& H) const override;
+  bool angular_equation(int i) const override { return lock_ && i == 1; }  // θ_A − θ0
 
  private:
   PointRef a_;
@@ -62,6 +63,7 @@ class AngleDriver : public ConstraintElement {
   void time_kinks(double t0, double t1, std::vector<double>& out) const override {
     law_->kinks(t0, t1, out);
   }
+  bool angular_equation(int) const override { return true; }
 
  private:
   std::vector<int> dofs_;

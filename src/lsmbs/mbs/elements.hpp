@@ -86,6 +86,9 @@ class ConstraintElement {
   }
   /// Appends the times in (t0, t1) where the prescribed motion's acceleration jumps.
   virtual void time_kinks(double /*t0*/, double /*t1*/, std::vector<double>& /*out*/) const {}
+  /// Whether equation i constrains an angle [rad]; its multiplier kλ is then a moment [N·m]. The
+  /// other equations constrain lengths [m], and their multipliers are forces [N].
+  virtual bool angular_equation(int /*i*/) const { return false; }
   /// Name of the joint for messages and constraint-force outputs.
   const std::string& name() const { return name_; }
   void set_name(std::string n) { name_ = std::move(n); }

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "lsmbs/core/csv.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/json_file.hpp"
@@ -188,18 +189,41 @@ nlopt_result run_mma_classic(Context& c, std::vector<double>& xs, const Evaluati
 void write_history(const std::string& path, const DesignProblem& problem,
                    const std::vector<Evaluation>& h) {
   const auto& d = *problem.study().design;
-  std::ostringstream os;
-  os.precision(12);
-  os << "evaluation,objective,max_constraint_violation,feasible,wall_seconds";
-  for (const auto& v : d.variables) os << "," << v.name;
-  os << "\n";
+  const Vec range = d.upper() - d.lower();
+  // the gradient's norm with respect to the variables scaled to [0, 1] (the optimizer's): in the
+  // unit of the response whatever the variables' units
+  auto scaled_norm = [&](const Vec& g) {
+    return g.size() == range.size() ? g.cwiseProduct(range).norm() : NAN;
+  };
+  std::string os = "evaluation,objective,max_constraint_violation,feasible,wall_seconds";
+  for (const auto& v : d.variables) os += "," + csv_field(v.name);
+  os += ",objective_gradient_norm";
+  for (const auto& c : problem.constraint_names())
+    os += "," + csv_field("constraint." + c) + "," + csv_field("constraint." + c + ".upper") + "," +
+          csv_field("constraint." + c + ".gradient_norm");
+  os += "\n";
+  const size_t m = problem.constraint_names().size();
   for (size_t k = 0; k < h.size(); ++k) {
-    os << k + 1 << "," << h[k].objective << "," << h[k].max_violation << ","
-       << (h[k].max_violation <= problem.spec().tol_constraint ? 1 : 0) << "," << h[k].wall_seconds;
-    for (Eigen::Index i = 0; i < h[k].p.size(); ++i) os << "," << h[k].p[i];
-    os << "\n";
+    const Evaluation& e = h[k];
+    os += std::to_string(k + 1) + "," + csv_number(e.objective) + "," +
+          csv_number(e.max_violation) + "," +
+          (e.max_violation <= problem.spec().tol_constraint ? "1" : "0") + "," +
+          csv_number(e.wall_seconds);
+    for (Eigen::Index i = 0; i < e.p.size(); ++i) os += "," + csv_number(e.p[i]);
+    os += "," + csv_number(scaled_norm(e.objective_gradient));
+    for (size_t j = 0; j < m; ++j) {
+      const bool has = j < e.constraints.size() && j < e.upper.size() &&
+                       static_cast<Eigen::Index>(j) < e.constraint_gradient.rows();
+      os +=
+          "," + csv_number(has ? e.constraints[j] : NAN) + "," +
+          csv_number(j < e.upper.size() ? e.upper[j] : NAN) + "," +
+          csv_number(
+              has ? scaled_norm(e.constraint_gradient.row(static_cast<Eigen::Index>(j)).transpose())
+                  : NAN);
+    }
+    os += "\n";
   }
-  write_file_atomic(path, os.str());
+  write_file_atomic(path, os);
 }
 
 std::string OptimizeOptions::validate() const {

@@ -44,6 +44,7 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
     if (r.kind != ResponseSpec::Kind::kPerStep) {
       ++num_constraints_;
       constraint_upper_.push_back(spec_.constraints[j].upper);
+      constraint_names_.push_back(r.name);
       continue;
     }
     const double h = cs_.simulation.h;
@@ -54,6 +55,7 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
       if (t >= r.t0 - 1e-9 * h && t <= r.t1 + 1e-9 * h) ++count;
     }
     num_constraints_ += count;
+    for (int k = 0; k < count; ++k) constraint_names_.push_back(r.name + "." + std::to_string(k));
     constraint_upper_.insert(constraint_upper_.end(), static_cast<size_t>(count),
                              spec_.constraints[j].upper);
   }

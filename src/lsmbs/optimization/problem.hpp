@@ -57,6 +57,9 @@ class DesignProblem {
   int num_variables() const { return cs_.design->size(); }
   /// Number of scalar constraints (per-step responses count one per step).
   int num_constraints() const { return num_constraints_; }
+  /// Name of each scalar constraint: its response's name, followed by ".k" for step k of a
+  /// per-step response's window (the step of gradients.csv).
+  const std::vector<std::string>& constraint_names() const { return constraint_names_; }
   const Evaluation& evaluate(const Vec& p);
   long simulations() const { return simulations_; }
   long cache_hits() const { return cache_hits_; }
@@ -75,6 +78,7 @@ class DesignProblem {
   int num_constraints_ = 0;
   std::vector<double>
       constraint_upper_;  // the bound of each scalar constraint (per-step: each step)
+  std::vector<std::string> constraint_names_;
   std::map<std::vector<double>, Evaluation> cache_;
   Evaluation interrupted_;  // the last interrupted evaluation (not cached)
   long simulations_ = 0, cache_hits_ = 0;

@@ -6,6 +6,13 @@
 
 namespace lsmbs {
 
+std::string ResponseSpec::unit(Kind k, const std::string& u) {
+  if (k != Kind::kIntegral) return u;
+  if (u == "1") return "s";
+  if (u.size() > 2 && u.compare(u.size() - 2, 2, "/s") == 0) return u.substr(0, u.size() - 2);
+  return u + "*s";
+}
+
 const char* ResponseSpec::kind_name(Kind k) {
   switch (k) {
     case Kind::kAverage:

@@ -29,6 +29,9 @@ struct ResponseSpec {
   double ks = 0;            ///< KS parameter [1/unit of the measure]
   std::string window_text;  ///< how the window was given, for the summary
   static const char* kind_name(Kind k);
+  /// Unit of a response of this kind over a measure of unit `measure_unit`: the measure's, or
+  /// for an integral the measure's times seconds ("m" → "m*s", "m/s" → "m").
+  static std::string unit(Kind k, const std::string& measure_unit);
 };
 
 /// A response aggregated over its window.

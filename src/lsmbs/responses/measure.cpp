@@ -153,6 +153,12 @@ std::vector<std::string> ConstraintForceMeasure::components() const {
   return c;
 }
 
+std::vector<std::string> ConstraintForceMeasure::units() const {
+  std::vector<std::string> u;
+  for (size_t i = 0; i < rows_.size(); ++i) u.push_back(angular_[i] ? "N*m" : "N");
+  return u;
+}
+
 void ConstraintForceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
                                       double* out) const {
   for (size_t i = 0; i < rows_.size(); ++i) out[i] = k_ * s.lambda[rows_[i]];

@@ -28,6 +28,9 @@ class Measure {
   const std::string& name() const { return name_; }
   /// Column names of the components (e.g. "tip.x", "tip.y"); a scalar measure has one.
   virtual std::vector<std::string> components() const { return {name_}; }
+  /// SI unit of each component, in the ASCII notation of docs/case-format.md ("m", "m/s", "rad",
+  /// "N*m", "J", "kg"; "1" for a dimensionless one).
+  virtual std::vector<std::string> units() const = 0;
   virtual void evaluate(const Model& m, const State& s, const ModelParams& p,
                         double* out) const = 0;
   /// Partial derivatives of component c with respect to the state (eq. 24).
@@ -43,6 +46,7 @@ class Measure {
 /// Position of a material point.
 class PositionMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"m", "m"}; }
   PositionMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
   std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
@@ -56,6 +60,7 @@ class PositionMeasure : public Measure {
 /// Angle of a rigid body.
 class AngleMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"rad"}; }
   AngleMeasure(std::string name, int theta_dof) : Measure(std::move(name)), dof_(theta_dof) {}
   void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override {
     *out = s.q[dof_];
@@ -72,6 +77,7 @@ class AngleMeasure : public Measure {
 /// Angular velocity θ̇ of a rigid body.
 class AngularVelocityMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"rad/s"}; }
   AngularVelocityMeasure(std::string name, int theta_dof)
       : Measure(std::move(name)), dof_(theta_dof) {}
   void evaluate(const Model&, const State& s, const ModelParams&, double* out) const override {
@@ -90,6 +96,7 @@ class AngularVelocityMeasure : public Measure {
 /// body-frame offset d: (ẋ, ẏ) + θ̇ R′(θ) d). ∂ṗ/∂q̇ = ∂p/∂q; ∂ṗ/∂θ = −θ̇ R(θ) d.
 class VelocityMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"m/s", "m/s"}; }
   VelocityMeasure(std::string name, PointRef pt) : Measure(std::move(name)), pt_(pt) {}
   std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
@@ -104,6 +111,7 @@ class VelocityMeasure : public Measure {
 /// elongation).
 class DistanceMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"m"}; }
   DistanceMeasure(std::string name, PointRef a, PointRef b, double reference)
       : Measure(std::move(name)), a_(a), b_(b), ref_(reference) {}
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
@@ -132,6 +140,7 @@ struct ChainPath {
 /// ‖q_pres(t) − p(q)‖ (eq. 44).
 class PathDeviationMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"m"}; }
   PathDeviationMeasure(std::string name, PointRef pt, ChainPath path)
       : Measure(std::move(name)), pt_(pt), path_(std::move(path)) {}
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
@@ -143,14 +152,16 @@ class PathDeviationMeasure : public Measure {
   ChainPath path_;
 };
 
-/// Constraint force kλ of one joint (all its equations).
+/// Constraint force kλ of one joint (all its equations): a force [N] per length equation, a
+/// moment [N·m] per angle equation (`angular`, one flag per row; empty: all forces).
 class ConstraintForceMeasure : public Measure {
  public:
-  ConstraintForceMeasure(std::string name, std::vector<int> rows, double k_unused = 0)
-      : Measure(std::move(name)), rows_(std::move(rows)) {
-    (void)k_unused;
+  ConstraintForceMeasure(std::string name, std::vector<int> rows, std::vector<bool> angular = {})
+      : Measure(std::move(name)), rows_(std::move(rows)), angular_(std::move(angular)) {
+    angular_.resize(rows_.size(), false);
   }
   std::vector<std::string> components() const override;
+  std::vector<std::string> units() const override;
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
   void gradient(const Model&, const State&, const ModelParams&, int c,
                 MeasureGradient& g) const override {
@@ -161,11 +172,13 @@ class ConstraintForceMeasure : public Measure {
 
  private:
   std::vector<int> rows_;
+  std::vector<bool> angular_;
   double k_ = 1;
 };
 
 class KineticEnergyMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"J"}; }
   using Measure::Measure;
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
     *out = m.kinetic_energy(s, p);
@@ -177,6 +190,7 @@ class KineticEnergyMeasure : public Measure {
 
 class StrainEnergyMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"J"}; }
   using Measure::Measure;
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
     *out = m.strain_energy(s.q, p);
@@ -188,6 +202,7 @@ class StrainEnergyMeasure : public Measure {
 
 class FlexibleMassMeasure : public Measure {
  public:
+  std::vector<std::string> units() const override { return {"kg"}; }
   FlexibleMassMeasure(std::string name, const FlexibleBody* b)
       : Measure(std::move(name)), body_(b) {}
   void evaluate(const Model&, const State&, const ModelParams& p, double* out) const override {

@@ -11,6 +11,18 @@ std::vector<std::string> Study::measure_columns() const {
   return c;
 }
 
+std::vector<std::string> Study::measure_units() const {
+  std::vector<std::string> u;
+  for (const auto& m : measures)
+    for (auto& s : m->units()) u.push_back(s);
+  return u;
+}
+
+std::string Study::response_unit(size_t r) const {
+  const auto& spec = responses.at(r);
+  return ResponseSpec::unit(spec.kind, measure_units().at(static_cast<size_t>(spec.column)));
+}
+
 Measure& Study::add_measure(std::unique_ptr<Measure> m) {
   for (const auto& c : m->components())
     if (measure_column(c) >= 0)

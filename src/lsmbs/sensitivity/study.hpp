@@ -40,6 +40,10 @@ struct Study {
 
   /// Column names of the measure history (in the order measures are evaluated).
   std::vector<std::string> measure_columns() const;
+  /// SI unit of each measure column (Measure::units), in the order of measure_columns().
+  std::vector<std::string> measure_units() const;
+  /// SI unit of response r (ResponseSpec::unit of its measure column's unit).
+  std::string response_unit(size_t r) const;
   /// Index of the measure column `name`, −1 if there is none.
   int measure_column(const std::string& name) const;
   /// Index of the response `name`, −1 if there is none.
