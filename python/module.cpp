@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 
+#include "lsmbs/core/allocator.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/json_file.hpp"
@@ -262,6 +263,7 @@ py::dict evaluation_dict(const Evaluation& e) {
 PYBIND11_MODULE(_lsmbs, m) {
   m.doc() = "lsmbs: level-set structural optimization of flexible multibody system components";
   m.attr("__version__") = kVersion;
+  keep_freed_memory();
   m.attr("git_commit") = git_commit();
 
   // ---------------------------------------------------------------- errors

@@ -20,6 +20,7 @@
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
+#include "lsmbs/core/allocator.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
@@ -39,6 +40,7 @@ std::string joined_args(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  lsmbs::keep_freed_memory();
   static const char* kSetHelp =
       "override a value of the case by JSON path, /simulation/h=1e-3 or "
       "/bodies/1/material/E=70e9, or a design variable, name=value (repeatable; recorded in "

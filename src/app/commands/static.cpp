@@ -20,7 +20,8 @@ int static_command(const CommonArgs& c, const StaticArgs& a) {
     cs.design->apply(o.design_point, cs.model->params());
   }
   const auto r = lsmbs::run_static(cs, o);
-  if (!c.quiet) std::printf("lsmbs static: %s\n  results in %s\n", r.report().c_str(), c.out.c_str());
+  if (!c.quiet)
+    std::printf("lsmbs static: %s\n  results in %s\n", r.report().c_str(), c.out.c_str());
   if (!r.solver.ok) {
     std::fprintf(stderr, "lsmbs static: no equilibrium found: %s\n", r.solver.message.c_str());
     return 1;

@@ -1,5 +1,6 @@
 // lsmbs verify: the verification report of a case (every sensitivity method against central
 // differences and IDAS, the Δp, time-step and mesh studies), with pass/fail verdicts.
+#include <chrono>
 #include <cstdio>
 
 #include "app/commands/commands.hpp"
@@ -17,6 +18,11 @@ int verify_command(const CommonArgs& c, VerifyArgs a) {
     else
       vo.design_overrides.push_back(parse_set(st));
   }
+  const auto start = std::chrono::steady_clock::now();
+  vo.on_stage = [&](const std::string& what) {  // a line per part: verify runs for a while
+    std::fprintf(stderr, "lsmbs verify: %s … (%.1f s)\n", what.c_str(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  };
   const auto r = run_verify(c.case_file, vo);
   for (const auto& v : r.summary["verdicts"]) std::printf("  %s\n", v.get<std::string>().c_str());
   std::printf("lsmbs verify: %s — report in %s/report.md\n",

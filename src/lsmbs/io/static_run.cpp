@@ -67,12 +67,9 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   S["case_name"] = cs.name;
   S["status"] = res.solver.ok ? "complete" : "partial";
   if (!res.solver.ok) S["failure"] = res.solver.message;
-  S["options"] = {{"analysis", "static"},
-                  {"t", o.t},
-                  {"max_iter", o.max_iter},
-                  {"tol_r", so.tol_r},
-                  {"tol_phi", so.tol_phi},
-                  {"k", so.k}};
+  S["options"] = {{"analysis", "static"},   {"t", o.t},
+                  {"max_iter", o.max_iter}, {"tol_r", so.tol_r},
+                  {"tol_phi", so.tol_phi},  {"k", so.k}};
   if (cs.design) {
     const Vec p = o.design_point.size() ? o.design_point : cs.design->initial();
     nlohmann::json d = nlohmann::json::object();

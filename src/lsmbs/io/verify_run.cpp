@@ -120,6 +120,10 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   using M = SensitivityOptions::Matrix;
   // the generalized-α methods share the exact matrix (refined), so that their columns differ only
   // in the pseudo-loads; the paper's last-iteration matrix gets its own column
+  auto stage = [&](const std::string& what) {
+    if (o.on_stage) o.on_stage(what);
+  };
+  stage("1/4 gradients by every method" + std::string(o.idas ? " (IDAS included)" : ""));
   runs.push_back({"direct-analytic", sens(Method::kDirectAnalytic, 1e-6, false, M::kRefined)});
   runs.push_back({"semi-analytical", sens(Method::kSemiAnalytical, 1e-6, false, M::kRefined)});
   runs.push_back(
@@ -218,6 +222,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
 
   // ---- 3. Δp study (same matrix for all: refined; only the pseudo-load differs)
   {
+    stage("2/4 Δp study of the semi-analytical methods (10 values of Δp)");
     const auto exact = sens(Method::kDirectAnalytic, 1e-6, false, M::kRefined);
     std::ofstream c(o.out_dir + "/dp_study.csv");
     c << "delta,forward,central\n";
@@ -270,6 +275,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
 
   // ---- 4. h study against IDAS
   if (o.idas) {
+    stage("3/4 time-step study against IDAS (4h, 2h, h, h/2)");
     md << "## 4. Time-step study against IDAS\n\nFor each h, generalized-α (direct-analytic, "
           "refined matrix) and IDAS "
           "(reference tolerances) on the same output grid; largest relative difference over the "
@@ -376,6 +382,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     if (b.value("type", "") == "flexible" && b.at("mesh").value("type", "") != "rectangle")
       rect = false;
   if (rect && !cs.model->flexible_bodies().empty()) {
+    stage("4/4 mesh study (element counts × 1/2, 1, 2)");
     md << "## 5. Mesh study\n\nElement counts of every rectangle mesh scaled by 1/2, 1, 2; scalar "
           "responses and the "
           "largest gradient component (direct-analytic).\n\n| scale | elements | ";

@@ -3,6 +3,7 @@
 // sensitivity method against the exact direct method, their costs, the Δp study of the
 // semi-analytical methods, the time-step study against IDAS, and a mesh study, written as
 // OUT/report.md with CSVs and PNG plots, ending with pass/fail lines against stated thresholds.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -25,6 +26,8 @@ struct VerifyOptions {
   /// a tiny start hole has negligible gradients).
   std::vector<std::pair<std::string, double>> design_overrides;
   std::vector<CaseOverride> case_overrides;  ///< values of the case document (--set /pointer=v)
+  /// Called as each part of the report starts ("gradients by every method", …; empty: none).
+  std::function<void(const std::string&)> on_stage;
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
 };
