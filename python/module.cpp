@@ -252,6 +252,7 @@ struct Problem {
 py::dict evaluation_dict(const Evaluation& e) {
   return py::dict(py::arg("p") = array(e.p), py::arg("objective") = e.objective,
                   py::arg("constraints") = array(e.constraints), py::arg("upper") = array(e.upper),
+                  py::arg("scale") = array(e.scale),
                   py::arg("objective_gradient") = array(e.objective_gradient),
                   py::arg("constraint_gradient") = array(e.constraint_gradient),
                   py::arg("max_violation") = e.max_violation, py::arg("ok") = e.ok,

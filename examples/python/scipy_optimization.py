@@ -48,7 +48,7 @@ def at(x):
     return problem.evaluate(np.clip(lo + scale * x, lo, up))
 
 
-# 2. SciPy: objective and constraints ((g - upper) / |upper| <= 0) with their gradients.
+# 2. SciPy: objective and constraints ((g - upper) / scale <= 0) with their gradients.
 def f(x):
     e = at(x)
     return e["objective"] / abs(first["objective"])
@@ -60,12 +60,12 @@ def df(x):
 
 def g(x):
     e = at(x)
-    return (e["constraints"] - e["upper"]) / np.abs(e["upper"])
+    return (e["constraints"] - e["upper"]) / e["scale"]
 
 
 def dg(x):
     e = at(x)
-    return e["constraint_gradient"] * scale / np.abs(e["upper"])[:, None]
+    return e["constraint_gradient"] * scale / e["scale"][:, None]
 
 
 x0 = (case.initial_design - lo) / scale

@@ -23,14 +23,40 @@ OptimizationSpec parse_optimization(const Case& cs) {
     at.fail(key, "unknown response '" + n + "' (define it in output.responses)");
   };
   s.objective = response(r, "objective", true);
+  // a constraint bounds a response from above ("upper"), below ("lower"), both, or to a value
+  // ("equals": both bounds at that value); each bound is one constraint g ≤ ū of the optimizer
   for (const auto& c : r.items("constraints")) {
-    OptimizationSpec::Constraint k;
-    k.response = response(c, "response", false);
-    k.upper = c.number("upper");
-    if (k.upper == 0)
-      c.fail("upper", "expected a non-zero bound (constraints are scaled by |bound|)");
+    const std::string resp = response(c, "response", false);
+    const bool has_up = c.has("upper"), has_lo = c.has("lower"), has_eq = c.has("equals");
+    if (has_eq && (has_up || has_lo))
+      c.fail("equals", "expected \"equals\" alone, or \"lower\" and/or \"upper\"");
+    if (!has_eq && !has_up && !has_lo)
+      c.fail("expected \"upper\", \"lower\", both, or \"equals\" (the bound of the response)");
+    double scale = 0;
+    if (c.has("scale")) scale = c.positive("scale");
+    auto add = [&](const char* key, double bound, bool lower) {
+      if (bound == 0 && scale == 0)
+        c.fail(key,
+               "a zero bound needs \"scale\": a reference value of the response (constraints "
+               "are scaled by |bound|)");
+      OptimizationSpec::Constraint k;
+      k.response = resp;
+      k.lower = lower;
+      k.upper = lower ? -bound : bound;
+      k.scale = scale;
+      s.constraints.push_back(k);
+    };
+    if (has_eq) {
+      const double v = c.number("equals");
+      add("equals", v, false);
+      add("equals", v, true);
+    } else {
+      const double lo = has_lo ? c.number("lower") : 0, up = has_up ? c.number("upper") : 0;
+      if (has_lo && has_up && !(lo <= up)) c.fail("lower", "expected lower <= upper");
+      if (has_up) add("upper", up, false);
+      if (has_lo) add("lower", lo, true);
+    }
     c.finish();
-    s.constraints.push_back(k);
   }
   s.optimizer = r.one_of("optimizer", {"mma", "ccsaq", "slsqp", "mma-svanberg"}, "mma");
   if (r.has("move_limit")) {

@@ -23,15 +23,16 @@ KktReport kkt_report(const DesignProblem& prob, const Evaluation& e, double tol_
   const int n = static_cast<int>(e.p.size());
   const double fs = std::max(std::abs(e.objective), 1e-300);
   const Vec gf = e.objective_gradient.cwiseProduct(range) / fs;  // scaled ∇f
+  auto scale = [&](size_t j) { return j < e.scale.size() ? e.scale[j] : std::abs(e.upper[j]); };
   std::vector<int> act;
   for (size_t j = 0; j < e.constraints.size(); ++j)
-    if (std::abs(e.constraints[j] - e.upper[j]) <= tol_active * std::abs(e.upper[j]))
+    if (std::abs(e.constraints[j] - e.upper[j]) <= tol_active * scale(j))
       act.push_back(static_cast<int>(j));
   r.active_constraints = static_cast<int>(act.size());
   Mat G(n, act.size());  // scaled ∇g_j as columns
   for (size_t k = 0; k < act.size(); ++k)
     G.col(k) = e.constraint_gradient.row(act[k]).transpose().cwiseProduct(range) /
-               std::abs(e.upper[act[k]]);
+               scale(static_cast<size_t>(act[k]));
   std::vector<int> free, lower, upper;
   for (int i = 0; i < n; ++i) {
     const double x = (e.p[i] - lo[i]) / range[i];

@@ -91,7 +91,7 @@ struct Context {
     g.resize(m);
     dg.resize(m, range.size());
     for (Eigen::Index j = 0; j < m; ++j) {
-      const double s = std::max(std::abs(e.upper[j]), 1e-300);
+      const double s = j < e.scale.size() ? e.scale[j] : std::max(std::abs(e.upper[j]), 1e-300);
       g[j] = (e.constraints[j] - e.upper[j]) / s;
       dg.row(j) = e.constraint_gradient.row(j).cwiseProduct(range.transpose()) / s;
     }
@@ -291,6 +291,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
                          e.constraint_gradient.cols() == (nc ? n : e.constraint_gradient.cols()) &&
                          static_cast<Eigen::Index>(e.upper.size()) ==
                              static_cast<Eigen::Index>(e.constraints.size()) &&
+                         e.scale.size() == e.upper.size() &&
                          static_cast<Eigen::Index>(e.constraints.size()) <= nc;
       if (!sizes)
         throw Error(

@@ -12,7 +12,15 @@ namespace lsmbs {
 
 nlohmann::json OptimizationSpec::to_json() const {
   nlohmann::json c = nlohmann::json::array();
-  for (const auto& k : constraints) c.push_back({{"response", k.response}, {"upper", k.upper}});
+  for (const auto& k : constraints) {  // a plain upper bound keeps the form of earlier checkpoints
+    nlohmann::json e = {{"response", k.response}};
+    if (k.lower)
+      e["lower"] = -k.upper;
+    else
+      e["upper"] = k.upper;
+    if (k.scale > 0) e["scale"] = k.scale;
+    c.push_back(e);
+  }
   return {{"objective", objective},
           {"constraints", c},
           {"optimizer", optimizer},
@@ -44,7 +52,8 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
     if (r.kind != ResponseSpec::Kind::kPerStep) {
       ++num_constraints_;
       constraint_upper_.push_back(spec_.constraints[j].upper);
-      constraint_names_.push_back(r.name);
+      constraint_scale_.push_back(spec_.constraints[j].normalizer());
+      constraint_names_.push_back((spec_.constraints[j].lower ? "-" : "") + r.name);
       continue;
     }
     const double h = cs_.simulation.h;
@@ -55,9 +64,13 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
       if (t >= r.t0 - 1e-9 * h && t <= r.t1 + 1e-9 * h) ++count;
     }
     num_constraints_ += count;
-    for (int k = 0; k < count; ++k) constraint_names_.push_back(r.name + "." + std::to_string(k));
+    for (int k = 0; k < count; ++k)
+      constraint_names_.push_back((spec_.constraints[j].lower ? "-" : "") + r.name + "." +
+                                  std::to_string(k));
     constraint_upper_.insert(constraint_upper_.end(), static_cast<size_t>(count),
                              spec_.constraints[j].upper);
+    constraint_scale_.insert(constraint_scale_.end(), static_cast<size_t>(count),
+                             spec_.constraints[j].normalizer());
   }
 }
 
@@ -87,13 +100,15 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
   e.max_violation = -INFINITY;
   for (size_t j = 0; j < constraint_index_.size(); ++j) {
     const auto& r = res.responses[constraint_index_[j]];
-    const double ub = spec_.constraints[j].upper;
+    const auto& spec = spec_.constraints[j];
+    const double ub = spec.upper, sign = spec.lower ? -1.0 : 1.0, sc = spec.normalizer();
     for (size_t k = 0; k < r.values.size() && row < num_constraints_; ++k, ++row) {
-      e.constraints.push_back(r.values[k]);
+      const double g = sign * r.values[k];
+      e.constraints.push_back(g);
       e.upper.push_back(ub);
-      e.constraint_gradient.row(row) = r.gradient.row(static_cast<Eigen::Index>(k));
-      e.max_violation =
-          std::max(e.max_violation, (r.values[k] - ub) / std::max(std::abs(ub), 1e-300));
+      e.scale.push_back(sc);
+      e.constraint_gradient.row(row) = sign * r.gradient.row(static_cast<Eigen::Index>(k));
+      e.max_violation = std::max(e.max_violation, (g - ub) / sc);
     }
   }
   if (row != num_constraints_ && res.ok) {  // a failed run's own message says when and why
@@ -108,6 +123,7 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
     e.objective_gradient.setConstant(p.size(), NAN);
     e.constraints.assign(static_cast<size_t>(num_constraints_), NAN);
     e.upper = constraint_upper_;
+    e.scale = constraint_scale_;
     e.constraint_gradient.setConstant(num_constraints_, p.size(), NAN);
   }
   e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -149,6 +165,7 @@ nlohmann::json evaluation_to_json(const Evaluation& e) {
           {"objective", hex(e.objective)},
           {"constraints", hexv(e.constraints.data(), e.constraints.size())},
           {"upper", hexv(e.upper.data(), e.upper.size())},
+          {"scale", hexv(e.scale.data(), e.scale.size())},
           {"objective_gradient", hexv(e.objective_gradient.data(), e.objective_gradient.size())},
           {"constraint_gradient", hexv(e.constraint_gradient.data(), e.constraint_gradient.size())},
           {"rows", e.constraint_gradient.rows()},
@@ -165,6 +182,11 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
   e.objective = unhex(j.at("objective"));
   e.constraints = unhexv(j.at("constraints"));
   e.upper = unhexv(j.at("upper"));
+  if (j.contains("scale")) {
+    e.scale = unhexv(j.at("scale"));
+  } else {  // a checkpoint from before lower bounds: every constraint was scaled by |bound|
+    for (double u : e.upper) e.scale.push_back(std::abs(u));
+  }
   const auto g = unhexv(j.at("objective_gradient"));
   e.objective_gradient = Eigen::Map<const Vec>(g.data(), static_cast<Eigen::Index>(g.size()));
   const auto cg = unhexv(j.at("constraint_gradient"));

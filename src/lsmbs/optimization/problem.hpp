@@ -19,9 +19,14 @@ namespace lsmbs {
 
 struct OptimizationSpec {
   std::string objective;  ///< response name (scalar)
+  /// g ≤ upper in the optimizer's form: g = r for an upper bound r ≤ b (upper = b), g = −r for a
+  /// lower bound r ≥ b (upper = −b); an `equals` is both. Scaled as (g − upper) / normalizer.
   struct Constraint {
     std::string response;
     double upper = 0;
+    bool lower = false;  ///< a lower bound of the response (g = −r)
+    double scale = 0;    ///< reference value of the scaling; 0: |upper| (non-zero then)
+    double normalizer() const { return scale > 0 ? scale : std::abs(upper); }
   };
   std::vector<Constraint> constraints;
   std::string optimizer = "mma";  ///< mma | ccsaq | slsqp (NLopt) | mma-svanberg (classic MMA)
@@ -39,11 +44,14 @@ struct OptimizationSpec {
 struct Evaluation {
   Vec p;
   double objective = 0;
-  std::vector<double> constraints;  ///< g_j (raw, each ≤ upper_j)
-  std::vector<double> upper;        ///< bounds
-  Vec objective_gradient;           ///< ∂f/∂p
-  Mat constraint_gradient;          ///< m × n_v
-  double max_violation = 0;         ///< max_j (g_j − ū_j)/|ū_j|  (≤ 0: feasible)
+  /// g_j, each ≤ upper_j: the response for an upper bound, minus the response for a lower
+  /// bound (OptimizationSpec::Constraint)
+  std::vector<double> constraints;
+  std::vector<double> upper;  ///< bounds of g_j
+  std::vector<double> scale;  ///< normalizer of g_j − upper_j (|bound| or the given reference)
+  Vec objective_gradient;     ///< ∂f/∂p
+  Mat constraint_gradient;    ///< m × n_v
+  double max_violation = 0;   ///< max_j (g_j − ū_j)/scale_j  (≤ 0: feasible)
   double wall_seconds = 0;
   bool ok = true;
   /// Stopped by an interrupt before the simulation ended: not a result of p (never cached).
@@ -78,6 +86,7 @@ class DesignProblem {
   int num_constraints_ = 0;
   std::vector<double>
       constraint_upper_;  // the bound of each scalar constraint (per-step: each step)
+  std::vector<double> constraint_scale_;  // … and its normalizer
   std::vector<std::string> constraint_names_;
   std::map<std::vector<double>, Evaluation> cache_;
   Evaluation interrupted_;  // the last interrupted evaluation (not cached)

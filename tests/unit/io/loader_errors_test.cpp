@@ -129,7 +129,7 @@ TEST(LoaderErrors, OptimizationSection) {
   expect_error(opt({{"stop", {{"tolerance", 1e-3}}}}), "/optimization/stop/tolerance",
                "unknown key", true);
   expect_error(opt({{"constraints", {{{"response", "mean_x"}, {"upper", 0}}}}}),
-               "/optimization/constraints/0/upper", "expected a non-zero bound", true);
+               "/optimization/constraints/0/upper", "a zero bound needs \"scale\"", true);
   json no_design = base();
   no_design.erase("design");
   expect_error(no_design, "/design", "optimization needs a design section", true);
