@@ -58,7 +58,12 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
                          {"band", bd.map->options().band}};
     if (!o.out_dir.empty()) {
       const std::string base = o.out_dir + "/" + bd.body->name;
-      write_vtu(base + ".vtu", *bd.body, cs.initial.q, params);
+      const Mesh2D& mesh = bd.body->mesh;
+      const auto values = bd.map->level_set().values(p);
+      Vec phi(mesh.num_nodes());
+      for (int i = 0; i < mesh.num_nodes(); ++i)
+        phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
+      write_design_vtu(base + ".vtu", mesh, mu, phi);
       int h = 0;
       const auto px = render_element_field(bd.body->mesh, mu, mu_min, o.image_width, h);
       write_png_gray(base + ".png", o.image_width, h, px);

@@ -61,9 +61,36 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
   for (int e = 1; e <= ne; ++e) os << 4 * e << "\n";
   os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
   for (int e = 0; e < ne; ++e) os << "9\n";
-  os << "</DataArray>\n</Cells>\n<PointData Vectors=\"displacement\">\n"
-     << "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" "
+  // Points are the deformed positions x (the PVD animates the motion as it is). Two vectors:
+  // total_displacement x − X (X: the node at t = 0), and elastic_displacement x − (x̄ + R(θ)(X −
+  // X̄)), the motion left after the rigid motion that fits the nodes best in least squares
+  // (centroids x̄, X̄; θ from the 2-D Procrustes problem). Warp By Vector on elastic_displacement
+  // with a factor s shows the deformation magnified s + 1 times; with −1, the body moved rigidly.
+  Vec2 xc = Vec2::Zero(), Xc = Vec2::Zero();
+  for (int i = 0; i < nn; ++i) {
+    xc += q.segment<2>(b.node_dof(i));
+    Xc += b.placed(i);
+  }
+  xc /= nn;
+  Xc /= nn;
+  double sn = 0, cs = 0;
+  for (int i = 0; i < nn; ++i) {
+    const Vec2 a = b.placed(i) - Xc, c = q.segment<2>(b.node_dof(i)) - xc;
+    sn += a.x() * c.y() - a.y() * c.x();
+    cs += a.x() * c.x() + a.y() * c.y();
+  }
+  const double th = std::atan2(sn, cs), ct = std::cos(th), st = std::sin(th);
+  os << "</DataArray>\n</Cells>\n<PointData Vectors=\"elastic_displacement\">\n"
+     << "<DataArray type=\"Float64\" Name=\"elastic_displacement\" NumberOfComponents=\"3\" "
         "format=\"ascii\">\n";
+  for (int i = 0; i < nn; ++i) {
+    const Vec2 a = b.placed(i) - Xc;
+    const Vec2 u =
+        q.segment<2>(b.node_dof(i)) - xc - Vec2(ct * a.x() - st * a.y(), st * a.x() + ct * a.y());
+    os << u.x() << " " << u.y() << " 0\n";
+  }
+  os << "</DataArray>\n<DataArray type=\"Float64\" Name=\"total_displacement\" "
+        "NumberOfComponents=\"3\" format=\"ascii\">\n";
   for (int i = 0; i < nn; ++i) {
     const Vec2 u = q.segment<2>(b.node_dof(i)) - b.placed(i);
     os << u.x() << " " << u.y() << " 0\n";
@@ -89,6 +116,32 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
                                 sig(1, 1) * sig(1, 1) + 3 * sig(0, 1) * sig(0, 1));
     os << vm << "\n";
   }
+  os << "</DataArray>\n</CellData>\n</Piece></UnstructuredGrid>\n</VTKFile>\n";
+  write_file_atomic(path, os.str());
+}
+
+void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi) {
+  const int nn = mesh.num_nodes(), ne = mesh.num_elements();
+  std::ostringstream os;
+  os << std::setprecision(17);
+  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+        "byte_order=\"LittleEndian\">\n"
+     << "<UnstructuredGrid><Piece NumberOfPoints=\"" << nn << "\" NumberOfCells=\"" << ne
+     << "\">\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const auto& x : mesh.nodes) os << x.x() << " " << x.y() << " 0\n";
+  os << "</DataArray></Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" "
+        "format=\"ascii\">\n";
+  for (const auto& c : mesh.quads) os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
+  os << "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
+  for (int e = 1; e <= ne; ++e) os << 4 * e << "\n";
+  os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (int e = 0; e < ne; ++e) os << "9\n";
+  os << "</DataArray>\n</Cells>\n<PointData Scalars=\"phi\">\n"
+     << "<DataArray type=\"Float64\" Name=\"phi\" format=\"ascii\">\n";
+  for (int i = 0; i < nn; ++i) os << phi[i] << "\n";
+  os << "</DataArray>\n</PointData>\n<CellData Scalars=\"mu\">\n"
+     << "<DataArray type=\"Float64\" Name=\"mu\" format=\"ascii\">\n";
+  for (int e = 0; e < ne; ++e) os << mu[e] << "\n";
   os << "</DataArray>\n</CellData>\n</Piece></UnstructuredGrid>\n</VTKFile>\n";
   write_file_atomic(path, os.str());
 }

@@ -23,6 +23,9 @@ void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<std::vector<double>>& rows);
 void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q,
                const ModelParams& p);
+/// A design on its mesh (body frame, undeformed): the level set φ at the nodes (material where
+/// φ > 0; a contour at 0 is the features' boundary) and μ_e per element.
+void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi);
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
 
 /// summary.json["units"]: the SI unit of the time column ("t": "s"), of every measure column
