@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages lsmbs builds and tests with, only those missing.
 # Idempotent, non-interactive, quiet when everything is present.
-#   scripts/setup-deps.sh [--with-gmsh]
+#   scripts/setup-deps.sh [--with-gmsh] [--with-vtk]
 set -euo pipefail
 
 packages=(
@@ -16,10 +16,13 @@ packages=(
 
 # --with-gmsh: also the Gmsh command line, to re-mesh data/slider_crank/rod.geo (the shipped
 # .msh files are committed; lsmbs itself reads .msh and needs no Gmsh)
+# --with-vtk: also VTK's Python module, with which tests/python/test_vtk_reader.py reads the
+# VTU/VTM/PVD output as ParaView does (skipped where `import vtk` fails; lsmbs needs no VTK)
 for arg in "$@"; do
   case $arg in
     --with-gmsh) packages+=(gmsh) ;;
-    *) echo "setup-deps: unknown option $arg (expected --with-gmsh)" >&2; exit 2 ;;
+    --with-vtk) packages+=(python3-vtk9) ;;
+    *) echo "setup-deps: unknown option $arg (expected --with-gmsh or --with-vtk)" >&2; exit 2 ;;
   esac
 done
 

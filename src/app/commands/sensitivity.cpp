@@ -97,9 +97,7 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   S["case_name"] = cs.name;
   S["status"] = res.ok ? "complete" : res.interrupted ? "interrupted" : "partial";
   if (!res.ok) S["failure"] = res.message;
-  nlohmann::json vars = nlohmann::json::object();
-  for (int i = 0; i < d.size(); ++i) vars[d.variables[i].name] = p[i];
-  S["design"] = vars;
+  S["design"] = lsmbs::design_json(cs, p);
   S["options"] = {{"sensitivity", nlohmann::json(so)},
                   {"generalized_alpha", nlohmann::json(cs.simulation)}};
   S["counts"] = nlohmann::json(res.counts);

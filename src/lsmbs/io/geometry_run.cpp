@@ -73,14 +73,12 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
     }
     bodies.push_back(jb);
   }
-  nlohmann::json vars = nlohmann::json::object();
-  for (int k = 0; k < d.size(); ++k) vars[d.variables[k].name] = p[k];
   nlohmann::json S =
       provenance(o.command_line.empty() ? "geometry" : o.command_line, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = "complete";
-  S["design"] = vars;
+  S["design"] = design_json(cs, p);
   S["bodies"] = bodies;
   S["responses"] = nlohmann::json::object();
   for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];

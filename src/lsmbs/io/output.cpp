@@ -43,24 +43,108 @@ void write_csv(const std::string& path, const std::vector<std::string>& header,
   write_file_atomic(path, os.str());
 }
 
+namespace {
+
+// One data array of a VTU piece: `components` values per point or cell.
+struct VtuArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;
+};
+
+// The one unstructured-grid writer: points (z = 0), cells (VTK connectivity, offsets and types),
+// point and cell data, ASCII with 17 significant digits (every double reads back exactly). The
+// first array of each kind is the active one (Vectors when it has 3 components, else Scalars).
+struct VtuPiece {
+  std::vector<Vec2> points;
+  std::vector<int> connectivity, offsets;  // offsets: the end of each cell in connectivity
+  std::vector<int> types;                  // VTK cell types: 1 vertex, 3 line, 7 polygon, 9 quad
+  std::vector<VtuArray> point_data, cell_data;
+
+  void add_cell(std::initializer_list<int> nodes, int type) { add_cell(nodes.begin(), nodes.end(), type); }
+  template <class It>
+  void add_cell(It first, It last, int type) {
+    connectivity.insert(connectivity.end(), first, last);
+    offsets.push_back(static_cast<int>(connectivity.size()));
+    types.push_back(type);
+  }
+
+  void write(const std::string& path) const {
+    std::ostringstream os;
+    os << std::setprecision(17);
+    os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+          "byte_order=\"LittleEndian\">\n<UnstructuredGrid><Piece NumberOfPoints=\""
+       << points.size() << "\" NumberOfCells=\"" << types.size() << "\">\n"
+       << "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (const auto& x : points) os << x.x() << " " << x.y() << " 0\n";
+    os << "</DataArray></Points>\n<Cells>\n"
+       << "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
+    for (size_t c = 0; c < offsets.size(); ++c) {  // one cell a line
+      const int first = c ? offsets[c - 1] : 0;
+      for (int k = first; k < offsets[c]; ++k) os << (k > first ? " " : "") << connectivity[k];
+      os << "\n";
+    }
+    os << "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
+    for (int o : offsets) os << o << "\n";
+    os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (int t : types) os << t << "\n";
+    os << "</DataArray>\n</Cells>\n";
+    data(os, "PointData", point_data);
+    data(os, "CellData", cell_data);
+    os << "</Piece></UnstructuredGrid>\n</VTKFile>\n";
+    write_file_atomic(path, os.str());
+  }
+
+ private:
+  static void data(std::ostringstream& os, const char* tag, const std::vector<VtuArray>& arrays) {
+    if (arrays.empty()) return;
+    const VtuArray& a0 = arrays.front();
+    os << "<" << tag << " " << (a0.components == 3 ? "Vectors" : "Scalars") << "=\"" << a0.name
+       << "\">\n";
+    for (const auto& a : arrays) {
+      os << "<DataArray type=\"Float64\" Name=\"" << a.name << "\"";
+      if (a.components > 1) os << " NumberOfComponents=\"" << a.components << "\"";
+      os << " format=\"ascii\">\n";
+      for (size_t i = 0; i < a.values.size(); ++i)
+        os << a.values[i] << ((i + 1) % static_cast<size_t>(a.components) == 0 ? "\n" : " ");
+      os << "</DataArray>\n";
+    }
+    os << "</" << tag << ">\n";
+  }
+};
+
+// a 2-D vector field as a VTK 3-vector array (z = 0)
+VtuArray vectors(const std::string& name, const std::vector<Vec2>& v) {
+  VtuArray a{name, 3, {}};
+  a.values.reserve(3 * v.size());
+  for (const auto& x : v) a.values.insert(a.values.end(), {x.x(), x.y(), 0.0});
+  return a;
+}
+
+std::string xml_attribute(const std::string& s) {
+  std::string r;
+  for (char c : s) {
+    if (c == '&')
+      r += "&amp;";
+    else if (c == '<')
+      r += "&lt;";
+    else if (c == '>')
+      r += "&gt;";
+    else if (c == '"')
+      r += "&quot;";
+    else
+      r += c;
+  }
+  return r;
+}
+
+}  // namespace
+
 void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, const ModelParams& p) {
   const int nn = b.mesh.num_nodes(), ne = b.mesh.num_elements();
-  std::ostringstream os;
-  os << std::setprecision(12);
-  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
-        "byte_order=\"LittleEndian\">\n"
-     << "<UnstructuredGrid><Piece NumberOfPoints=\"" << nn << "\" NumberOfCells=\"" << ne
-     << "\">\n";
-  os << "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (int i = 0; i < nn; ++i) os << q[b.node_dof(i)] << " " << q[b.node_dof(i) + 1] << " 0\n";
-  os << "</DataArray></Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" "
-        "format=\"ascii\">\n";
-  for (const auto& c : b.mesh.quads)
-    os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
-  os << "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
-  for (int e = 1; e <= ne; ++e) os << 4 * e << "\n";
-  os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (int e = 0; e < ne; ++e) os << "9\n";
+  VtuPiece v;
+  for (int i = 0; i < nn; ++i) v.points.push_back(q.segment<2>(b.node_dof(i)));
+  for (const auto& c : b.mesh.quads) v.add_cell({c[0], c[1], c[2], c[3]}, 9);
   // Points are the deformed positions x (the PVD animates the motion as it is). Two vectors:
   // total_displacement x − X (X: the node at t = 0), and elastic_displacement x − (x̄ + R(θ)(X −
   // X̄)), the motion left after the rigid motion that fits the nodes best in least squares
@@ -68,38 +152,26 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
   // with a factor s shows the deformation magnified s + 1 times; with −1, the body moved rigidly.
   Vec2 xc = Vec2::Zero(), Xc = Vec2::Zero();
   for (int i = 0; i < nn; ++i) {
-    xc += q.segment<2>(b.node_dof(i));
+    xc += v.points[i];
     Xc += b.placed(i);
   }
   xc /= nn;
   Xc /= nn;
   double sn = 0, cs = 0;
   for (int i = 0; i < nn; ++i) {
-    const Vec2 a = b.placed(i) - Xc, c = q.segment<2>(b.node_dof(i)) - xc;
+    const Vec2 a = b.placed(i) - Xc, c = v.points[i] - xc;
     sn += a.x() * c.y() - a.y() * c.x();
     cs += a.x() * c.x() + a.y() * c.y();
   }
-  const double th = std::atan2(sn, cs), ct = std::cos(th), st = std::sin(th);
-  os << "</DataArray>\n</Cells>\n<PointData Vectors=\"elastic_displacement\">\n"
-     << "<DataArray type=\"Float64\" Name=\"elastic_displacement\" NumberOfComponents=\"3\" "
-        "format=\"ascii\">\n";
+  const Mat2 R = rotation(std::atan2(sn, cs));
+  std::vector<Vec2> elastic(nn), total(nn);
   for (int i = 0; i < nn; ++i) {
-    const Vec2 a = b.placed(i) - Xc;
-    const Vec2 u =
-        q.segment<2>(b.node_dof(i)) - xc - Vec2(ct * a.x() - st * a.y(), st * a.x() + ct * a.y());
-    os << u.x() << " " << u.y() << " 0\n";
+    elastic[i] = v.points[i] - xc - R * (b.placed(i) - Xc);
+    total[i] = v.points[i] - b.placed(i);
   }
-  os << "</DataArray>\n<DataArray type=\"Float64\" Name=\"total_displacement\" "
-        "NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (int i = 0; i < nn; ++i) {
-    const Vec2 u = q.segment<2>(b.node_dof(i)) - b.placed(i);
-    os << u.x() << " " << u.y() << " 0\n";
-  }
-  os << "</DataArray>\n</PointData>\n<CellData Scalars=\"mu\">\n"
-     << "<DataArray type=\"Float64\" Name=\"mu\" format=\"ascii\">\n";
+  v.point_data = {vectors("elastic_displacement", elastic), vectors("total_displacement", total)};
   const Vec& mu = p.fields[b.field];
-  for (int e = 0; e < ne; ++e) os << mu[e] << "\n";
-  os << "</DataArray>\n<DataArray type=\"Float64\" Name=\"von_mises\" format=\"ascii\">\n";
+  VtuArray vm{"von_mises", 1, {}};
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
   for (int e = 0; e < ne; ++e) {
     QuadElement::Vec8 x;
@@ -112,49 +184,113 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
     S << c * (Ev[0] + nu * Ev[1]), c * (1 - nu) / 2 * Ev[2], c * (1 - nu) / 2 * Ev[2],
         c * (Ev[1] + nu * Ev[0]);
     const Mat2 sig = F * S * F.transpose() / F.determinant();
-    const double vm = std::sqrt(sig(0, 0) * sig(0, 0) - sig(0, 0) * sig(1, 1) +
-                                sig(1, 1) * sig(1, 1) + 3 * sig(0, 1) * sig(0, 1));
-    os << vm << "\n";
+    vm.values.push_back(std::sqrt(sig(0, 0) * sig(0, 0) - sig(0, 0) * sig(1, 1) +
+                                  sig(1, 1) * sig(1, 1) + 3 * sig(0, 1) * sig(0, 1)));
   }
-  os << "</DataArray>\n</CellData>\n</Piece></UnstructuredGrid>\n</VTKFile>\n";
-  write_file_atomic(path, os.str());
+  v.cell_data = {{"mu", 1, std::vector<double>(mu.data(), mu.data() + ne)}, std::move(vm)};
+  v.write(path);
+}
+
+std::vector<Vec2> rigid_outline(const RigidBody& b) {
+  std::vector<Vec2> pts = b.attachments;
+  if (b.com_offset != Vec2::Zero()) pts.push_back(b.com_offset);
+  if (pts.empty()) return {Vec2::Zero()};
+  // Andrew's monotone chain; cross ≤ 0 pops, so collinear points drop out
+  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& c) {
+    return a.x() < c.x() || (a.x() == c.x() && a.y() < c.y());
+  });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  auto cross = [](const Vec2& o, const Vec2& a, const Vec2& c) {
+    return (a.x() - o.x()) * (c.y() - o.y()) - (a.y() - o.y()) * (c.x() - o.x());
+  };
+  std::vector<Vec2> hull(2 * pts.size());
+  size_t k = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {  // lower chain
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    hull[k++] = pts[i];
+  }
+  for (size_t i = pts.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    hull[k++] = pts[i];
+  }
+  hull.resize(k - 1);  // the last point is the first again
+  return hull;
+}
+
+void write_rigid_vtu(const std::string& path, const RigidBody& b, const Vec& q) {
+  const std::vector<Vec2> d = rigid_outline(b);
+  const Vec2 r = q.segment<2>(b.dof0);
+  const Mat2 R = rotation(q[b.dof0 + 2]), R0 = rotation(b.angle0);
+  VtuPiece v;
+  std::vector<Vec2> total;
+  std::vector<int> cell;
+  for (const auto& di : d) {
+    cell.push_back(static_cast<int>(v.points.size()));
+    v.points.push_back(r + R * di);
+    total.push_back(v.points.back() - (b.position0 + R0 * di));
+  }
+  v.add_cell(cell.begin(), cell.end(), d.size() == 1 ? 1 : d.size() == 2 ? 3 : 7);
+  v.point_data = {vectors("elastic_displacement", std::vector<Vec2>(d.size(), Vec2::Zero())),
+                  vectors("total_displacement", total)};
+  v.write(path);
 }
 
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi) {
-  const int nn = mesh.num_nodes(), ne = mesh.num_elements();
+  VtuPiece v;
+  v.points = mesh.nodes;
+  for (const auto& c : mesh.quads) v.add_cell({c[0], c[1], c[2], c[3]}, 9);
+  v.point_data = {{"phi", 1, std::vector<double>(phi.data(), phi.data() + phi.size())}};
+  v.cell_data = {{"mu", 1, std::vector<double>(mu.data(), mu.data() + mu.size())}};
+  v.write(path);
+}
+
+void write_vtm(const std::string& path,
+               const std::vector<std::pair<std::string, std::string>>& blocks) {
   std::ostringstream os;
-  os << std::setprecision(17);
-  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
-        "byte_order=\"LittleEndian\">\n"
-     << "<UnstructuredGrid><Piece NumberOfPoints=\"" << nn << "\" NumberOfCells=\"" << ne
-     << "\">\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const auto& x : mesh.nodes) os << x.x() << " " << x.y() << " 0\n";
-  os << "</DataArray></Points>\n<Cells>\n<DataArray type=\"Int32\" Name=\"connectivity\" "
-        "format=\"ascii\">\n";
-  for (const auto& c : mesh.quads) os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
-  os << "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
-  for (int e = 1; e <= ne; ++e) os << 4 * e << "\n";
-  os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (int e = 0; e < ne; ++e) os << "9\n";
-  os << "</DataArray>\n</Cells>\n<PointData Scalars=\"phi\">\n"
-     << "<DataArray type=\"Float64\" Name=\"phi\" format=\"ascii\">\n";
-  for (int i = 0; i < nn; ++i) os << phi[i] << "\n";
-  os << "</DataArray>\n</PointData>\n<CellData Scalars=\"mu\">\n"
-     << "<DataArray type=\"Float64\" Name=\"mu\" format=\"ascii\">\n";
-  for (int e = 0; e < ne; ++e) os << mu[e] << "\n";
-  os << "</DataArray>\n</CellData>\n</Piece></UnstructuredGrid>\n</VTKFile>\n";
+  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" "
+        "byte_order=\"LittleEndian\">\n<vtkMultiBlockDataSet>\n";
+  for (size_t i = 0; i < blocks.size(); ++i)
+    os << "<DataSet index=\"" << i << "\" name=\"" << xml_attribute(blocks[i].first)
+       << "\" file=\"" << xml_attribute(blocks[i].second) << "\"/>\n";
+  os << "</vtkMultiBlockDataSet>\n</VTKFile>\n";
   write_file_atomic(path, os.str());
+}
+
+ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
+                              const std::string& suffix, const Model& m, const Vec& q) {
+  ModelVtkFiles f;
+  std::vector<std::pair<std::string, std::string>> blocks;  // relative to the .vtm
+  auto add = [&](const std::string& name) {
+    const std::string file = name + suffix + ".vtu";
+    blocks.emplace_back(name, file);
+    f.bodies.emplace_back(name, folder + file);
+    return out_dir + "/" + folder + file;
+  };
+  for (const auto& b : m.flexible_bodies()) write_vtu(add(b->name), *b, q, m.params());
+  for (const auto& b : m.rigid_bodies()) write_rigid_vtu(add(b.name), b, q);
+  f.multiblock = folder + kModelVtk + suffix + ".vtm";
+  write_vtm(out_dir + "/" + f.multiblock, blocks);
+  return f;
 }
 
 void write_pvd(const std::string& path,
                const std::vector<std::pair<double, std::string>>& entries) {
   std::ostringstream os;
-  os << std::setprecision(12);
+  os << std::setprecision(15);  // t to 15 digits: grid times print as they were given
   os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
   for (const auto& [t, f] : entries)
-    os << "<DataSet timestep=\"" << t << "\" file=\"" << f << "\"/>\n";
+    os << "<DataSet timestep=\"" << t << "\" file=\"" << xml_attribute(f) << "\"/>\n";
   os << "</Collection>\n</VTKFile>\n";
   write_file_atomic(path, os.str());
+}
+
+nlohmann::json design_json(const Study& s, const Vec& p) {
+  if (!s.design) return nullptr;
+  const Vec x = p.size() ? p : s.design->initial();
+  nlohmann::json d = nlohmann::json::object();
+  for (int i = 0; i < s.design->size(); ++i) d[s.design->variables[i].name] = x[i];
+  return d;
 }
 
 nlohmann::json provenance(const std::string& command, const std::string& case_file,

@@ -4,9 +4,13 @@
 //  * write_csv: a header and rows (names quoted where RFC 4180 needs it, so that any CSV reader,
 //    pandas.read_csv without options included, reads the columns back; numbers that read back as
 //    the same doubles);
-//  * write_vtu: one flexible body at one instant (ParaView), with displacement, μ_e and the
-//    von Mises stress of the Cauchy stress at the element centre;
-//  * write_pvd: the time series of VTU files.
+//  * write_vtu / write_rigid_vtu / write_model_vtk: the bodies at one instant (ParaView; the
+//    conventions are in docs/case-format.md, "VTK files"): a flexible body's quads at the deformed
+//    points with total_displacement, elastic_displacement, μ_e and the von Mises stress of the
+//    Cauchy stress at the element centre; a rigid body's outline (rigid_outline) with the same two
+//    displacement arrays; one multiblock .vtm per instant that lists every body;
+//  * write_design_vtu: a design on its mesh (level set φ and μ_e);
+//  * write_pvd: a time series of VTU or VTM files.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -21,12 +25,46 @@ namespace lsmbs {
 
 void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<std::vector<double>>& rows);
+/// A flexible body at positions q: points x, the quads, point data total_displacement x − X (X:
+/// the placed mesh at t = 0) and elastic_displacement (x minus the rigid motion that fits the nodes
+/// best in least squares), cell data mu and von_mises.
 void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q,
                const ModelParams& p);
+/// The body-frame points a rigid body is drawn with: the convex hull (counter-clockwise, collinear
+/// points dropped) of its attachments (RigidBody::attachments) and of its centre of mass when that
+/// is off the reference point; the reference point alone when nothing attaches. One point, two
+/// (a line between the extreme joint points) or a polygon.
+std::vector<Vec2> rigid_outline(const RigidBody& body);
+/// A rigid body at positions q: its outline placed at (x, y, θ) as one cell (vertex, line or
+/// polygon), point data total_displacement (from the placement at t = 0) and elastic_displacement
+/// (zero), so that filters over all bodies find the same arrays as on the flexible ones.
+void write_rigid_vtu(const std::string& path, const RigidBody& body, const Vec& q);
 /// A design on its mesh (body frame, undeformed): the level set φ at the nodes (material where
 /// φ > 0; a contour at 0 is the features' boundary) and μ_e per element.
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi);
+/// A VTK multiblock file: one block per (name, file), files relative to the .vtm's folder.
+void write_vtm(const std::string& path,
+               const std::vector<std::pair<std::string, std::string>>& blocks);
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
+
+/// The multiblock name of a model's VTK output (kModelVtk.pvd, vtu/kModelVtk_<step>.vtm); the case
+/// loader refuses a body of that name while VTK files are written.
+inline constexpr const char* kModelVtk = "model";
+
+/// What write_model_vtk wrote, as paths relative to its output folder.
+struct ModelVtkFiles {
+  std::vector<std::pair<std::string, std::string>> bodies;  ///< body name, its VTU
+  std::string multiblock;                                   ///< the .vtm listing them
+};
+/// Every body of the model at positions q: OUT/<folder><body><suffix>.vtu (flexible bodies first,
+/// then rigid ones, each in model order) and OUT/<folder>model<suffix>.vtm listing them (folder:
+/// "" or ending in '/'; it must exist).
+ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
+                              const std::string& suffix, const Model& model, const Vec& q);
+
+/// summary.json["design"]: {variable: value} at the design point p (empty: the case's initial
+/// design); null when the study has no design variables.
+nlohmann::json design_json(const Study& s, const Vec& p = {});
 
 /// summary.json["units"]: the SI unit of the time column ("t": "s"), of every measure column
 /// ("measures", as in history.csv) and of every response ("responses"); docs/case-format.md.

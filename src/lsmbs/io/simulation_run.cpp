@@ -60,11 +60,10 @@ class Recorder : public StepObserver {
     res_.times.push_back(s.t);
     res_.history.push_back(std::move(row));
     if (!ro_.out_dir.empty() && cs_.output.vtu_stride > 0 && step % cs_.output.vtu_stride == 0) {
-      for (const auto& b : cs_.model->flexible_bodies()) {
-        const std::string rel = "vtu/" + b->name + "_" + std::to_string(step) + ".vtu";
-        write_vtu(ro_.out_dir + "/" + rel, *b, s.q, cs_.model->params());
-        pvd_[b->name].emplace_back(s.t, rel);
-      }
+      const ModelVtkFiles f =
+          write_model_vtk(ro_.out_dir, "vtu/", "_" + std::to_string(step), *cs_.model, s.q);
+      for (const auto& [body, rel] : f.bodies) pvd_[body].emplace_back(s.t, rel);
+      model_pvd_.emplace_back(s.t, f.multiblock);
     }
   }
   const Case& cs_;
@@ -74,7 +73,8 @@ class Recorder : public StepObserver {
   long grid_ = 0;
 
  public:
-  std::map<std::string, std::vector<std::pair<double, std::string>>> pvd_;
+  std::map<std::string, std::vector<std::pair<double, std::string>>> pvd_;  // per body
+  std::vector<std::pair<double, std::string>> model_pvd_;                     // the .vtm files
 };
 
 }  // namespace
@@ -94,8 +94,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     // an earlier run's summary must never stand next to this run's files
     std::error_code ec;
     std::filesystem::remove(ro.out_dir + "/summary.json", ec);
-    if (cs.output.vtu_stride > 0 && !cs.model->flexible_bodies().empty())
-      std::filesystem::create_directories(ro.out_dir + "/vtu");
+    if (cs.output.vtu_stride > 0) std::filesystem::create_directories(ro.out_dir + "/vtu");
   }
   Recorder rec(cs, res, ro);
   if (ro.idas) {
@@ -191,12 +190,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
       {ro.idas ? "idas" : "generalized_alpha",
        ro.idas ? nlohmann::json(res.idas_options) : nlohmann::json(cs.simulation)},
       {"output", {{"csv_stride", cs.output.csv_stride}, {"vtu_stride", cs.output.vtu_stride}}}};
-  if (cs.design) {
-    const Vec p = ro.design_point.size() ? ro.design_point : cs.design->initial();
-    nlohmann::json d = nlohmann::json::object();
-    for (int i = 0; i < cs.design->size(); ++i) d[cs.design->variables[i].name] = p[i];
-    S["design"] = d;
-  }
+  if (cs.design) S["design"] = design_json(cs, ro.design_point);
   S["model"] = {{"dofs", m.nq()},
                 {"constraints", m.nc()},
                 {"unknowns", m.n()},
@@ -230,6 +224,11 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
       write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
       files.push_back(body + ".pvd");
       for (const auto& e : entries) files.push_back(e.second);
+    }
+    if (!rec.model_pvd_.empty()) {
+      write_pvd(ro.out_dir + "/" + kModelVtk + ".pvd", rec.model_pvd_);
+      files.push_back(std::string(kModelVtk) + ".pvd");
+      for (const auto& e : rec.model_pvd_) files.push_back(e.second);
     }
     S["files"] = file_list(std::move(files));
     write_json_atomic(ro.out_dir + "/summary.json", S);

@@ -70,12 +70,7 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   S["options"] = {{"analysis", "static"},   {"t", o.t},
                   {"max_iter", o.max_iter}, {"tol_r", so.tol_r},
                   {"tol_phi", so.tol_phi},  {"k", so.k}};
-  if (cs.design) {
-    const Vec p = o.design_point.size() ? o.design_point : cs.design->initial();
-    nlohmann::json d = nlohmann::json::object();
-    for (int i = 0; i < cs.design->size(); ++i) d[cs.design->variables[i].name] = p[i];
-    S["design"] = d;
-  }
+  if (cs.design) S["design"] = design_json(cs, o.design_point);
   S["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}};
   S["counts"] = {{"newton_iterations", res.solver.iterations},
                  {"residual_norm", res.solver.residual_norm}};
@@ -96,13 +91,11 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
     if (res.solver.ok) {
       write_csv(o.out_dir + "/history.csv", header, {row});
       files.push_back("history.csv");
-      for (const auto& b : m.flexible_bodies()) {
-        write_vtu(o.out_dir + "/" + b->name + ".vtu", *b, res.state.q, m.params());
-        files.push_back(b->name + ".vtu");
-      }
+      const ModelVtkFiles f = write_model_vtk(o.out_dir, "", "", m, res.state.q);
+      for (const auto& b : f.bodies) files.push_back(b.second);
+      files.push_back(f.multiblock);
     }
-    std::sort(files.begin(), files.end());
-    S["files"] = files;
+    S["files"] = file_list(std::move(files));
     write_json_atomic(o.out_dir + "/summary.json", S);
   }
   return res;

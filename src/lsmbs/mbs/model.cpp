@@ -43,6 +43,16 @@ RigidBody& Model::add_rigid_body(RigidBody b) {
   return rigid_.back();
 }
 
+void Model::add_attachment(const PointRef& p) {
+  if (p.kind != PointRef::Kind::kBody) return;
+  for (auto& b : rigid_)
+    if (b.dof0 == p.dof0) {
+      if (std::find(b.attachments.begin(), b.attachments.end(), p.local) == b.attachments.end())
+        b.attachments.push_back(p.local);
+      return;
+    }
+}
+
 FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
   auto body = std::make_unique<FlexibleBody>(std::move(b));
   body->dof0 = add_dofs(2 * body->mesh.num_nodes(), "flexible body '" + body->name + "'");

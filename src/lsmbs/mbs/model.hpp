@@ -44,6 +44,10 @@ struct RigidBody {
   Vec2 com_offset = Vec2::Zero();
   Vec2 position0 = Vec2::Zero();  ///< reference point at t = 0
   double angle0 = 0;
+  /// Body-frame points where joints, rigid connections, drivers and forces attach, in the order
+  /// they were added, without repeats. Only pictures read them (io/output.hpp: the outline a
+  /// rigid body is drawn with); the dynamics never do.
+  std::vector<Vec2> attachments;
 };
 
 /// A state at one time: positions, velocities, accelerations q̈ and scaled multipliers λ.
@@ -66,6 +70,9 @@ class Model {
   int add_field(Vec values);
   int add_dofs(int n, const std::string& owner);
   RigidBody& add_rigid_body(RigidBody b);
+  /// Records that something attaches to a rigid body at p (RigidBody::attachments); other kinds of
+  /// points are ignored.
+  void add_attachment(const PointRef& p);
   FlexibleBody& add_flexible_body(FlexibleBody b);  ///< allocates DOFs, builds element geometry
   void add_force(std::unique_ptr<ForceElement> f);
   void add_constraint(std::unique_ptr<ConstraintElement> c);

@@ -301,6 +301,8 @@ void ModelBuilder::revolute(const std::string& name, const Point& a,
   if (pa.kind == PointRef::Kind::kGround && pb.kind == PointRef::Kind::kGround)
     fail(e, "", "both points are ground");
   add_constraint(e, std::make_unique<PointCoincidence>(pa, pb));
+  m_->add_attachment(pa);
+  m_->add_attachment(pb);
   commit(e, mark);
 }
 
@@ -317,6 +319,7 @@ void ModelBuilder::prismatic(const std::string& name, const Point& a, const Vec2
   double th0 = 0;
   if (pa.kind == PointRef::Kind::kBody) th0 = m_->initial_positions()[pa.dof0 + 2];
   add_constraint(e, std::make_unique<Prismatic>(pa, x0, direction, o.lock_rotation, th0));
+  m_->add_attachment(pa);
   commit(e, mark);
 }
 
@@ -332,6 +335,7 @@ void ModelBuilder::rigid_connection(const std::string& name, const std::string& 
     add_constraint(e, std::make_unique<PointCoincidence>(
                           PointRef{PointRef::Kind::kNode, fb.node_dof(nd), Vec2::Zero()},
                           PointRef{PointRef::Kind::kBody, rb.dof0, off}));
+    m_->add_attachment(PointRef{PointRef::Kind::kBody, rb.dof0, off});
   }
   commit(e, mark);
 }
@@ -378,6 +382,7 @@ void ModelBuilder::translation_driver(const std::string& name, const Point& poin
   if (!law) fail(e, "law", "expected a law");
   drivers_[name] = {law, false};
   add_constraint(e, std::make_unique<TranslationDriver>(p, x0, direction, std::move(law)));
+  m_->add_attachment(p);
   commit(e, mark);
 }
 
@@ -396,6 +401,7 @@ void ModelBuilder::point_mass(const std::string& name, const Point& point, doubl
   else
     m_->add_force(
         std::make_unique<RigidInertia>(p.dof0, mp, -1, p.local, "point mass '" + name + "'"));
+  m_->add_attachment(p);
   commit(e, mark);
 }
 
@@ -411,6 +417,7 @@ void ModelBuilder::point_force(const std::string& name, const Point& point,
   const int sp = param(e, "scale", scale);
   m_->add_force(
       std::make_unique<PointForce>(p, std::move(fx), std::move(fy), sp, "force '" + name + "'"));
+  m_->add_attachment(p);
   commit(e, mark);
 }
 
@@ -434,6 +441,8 @@ void ModelBuilder::spring_damper(const std::string& name, const Point& a, const 
   const int cp = param(e, "damping", o.damping);
   const int lp = param(e, "free_length", o.free_length.value_or(l_init));
   m_->add_force(std::make_unique<SpringDamper>(pa, pb, kp, cp, lp, "spring '" + name + "'"));
+  m_->add_attachment(pa);
+  m_->add_attachment(pb);
   commit(e, mark);
 }
 
@@ -491,6 +500,7 @@ void ModelBuilder::pressure(const std::string& name, const Point& point, const V
   const int ap = param(e, "area", area);
   m_->add_force(std::make_unique<PressureForce>(p, direction, ap, std::move(table), angle_dof,
                                                 argument.offset, "pressure '" + name + "'"));
+  m_->add_attachment(p);
   commit(e, mark);
 }
 
