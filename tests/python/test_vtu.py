@@ -1,7 +1,10 @@
 """VTU outputs read back with an XML parser (ParaView's format). References: the signed distance
-to a circle (the design's level set φ near its boundary), and the rotation a driver prescribes to
-a near-rigid plate (total displacement R(θ)X − X; elastic displacement ≈ 0)."""
+to a circle (the design's level set φ near its boundary), the rotation a driver prescribes to
+a near-rigid plate (total displacement R(θ)X − X; elastic displacement ≈ 0), the bodies of the case
+(every one in every multiblock), the convex hull of a rigid body's joint points, and the crank of a
+four-bar (its driven pin). test_vtk_reader.py reads the same files with VTK itself."""
 import math
+import subprocess
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -10,7 +13,8 @@ import pytest
 import lsmbs
 from lsmbs import at, circle, rectangle
 
-from conftest import run_cli
+import fourbar
+from conftest import CLI, run_cli
 
 
 def read_vtu(path):
@@ -19,7 +23,7 @@ def read_vtu(path):
     pts = np.array(piece.find("Points/DataArray").text.split(), float).reshape(-1, 3)
     arrays = {}
     for where in ("PointData", "CellData"):
-        for a in piece.find(where).findall("DataArray"):
+        for a in piece.findall(where + "/DataArray"):
             v = np.array(a.text.split(), float)
             n = int(a.get("NumberOfComponents", "1"))
             arrays[a.get("Name")] = v.reshape(-1, n) if n > 1 else v
@@ -103,3 +107,86 @@ def test_elastic_displacement_is_the_motion_left_after_the_best_fitting_rigid_mo
     elastic = x - (x.mean(0) + a @ R.T)
     assert np.max(np.abs(elastic)) > 1e-5  # the plate bends (4.7e-5 m at the tip)
     assert np.max(np.abs(arrays["elastic_displacement"][:, :2] - elastic)) < 1e-9
+
+
+def cell_types(path):
+    piece = ET.parse(path).getroot().find("UnstructuredGrid/Piece")
+    return [int(x) for x in piece.find("Cells/DataArray[@Name='types']").text.split()]
+
+
+def test_every_multiblock_lists_every_body_and_every_file_is_in_the_summary(tmp_path):
+    m, _ = fourbar.build()
+    m.save(tmp_path / "fourbar.json")
+    S = run_cli("simulate", tmp_path / "fourbar.json", "-o", tmp_path / "out")
+    out = tmp_path / "out"
+    written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    assert written == S["files"]  # every file written is listed, and nothing else
+    pvd = ET.parse(out / "model.pvd").getroot()
+    steps = [(float(d.get("timestep")), d.get("file")) for d in pvd.iter("DataSet")]
+    assert len(steps) == 5  # steps 0, 25, …, 100
+    for t, f in steps:
+        vtm = ET.parse(out / f).getroot()
+        assert vtm.get("type") == "vtkMultiBlockDataSet"
+        ds = {d.get("name"): (out / f).parent / d.get("file") for d in vtm.iter("DataSet")}
+        assert set(ds) == {"crank", "coupler", "rocker"}
+        assert all(p.is_file() for p in ds.values())
+        # the crank's line ends at its ground pivot and at the pin the driver puts at θ2(t)
+        pts, arrays = read_vtu(ds["crank"])
+        a, _ = fourbar.joints(fourbar.crank_angle(t))
+        assert cell_types(ds["crank"]) == [3]  # VTK_LINE
+        assert np.max(np.abs(pts[:, :2] - np.array([[0, 0], a]))) < 1e-10
+        assert set(arrays) == {"total_displacement", "elastic_displacement"}
+        assert cell_types(ds["coupler"]) == [9] * (fourbar.NX * fourbar.NY)  # VTK_QUAD
+    # each body's own series too
+    for body in ("crank", "coupler", "rocker"):
+        files = [d.get("file") for d in ET.parse(out / f"{body}.pvd").getroot().iter("DataSet")]
+        assert len(files) == 5 and all(f.startswith(f"vtu/{body}_") for f in files)
+
+
+def test_a_rigid_body_is_drawn_as_the_convex_hull_of_its_attachment_points(tmp_path):
+    # a triangular plate on a pivot, held by springs at two corners; a spring at a point on the
+    # edge between the pivot and a corner (collinear: not a hull vertex); a lone block (nothing
+    # attached: a vertex at its reference point)
+    m = lsmbs.ModelBuilder("triangle")
+    m.rigid_body("plate", position=(1, 2), angle=0.3, mass=1, inertia=0.01)
+    m.rigid_body("block", position=(3, 0), mass=1)
+    m.revolute("pivot", at("plate"))
+    m.spring_damper("s1", at("plate", (0.4, 0)), lsmbs.ground((2, 2)), stiffness=10)
+    m.spring_damper("s2", at("plate", (0.1, 0.3)), lsmbs.ground((1, 3)), stiffness=10)
+    m.spring_damper("s3", at("plate", (0.2, 0)), lsmbs.ground((1.5, 1)), stiffness=10)
+    m.output(vtu_stride=1)
+    m.simulation(t_end=0.01, h=0.01)
+    m.save(tmp_path / "tri.json")
+    S = run_cli("static", tmp_path / "tri.json", "-o", tmp_path / "st")
+    assert {"model.vtm", "plate.vtu", "block.vtu"} <= set(S["files"])
+    vtm = ET.parse(tmp_path / "st" / "model.vtm").getroot()
+    assert {d.get("name") for d in vtm.iter("DataSet")} == {"plate", "block"}
+    pts, arrays = read_vtu(tmp_path / "st" / "plate.vtu")
+    assert cell_types(tmp_path / "st" / "plate.vtu") == [7]  # VTK_POLYGON
+    # at t = 0 (points − total displacement): the corners placed at (1, 2) turned by 0.3 rad
+    X = pts[:, :2] - arrays["total_displacement"][:, :2]
+    c, s_ = math.cos(0.3), math.sin(0.3)
+    corners = np.array([[0, 0], [0.4, 0], [0.1, 0.3]]) @ np.array([[c, -s_], [s_, c]]).T + (1, 2)
+    assert len(X) == 3
+    for k in range(3):  # the same triangle, counter-clockwise from any vertex
+        if np.allclose(np.roll(X, k, axis=0), corners, atol=1e-12):
+            break
+    else:
+        raise AssertionError(X)
+    pts, _ = read_vtu(tmp_path / "st" / "block.vtu")
+    assert cell_types(tmp_path / "st" / "block.vtu") == [1]  # VTK_VERTEX
+    assert np.allclose(pts[:, :2], [[3, 0]], atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["model", "a/b", ".hidden"])
+def test_a_body_name_that_cannot_name_its_output_files_is_an_input_error(tmp_path, name):
+    m = lsmbs.ModelBuilder("named")
+    m.rigid_body(name, mass=1, inertia=1)
+    m.simulation(t_end=0.01, h=0.01)
+    doc = m.document()
+    (tmp_path / "c.json").write_text(__import__("json").dumps(doc))
+    p = subprocess.run([CLI, "simulate", str(tmp_path / "c.json"), "-o", str(tmp_path / "o"), "-q"],
+                       capture_output=True, text=True)
+    assert p.returncode == 2, p.stderr
+    assert "/bodies/0/name" in p.stderr and "c.json" in p.stderr
+    assert not (tmp_path / "o").exists()

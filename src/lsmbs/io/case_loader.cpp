@@ -960,8 +960,9 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
     const std::string name = b.string("name");
     // a body's name is part of the names of its output files (vtu/<body>_<step>.vtu, <body>.pvd)
     if (name.empty() || name[0] == '.' || name.find_first_of("/\\") != std::string::npos)
-      b.fail("name", "a body's name names its output files: expected a name without '/' or '\\' "
-                     "that does not start with '.'");
+      b.fail("name",
+             "a body's name names its output files: expected a name without '/' or '\\' "
+             "that does not start with '.'");
     if (name == kModelVtk)
       b.fail("name", std::string("'") + kModelVtk +
                          "' names the VTK output of all bodies (model.pvd, model.vtm); choose "

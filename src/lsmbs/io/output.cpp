@@ -61,7 +61,9 @@ struct VtuPiece {
   std::vector<int> types;                  // VTK cell types: 1 vertex, 3 line, 7 polygon, 9 quad
   std::vector<VtuArray> point_data, cell_data;
 
-  void add_cell(std::initializer_list<int> nodes, int type) { add_cell(nodes.begin(), nodes.end(), type); }
+  void add_cell(std::initializer_list<int> nodes, int type) {
+    add_cell(nodes.begin(), nodes.end(), type);
+  }
   template <class It>
   void add_cell(It first, It last, int type) {
     connectivity.insert(connectivity.end(), first, last);
@@ -251,8 +253,8 @@ void write_vtm(const std::string& path,
   os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" "
         "byte_order=\"LittleEndian\">\n<vtkMultiBlockDataSet>\n";
   for (size_t i = 0; i < blocks.size(); ++i)
-    os << "<DataSet index=\"" << i << "\" name=\"" << xml_attribute(blocks[i].first)
-       << "\" file=\"" << xml_attribute(blocks[i].second) << "\"/>\n";
+    os << "<DataSet index=\"" << i << "\" name=\"" << xml_attribute(blocks[i].first) << "\" file=\""
+       << xml_attribute(blocks[i].second) << "\"/>\n";
   os << "</vtkMultiBlockDataSet>\n</VTKFile>\n";
   write_file_atomic(path, os.str());
 }

@@ -74,7 +74,7 @@ class Recorder : public StepObserver {
 
  public:
   std::map<std::string, std::vector<std::pair<double, std::string>>> pvd_;  // per body
-  std::vector<std::pair<double, std::string>> model_pvd_;                     // the .vtm files
+  std::vector<std::pair<double, std::string>> model_pvd_;                   // the .vtm files
 };
 
 }  // namespace
