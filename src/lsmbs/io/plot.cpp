@@ -5,9 +5,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 
 extern char** environ;
 
@@ -69,6 +73,55 @@ bool plot(const PlotSpec& s) {
   std::filesystem::remove(script);
   std::error_code ec;
   if (!ok) std::filesystem::remove(s.png, ec);  // no half-written picture
+  return ok && std::filesystem::exists(s.png);
+}
+
+bool plot_panels(const PanelPlotSpec& s, const std::vector<std::vector<double>>& rows) {
+  using P = PanelPlotSpec;
+  if (s.panels.empty() || rows.size() < 2) return false;
+  const int np = static_cast<int>(s.panels.size());
+  const int W = s.width, H = P::kTop + P::kBottom + np * s.panel_height + (np - 1) * P::kGap;
+  const double x0 = rows.front()[0], x1 = rows.back()[0];
+  if (!(x1 > x0)) return false;
+  const std::string script = s.png + ".gp";
+  {
+    std::ofstream g(script);
+    g << std::setprecision(17);
+    g << "set terminal pngcairo size " << W << "," << H << " noenhanced\nset output "
+      << gnuplot_quote(s.png) << "\nset datafile separator ','\nset grid\n"
+      << "set key outside right top\nset multiplot title " << gnuplot_quote(s.title) << "\n"
+      << "set lmargin at screen " << double(P::kLeft) / W << "\nset rmargin at screen "
+      << double(W - P::kRight) / W << "\nset xrange [" << x0 << ":" << x1 << "]\n";
+    for (int i = 0; i < np; ++i) {
+      const Panel& p = s.panels[i];
+      double lo = INFINITY, hi = -INFINITY;
+      for (const auto& r : rows)
+        for (const auto& ser : p.series) {
+          const double v = r[static_cast<size_t>(ser.column - 1)];
+          if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+        }
+      if (!(hi >= lo)) lo = -1, hi = 1;  // nothing finite
+      const double pad = hi > lo ? 0.05 * (hi - lo) : lo != 0 ? 0.05 * std::abs(lo) : 1.0;
+      // pixel rows from the top: the screen coordinates gnuplot takes run from the bottom
+      const int top = P::kTop + i * (s.panel_height + P::kGap), bottom = top + s.panel_height;
+      g << "set tmargin at screen " << 1 - double(top) / H << "\nset bmargin at screen "
+        << 1 - double(bottom) / H << "\nset yrange [" << lo - pad << ":" << hi + pad << "]\n"
+        << "set ylabel " << gnuplot_quote(p.ylabel) << "\n"
+        << (i + 1 == np ? "set format x\nset xlabel " + gnuplot_quote(s.xlabel)
+                        : std::string("set format x ''\nunset xlabel"))
+        << "\nplot ";
+      for (size_t k = 0; k < p.series.size(); ++k)
+        g << (k ? ", " : "") << gnuplot_quote(s.csv) << " every ::1 using 1:" << p.series[k].column
+          << " with lines lw 1.5 lc rgb '" << kSeriesColours[k % std::size(kSeriesColours)]
+          << "' title " << gnuplot_quote(p.series[k].title);
+      g << "\n";
+    }
+    g << "unset multiplot\n";
+  }
+  const bool ok = run_gnuplot(script);
+  std::filesystem::remove(script);
+  std::error_code ec;
+  if (!ok) std::filesystem::remove(s.png, ec);
   return ok && std::filesystem::exists(s.png);
 }
 

@@ -25,6 +25,33 @@ struct PlotSpec {
 
 bool plot(const PlotSpec& spec);
 
+/// Panels stacked over one shared x axis: the time-history picture of `simulate` (history.png).
+/// The layout is fixed so that a reader (or a test) can map pixels back to values: each panel's
+/// plot area spans the pixel columns [kLeft, width − kRight) and rows of height panel_height
+/// between kTop and kBottom pixels of margin, panels kGap pixels apart; the x range is exactly
+/// [x_first, x_last] of the data, and each panel's y range is the [min, max] of its finite values
+/// widened by 5 % of max − min on both sides (± 5 % of |value|, or ± 1, when constant).
+struct PanelSeries {
+  int column = 2;  ///< 1-based column of the CSV (and of the rows)
+  std::string title;
+};
+struct Panel {
+  std::string ylabel;
+  std::vector<PanelSeries> series;
+};
+struct PanelPlotSpec {
+  std::string png, csv, title, xlabel;
+  std::vector<Panel> panels;
+  int width = 900, panel_height = 200;
+  static constexpr int kLeft = 110, kRight = 190, kTop = 40, kBottom = 64, kGap = 16;
+};
+/// Series colours, in order (then again): blue, red, green, purple, orange, brown.
+inline constexpr const char* kSeriesColours[] = {"#1f77b4", "#d62728", "#2ca02c",
+                                                 "#9467bd", "#ff7f0e", "#8c564b"};
+/// Draws the panels from `rows` (the rows of spec.csv, x in column 1); false when gnuplot is
+/// missing or fails (no picture is left then).
+bool plot_panels(const PanelPlotSpec& spec, const std::vector<std::vector<double>>& rows);
+
 /// Runs `gnuplot SCRIPT` without a shell (any path is safe), output discarded; false when gnuplot
 /// is missing or fails.
 bool run_gnuplot(const std::string& script);

@@ -8,6 +8,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/io/plot.hpp"
 #include "lsmbs/records/json.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
 
@@ -220,6 +221,31 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
       add_row(res.history.size() - 1);
     write_csv(ro.out_dir + "/history.csv", header, rows);
     std::vector<std::string> files = {"history.csv", "summary.json"};
+    // history.png: one panel per measure, its columns in it (layout: io/plot.hpp)
+    PanelPlotSpec ps;
+    ps.png = ro.out_dir + "/history.png";
+    ps.csv = ro.out_dir + "/history.csv";
+    ps.title = cs.name + ": measured histories";
+    ps.xlabel = "t [s]";
+    int col = 2;
+    for (const auto& m : cs.measures) {
+      const auto comps = m->components();
+      const auto units = m->units();
+      Panel p;
+      p.ylabel = m->name();
+      if (std::all_of(units.begin(), units.end(), [&](const auto& u) { return u == units[0]; }))
+        p.ylabel += " [" + units[0] + "]";
+      for (size_t k = 0; k < comps.size(); ++k)
+        p.series.push_back({col++, comps[k] + " [" + units[k] + "]"});
+      ps.panels.push_back(std::move(p));
+    }
+    if (!ps.panels.empty() && rows.size() >= 2) {
+      const bool drawn = plot_panels(ps, rows);
+      if (drawn) files.push_back("history.png");
+      S["history_plot"] =
+          drawn ? "history.png"
+                : "not drawn: gnuplot is missing or failed (history.csv has the data)";
+    }
     for (const auto& [body, entries] : rec.pvd_) {
       write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
       files.push_back(body + ".pvd");
