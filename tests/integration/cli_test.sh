@@ -84,7 +84,7 @@ assert png[:8] == b"\x89PNG\r\n\x1a\n"
 w, h = struct.unpack(">II", png[16:24])
 idat = b"".join(png[i + 8:i + 8 + struct.unpack(">I", png[i:i + 4])[0]] for i in [png.index(b"IDAT") - 4])
 raw = zlib.decompress(idat)
-assert w == 600 and len(raw) == h * (w + 1), (w, h, len(raw))
+assert w == 600 and png[25] == 2 and len(raw) == h * (3 * w + 1), (w, h, len(raw))  # RGB
 assert len(png) < len(raw) / 20, (len(png), len(raw))  # deflated by zlib (was stored blocks)
 assert s["files"] == ["plate.png", "plate.vtu", "summary.json"], s["files"]
 print("geometry ok: PNG", len(png), "bytes for", len(raw), "bytes of scanlines")

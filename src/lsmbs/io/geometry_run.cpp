@@ -4,13 +4,15 @@
 #include <filesystem>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/io/design_picture.hpp"
 #include "lsmbs/io/output.hpp"
-#include "lsmbs/io/png.hpp"
 
 namespace lsmbs {
 
 std::string GeometryRunOptions::validate() const {
-  if (image_width < 16 || image_width > 20000) return "image_width: expected 16..20000 pixels";
+  if (image_width < DesignPictureLayout::kMinWidth || image_width > 20000)
+    return "image_width: expected " + std::to_string(DesignPictureLayout::kMinWidth) +
+           "..20000 pixels";
   return {};
 }
 
@@ -64,9 +66,7 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
       for (int i = 0; i < mesh.num_nodes(); ++i)
         phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
       write_design_vtu(base + ".vtu", mesh, mu, phi);
-      int h = 0;
-      const auto px = render_element_field(bd.body->mesh, mu, mu_min, o.image_width, h);
-      write_png_gray(base + ".png", o.image_width, h, px);
+      write_design_png(base + ".png", mesh, mu, mu_min, phi, o.image_width);
       jb["files"] = {{"vtu", bd.body->name + ".vtu"}, {"png", bd.body->name + ".png"}};
       files.push_back(bd.body->name + ".vtu");
       files.push_back(bd.body->name + ".png");

@@ -1,7 +1,6 @@
 #pragma once
-// Minimal PNG output (8-bit greyscale, deflated by zlib at its best compression) and a
-// rasterizer that draws element values of a quad mesh as grey levels, the way the paper shows
-// designs (Figs. 1(d), 6, 13): μ = 1 black (material), μ = μ_min white (void).
+// Minimal PNG output: 8-bit greyscale or RGB, deflated by zlib at its best compression. Design
+// pictures are drawn by io/design_picture.hpp.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -12,11 +11,8 @@ namespace lsmbs {
 
 void write_png_gray(const std::string& path, int width, int height,
                     const std::vector<uint8_t>& pixels);
-
-/// Image of the mesh (design frame) `width` pixels wide; element e painted with grey level
-/// 255 (1 − μ_e)/(1 − μ_min). Returns the pixels (row-major, top row first); `height` receives
-/// the image height.
-std::vector<uint8_t> render_element_field(const Mesh2D& mesh, const Vec& mu, double mu_min,
-                                          int width, int& height);
+/// 8-bit RGB: three bytes per pixel, row-major, top row first.
+void write_png_rgb(const std::string& path, int width, int height,
+                   const std::vector<uint8_t>& pixels);
 
 }  // namespace lsmbs
