@@ -48,8 +48,8 @@ constexpr Glyph kFont[] = {
     {'u', {0x00, 0x11, 0x11, 0x11, 0x13, 0x1D, 0x10}},
     {' ', {0, 0, 0, 0, 0, 0, 0}},
 };
-constexpr int kScale = 2;                 // glyph pixels per font pixel
-constexpr int kAdvance = 6 * kScale;      // glyph width plus one column of space
+constexpr int kScale = 2;             // glyph pixels per font pixel
+constexpr int kAdvance = 6 * kScale;  // glyph width plus one column of space
 constexpr int kTextHeight = 7 * kScale;
 
 struct Canvas {
@@ -89,8 +89,7 @@ struct Canvas {
       for (int r = 0; r < 7; ++r)
         for (int col = 0; col < 5; ++col)
           if (g->rows[r] & (0x10 >> col))
-            fill(x + col * kScale, y + r * kScale, x + (col + 1) * kScale, y + (r + 1) * kScale,
-                 c);
+            fill(x + col * kScale, y + r * kScale, x + (col + 1) * kScale, y + (r + 1) * kScale, c);
       x += kAdvance;
     }
   }
@@ -152,8 +151,8 @@ void write_design_png(const std::string& path, const Mesh2D& mesh, const Vec& mu
       bl = bl.cwiseMin(P[k]), bu = bu.cwiseMax(P[k]);
     }
     const uint8_t g = grey(mu[e], mu_min);
-    for (int y = std::max(y0, static_cast<int>(bl.y())); y <= std::min(y1 - 1, static_cast<int>(bu.y()));
-         ++y)
+    for (int y = std::max(y0, static_cast<int>(bl.y()));
+         y <= std::min(y1 - 1, static_cast<int>(bu.y())); ++y)
       for (int x = std::max(x0, static_cast<int>(bl.x()));
            x <= std::min(x1 - 1, static_cast<int>(bu.x())); ++x) {
         const Vec2 c(x + 0.5, y + 0.5);
@@ -216,8 +215,8 @@ void write_design_png(const std::string& path, const Mesh2D& mesh, const Vec& mu
   auto ticks = [&](double a, double b) {  // tick values (in metres) in [a, b]
     const double step = nice_step((b - a) * unit, 5);
     std::vector<std::pair<double, std::string>> t;
-    for (double k = std::ceil(a * unit / step - 1e-9); k * step <= b * unit * (1 + 1e-12) + 1e-9 * step;
-         ++k)
+    for (double k = std::ceil(a * unit / step - 1e-9);
+         k * step <= b * unit * (1 + 1e-12) + 1e-9 * step; ++k)
       t.emplace_back(k * step / unit, tick_label(k * step, step));
     return t;
   };
