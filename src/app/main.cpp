@@ -135,7 +135,9 @@ int main(int argc, char** argv) {
   sen->add_option("--method", sen_args.method,
                   "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | "
                   "fd-central | idas | "
-                  "idas-adjoint (time-integral responses only)")
+                  "idas-adjoint (time-integral responses only); several separated by commas are "
+                  "all run and compared (methods.csv, methods.png), the first one's results are "
+                  "the gradients")
       ->capture_default_str();
   sen->add_option("--delta", sen_args.delta,
                   "perturbation Δp (semi-analytical) or finite-difference step")

@@ -182,3 +182,58 @@ def test_the_colour_bar_maps_grey_levels_back_to_mu_monotonically(tmp_path):
     assert n >= 10
     # a grey level is 1/255 of the range, a bar row 1/len(bar): measured 0.0027
     assert worst < 0.01, worst
+
+
+def test_sensitivity_with_several_methods_draws_their_derivatives_side_by_side(tmp_path):
+    """The oscillator of test_builder.py: x(t) = L0 + A cos(√(k/m) t); ∂x(T)/∂k > 0 at T = 1 s and
+    the mean's derivative < 0 (closed forms there). Three methods agree to 1e-6, so their bars,
+    each divided by the first method's magnitude, are ±1: the same height, on the closed form's side
+    of zero."""
+    from test_builder import A, K0, M, T_END, oscillator
+    w = math.sqrt(K0 / M)
+    assert -A * math.sin(w * T_END) * T_END / (2 * math.sqrt(K0 * M)) > 0  # ∂x(T)/∂k
+    oscillator().save(tmp_path / "osc.json")
+    methods = ["direct-analytic", "fd-central", "semi-analytical"]
+    S = run_cli("sensitivity", tmp_path / "osc.json", "--method", ",".join(methods),
+                "-o", tmp_path / "out")
+    assert {"methods.csv", "methods.png", "gradients.csv"} <= set(S["files"])
+    assert list(S["methods"]) == methods
+    g = [S["methods"][m]["gradients"]["x_end"]["k"] for m in methods]
+    assert g[0] == S["gradients"]["x_end"]["k"]  # the first method's are the gradients
+    assert max(abs(x / g[0] - 1) for x in g) < 1e-6
+    img = np.asarray(Image.open(tmp_path / "out" / "methods.png").convert("RGB")).astype(int)
+    assert img.shape == (560, 900, 3)
+    left, right, rows = frames(img)
+    colours = [(0x1f, 0x77, 0xb4), (0xd6, 0x27, 0x28), (0x2c, 0xa0, 0x2c)]  # io/plot.hpp
+    # the zero line: the long dark row strictly inside the frame
+    zero = [r for r in rows if rows[0] + 2 < r < rows[-1] - 2]
+    assert len(zero) >= 1
+    zero = zero[0]
+    tops, bottoms = [], []
+    for c in colours:
+        mask = np.all(np.abs(img - c) <= 40, axis=2)
+        mask[:, right:] = False  # the key
+        ys, xs = np.where(mask)
+        first = xs < xs.min() + (xs.max() - xs.min()) / 2  # x_end's group, then x_mean's
+        tops.append(ys[first].min())
+        assert ys[first].max() < zero  # x_end: ∂/∂k > 0, above zero
+        bottoms.append(ys[~first].max())
+        assert ys[~first].min() > zero  # x_mean: below zero
+    assert np.ptp(tops) <= 1 and np.ptp(bottoms) <= 1
+    # +1 on the axis: the y range is [−1, 1] widened by 10 % of 2 (io/plot.hpp), 1 is 1/2.4 of it
+    # above zero
+    span = rows[-1] - rows[0]
+    assert abs((zero - tops[0]) / span - 1 / 2.4) < 0.01, ((zero - tops[0]) / span)
+
+
+@pytest.mark.parametrize("methods, says", [("direct-analytic,bogus", "'bogus' is not a method"),
+                                           ("fd-central,fd-central", "given twice")])
+def test_a_bad_method_list_is_a_usage_error(tmp_path, methods, says):
+    import subprocess
+    from conftest import CLI
+    from test_builder import oscillator
+    oscillator().save(tmp_path / "osc.json")
+    p = subprocess.run([CLI, "sensitivity", str(tmp_path / "osc.json"), "--method", methods,
+                        "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert p.returncode == 2 and says in p.stderr and "--method" in p.stderr
+    assert not (tmp_path / "out").exists()

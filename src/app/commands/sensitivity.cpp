@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,25 +18,116 @@
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/io/plot.hpp"
 #include "lsmbs/records/json.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
 
 namespace lsmbs::app {
+namespace {
+
+struct MethodComparison {
+  nlohmann::json summary = nlohmann::json::object();  // summary.json["methods"]
+  std::vector<std::string> files;
+  bool all_ok = true;
+};
+
+// Several methods run (--method a,b,…): methods.csv (long form: every method's every derivative),
+// methods.png (a bar per method for each response and variable: the derivative divided by the
+// magnitude of the first method's, so that methods that agree draw bars of the same height; a
+// per-step response at the step where the first method's derivative is largest) and the summary.
+MethodComparison compare_methods(const std::string& out, const std::vector<std::string>& names,
+                                 const std::vector<lsmbs::SensitivityResult>& runs,
+                                 const std::vector<std::string>& vars) {
+  MethodComparison mc;
+  std::string csv = "method,response,variable,step,t,derivative\n";
+  lsmbs::BarChartSpec bars;
+  bars.png = out + "/methods.png";
+  bars.title = "design derivatives by method";
+  bars.ylabel = "derivative / |derivative by " + names[0] + "|";
+  bars.series = names;
+  bars.values.assign(names.size(), {});
+  const auto& ref = runs[0].responses;
+  for (size_t r = 0; r < ref.size(); ++r)
+    for (size_t i = 0; i < vars.size(); ++i) {
+      const Eigen::Index col = static_cast<Eigen::Index>(i);
+      Eigen::Index step = 0;  // a per-step response: the first method's largest derivative
+      if (ref[r].gradient.rows() > 1) ref[r].gradient.col(col).cwiseAbs().maxCoeff(&step);
+      const double scale = std::abs(ref[r].gradient(step, col));
+      bars.groups.push_back(ref[r].name + " / " + vars[i] +
+                            (ref[r].times.empty() ? "" : " (step " + std::to_string(step) + ")"));
+      for (size_t k = 0; k < runs.size(); ++k) {
+        const auto& rs = runs[k].responses;
+        const bool has = runs[k].ok && r < rs.size() && rs[r].gradient.rows() > step;
+        const double g = has ? rs[r].gradient(step, col) : NAN;
+        bars.values[k].push_back(scale > 0 ? g / scale : g == 0 ? 0.0 : NAN);
+      }
+    }
+  for (size_t k = 0; k < runs.size(); ++k) {
+    const auto& run = runs[k];
+    nlohmann::json grads = nlohmann::json::object();
+    for (const auto& rs : run.responses) {
+      nlohmann::json g = nlohmann::json::object();
+      for (size_t i = 0; i < vars.size() && run.ok; ++i) {
+        const Eigen::Index col = static_cast<Eigen::Index>(i);
+        std::vector<double> v;
+        for (Eigen::Index n = 0; n < rs.gradient.rows(); ++n) {
+          v.push_back(rs.gradient(n, col));
+          csv += lsmbs::csv_field(names[k]) + "," + lsmbs::csv_field(rs.name) + "," +
+                 lsmbs::csv_field(vars[i]) + "," + std::to_string(n) + "," +
+                 lsmbs::csv_number(rs.times.empty() ? NAN : rs.times[static_cast<size_t>(n)]) +
+                 "," + lsmbs::csv_number(rs.gradient(n, col)) + "\n";
+        }
+        g[vars[i]] = rs.times.empty() ? nlohmann::json(v.empty() ? NAN : v[0]) : nlohmann::json(v);
+      }
+      grads[rs.name] = g;
+    }
+    mc.all_ok = mc.all_ok && run.ok;
+    mc.summary[names[k]] = {{"status", run.ok ? "complete" : "failed"},
+                            {"wall_seconds", run.counts.wall_seconds},
+                            {"simulations", run.counts.simulations}};
+    if (run.ok)
+      mc.summary[names[k]]["gradients"] = grads;
+    else
+      mc.summary[names[k]]["failure"] = run.message;
+  }
+  lsmbs::write_file_atomic(out + "/methods.csv", csv);
+  mc.files.push_back("methods.csv");
+  if (!bars.groups.empty() && lsmbs::plot_bars(bars)) mc.files.push_back("methods.png");
+  return mc;
+}
+
+}  // namespace
 
 int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   const std::string& case_file = c.case_file;
   const std::string& out = c.out;
-  const std::string& method = a.method;
+  // --method a,b,…: every method is run; the first one's results are the gradients, the others
+  // are compared with it (methods.csv, methods.png)
+  std::vector<std::string> methods;
+  for (size_t b = 0, e; b <= a.method.size(); b = e + 1) {
+    e = std::min(a.method.find(',', b), a.method.size());
+    methods.push_back(a.method.substr(b, e - b));
+  }
+  const std::string& method = methods.front();
   const std::string& cmdline = c.command_line;
   const bool quiet = c.quiet;
   const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
   lsmbs::SensitivityOptions so;
   so.threads = a.threads;
-  if (!lsmbs::SensitivityOptions::parse(method, so.method)) {
-    std::string all;
-    for (const auto& n : lsmbs::SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
-    throw lsmbs::Error("--method " + method + ": expected one of " + all);
+  std::vector<lsmbs::SensitivityOptions::Method> parsed;
+  for (const auto& m : methods) {
+    if (!lsmbs::SensitivityOptions::parse(m, so.method)) {
+      std::string all;
+      for (const auto& n : lsmbs::SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
+      throw lsmbs::Error("--method " + a.method + ": '" + m +
+                         "' is not a method; expected one or " +
+                         "several, separated by commas, of " + all);
+    }
+    if (std::count(methods.begin(), methods.end(), m) > 1)
+      throw lsmbs::Error("--method " + a.method + ": '" + m + "' is given twice");
+    parsed.push_back(so.method);
   }
+  so.method = parsed.front();
   if (!(a.delta > 0) || !std::isfinite(a.delta))
     throw lsmbs::Error("--delta: expected a positive step");
   check_idas_tolerances(a.rtol, a.atol);
@@ -60,6 +152,12 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   lsmbs::install_interrupt_handlers();  // an interrupt stops the generalized-α runs at the next
                                         // step
   const auto res = lsmbs::compute_sensitivities(cs, p, so);
+  std::vector<lsmbs::SensitivityResult> compared = {res};  // every method, the first one first
+  for (size_t k = 1; k < parsed.size() && res.ok; ++k) {
+    lsmbs::SensitivityOptions sk = so;
+    sk.method = parsed[k];
+    compared.push_back(lsmbs::compute_sensitivities(cs, p, sk));
+  }
   std::optional<lsmbs::GradientCheckResult> checked;
   if (check && res.ok) checked = lsmbs::check_gradients(cs, p, res.responses, *check);
   line.clear();
@@ -129,8 +227,18 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   if (res.ok)
     lsmbs::write_file_atomic(out + "/gradients.csv", csv);  // a failed run has no gradients
   S["units"] = lsmbs::units_json(cs);
-  S["files"] = res.ok ? lsmbs::file_list({"gradients.csv", "summary.json"})
-                      : lsmbs::file_list({"summary.json"});
+  std::vector<std::string> files = {"summary.json"};
+  if (res.ok) files.push_back("gradients.csv");
+  bool others_ok = true;
+  if (compared.size() > 1) {
+    std::vector<std::string> vars;
+    for (const auto& v : d.variables) vars.push_back(v.name);
+    const MethodComparison mc = compare_methods(out, methods, compared, vars);
+    S["methods"] = mc.summary;
+    for (const auto& f : mc.files) files.push_back(f);
+    others_ok = mc.all_ok;
+  }
+  S["files"] = lsmbs::file_list(std::move(files));
   lsmbs::write_json_atomic(out + "/summary.json", S);
   if (!quiet) {
     std::printf(
@@ -166,6 +274,10 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   }
   if (!res.ok) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", res.message.c_str());
+    return 1;
+  }
+  if (!others_ok) {
+    std::fprintf(stderr, "lsmbs: numerical failure of a compared method (summary.json methods)\n");
     return 1;
   }
   if (checked && checked->verdict(*check) == "fail") {

@@ -125,4 +125,45 @@ bool plot_panels(const PanelPlotSpec& s, const std::vector<std::vector<double>>&
   return ok && std::filesystem::exists(s.png);
 }
 
+bool plot_bars(const BarChartSpec& s) {
+  if (s.groups.empty() || s.series.empty() || s.values.size() != s.series.size()) return false;
+  double lo = 0, hi = 0;
+  for (const auto& v : s.values)
+    for (double x : v)
+      if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
+  if (!(hi > lo)) hi = 1;
+  const double pad = 0.1 * (hi - lo);
+  const std::string data = s.png + ".dat", script = s.png + ".gp";
+  {
+    std::ofstream d(data);  // tab-separated: the group label, then one value per series
+    d << std::setprecision(17);
+    for (size_t g = 0; g < s.groups.size(); ++g) {
+      std::string label;
+      for (char c : s.groups[g]) label += c == '\t' || c == '\n' ? ' ' : c;
+      d << label;
+      for (const auto& v : s.values) d << "\t" << (std::isfinite(v[g]) ? v[g] : NAN);
+      d << "\n";
+    }
+    std::ofstream g(script);
+    g << "set terminal pngcairo size " << s.width << "," << s.height << " noenhanced\nset output "
+      << gnuplot_quote(s.png) << "\nset datafile separator '\\t'\nset datafile missing 'nan'\n"
+      << "set title " << gnuplot_quote(s.title) << "\nset ylabel " << gnuplot_quote(s.ylabel)
+      << "\nset style data histograms\nset style histogram clustered gap 1\n"
+      << "set style fill solid 0.9 border -1\nset boxwidth 0.9\nset grid ytics\n"
+      << "set xtics rotate by -30 nomirror\nset key outside right top\nset xzeroaxis lt -1\n"
+      << "set bmargin 7\nset yrange [" << lo - pad << ":" << hi + pad << "]\nplot ";
+    for (size_t k = 0; k < s.series.size(); ++k)
+      g << (k ? ", " : "") << gnuplot_quote(data) << " using " << k + 2 << (k ? "" : ":xtic(1)")
+        << " lc rgb '" << kSeriesColours[k % std::size(kSeriesColours)] << "' title "
+        << gnuplot_quote(s.series[k]);
+    g << "\n";
+  }
+  const bool ok = run_gnuplot(script);
+  std::filesystem::remove(script);
+  std::filesystem::remove(data);
+  std::error_code ec;
+  if (!ok) std::filesystem::remove(s.png, ec);
+  return ok && std::filesystem::exists(s.png);
+}
+
 }  // namespace lsmbs

@@ -52,6 +52,17 @@ inline constexpr const char* kSeriesColours[] = {"#1f77b4", "#d62728", "#2ca02c"
 /// missing or fails (no picture is left then).
 bool plot_panels(const PanelPlotSpec& spec, const std::vector<std::vector<double>>& rows);
 
+/// Clustered bars: for each group (x axis, labels turned), one bar per series in the colours of
+/// kSeriesColours; NaN draws no bar. The y range holds every bar and 0, widened by 10 %.
+struct BarChartSpec {
+  std::string png, title, ylabel;
+  std::vector<std::string> groups, series;
+  std::vector<std::vector<double>> values;  ///< [series][group]
+  int width = 900, height = 560;
+};
+/// False when gnuplot is missing or fails (no picture is left then).
+bool plot_bars(const BarChartSpec& spec);
+
 /// Runs `gnuplot SCRIPT` without a shell (any path is safe), output discarded; false when gnuplot
 /// is missing or fails.
 bool run_gnuplot(const std::string& script);
