@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # history.csv keeps the last recorded step whatever csv_stride is (a stride larger than the step
-# count once left only the t = 0 row), every n-th step otherwise; a model without flexible bodies
-# gets no empty vtu/ folder even with vtu_stride set.
+# count once left only the t = 0 row), every n-th step otherwise; a model of rigid bodies only gets
+# its bodies in vtu/ every vtu_stride-th step (a multiblock each, listing every body of the case).
 set -u
 lsmbs="$1"; root="$2"
 t="$(mktemp -d)"; trap 'rm -rf "$t"' EXIT
@@ -17,7 +17,16 @@ for name, stride in (("s1", 1), ("s3", 3), ("s99", 99)):
     json.dump(c, open("%s/%s.json" % (sys.argv[2], name), "w"))
 PY
 for s in s1 s3 s99; do "$lsmbs" simulate "$t/$s.json" -o "$t/$s" -q || fail "simulate $s"; done
-[ ! -e "$t/s1/vtu" ] || fail "empty vtu/ folder written for a rigid model"
+python3 - "$t" <<'PY' || fail "VTK files of a rigid model"
+import json, os, sys, xml.etree.ElementTree as ET
+d = sys.argv[1] + "/s1"
+bodies = {b["name"] for b in json.load(open(sys.argv[1] + "/s1.json"))["bodies"]}
+vtms = sorted(f for f in os.listdir(d + "/vtu") if f.endswith(".vtm"))
+assert vtms == sorted("model_%d.vtm" % k for k in range(0, 11, 2)), vtms  # 10 steps, stride 2
+for f in vtms:
+    names = {e.get("name") for e in ET.parse(d + "/vtu/" + f).getroot().iter("DataSet")}
+    assert names == bodies, (f, names, bodies)
+PY
 python3 - "$t" <<'PY' || fail "strides"
 import csv, sys
 d = sys.argv[1]

@@ -34,7 +34,7 @@ def test_a_mass_on_a_spring_hangs_at_m_g_over_k():
     assert r.measures["block.x"] == pytest.approx(0, abs=1e-14)
 
 
-def test_the_command_line_writes_the_same_equilibrium_and_a_vtu_for_flexible_bodies(tmp_path):
+def test_the_command_line_writes_the_same_equilibrium_and_the_vtk_files(tmp_path):
     E, nu, t, h, L, F = 70e9, 0.0, 0.01, 0.02, 0.5, 20.0
     m = lsmbs.ModelBuilder("cantilever")
     m.flexible_body("beam", rectangle((0, -h / 2), (L, h), (100, 4)), E=E, nu=nu, rho=2700,
@@ -53,7 +53,7 @@ def test_the_command_line_writes_the_same_equilibrium_and_a_vtu_for_flexible_bod
     assert -S["responses"]["tip_y"] == pytest.approx(beam, rel=2e-2)
     assert S["responses"]["tip_y"] == lsmbs.static(m.build()).responses["tip_y"]
     assert (tmp_path / "out" / "beam.vtu").stat().st_size > 1000
-    assert set(S["files"]) == {"summary.json", "history.csv", "beam.vtu"}
+    assert set(S["files"]) == {"summary.json", "history.csv", "beam.vtu", "model.vtm"}
     rows = (tmp_path / "out" / "history.csv").read_text().splitlines()
     assert len(rows) == 2
 

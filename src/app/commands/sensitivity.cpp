@@ -120,8 +120,8 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
       std::string all;
       for (const auto& n : lsmbs::SensitivityOptions::names()) all += (all.empty() ? "" : ", ") + n;
       throw lsmbs::Error("--method " + a.method + ": '" + m +
-                         "' is not a method; expected one or " +
-                         "several, separated by commas, of " + all);
+                         "' is not a method; expected one of " + all +
+                         " (or several, separated by commas)");
     }
     if (std::count(methods.begin(), methods.end(), m) > 1)
       throw lsmbs::Error("--method " + a.method + ": '" + m + "' is given twice");
