@@ -588,7 +588,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       [](const CasePtr& cs, const std::string& method, const py::object& design, double delta,
          bool relative, const std::string& matrix, int threads, double rtol, double atol,
          bool check, double check_delta, unsigned check_seed, double check_warn, double check_fail,
-         const py::object& progress) {
+         const py::object& progress, double adjoint_memory) {
         SensitivityOptions o;
         if (!SensitivityOptions::parse(method, o.method)) {
           std::string all;
@@ -600,6 +600,7 @@ PYBIND11_MODULE(_lsmbs, m) {
         o.delta = delta;
         o.relative = relative;
         o.threads = threads;
+        o.adjoint_memory_mb = adjoint_memory;
         o.idas.rtol = rtol;
         o.idas.atol = atol > 0 ? atol : rtol;
         const GradientCheckOptions co =
@@ -625,8 +626,10 @@ PYBIND11_MODULE(_lsmbs, m) {
       py::arg("matrix") = "converged", py::arg("threads") = 2, py::arg("rtol") = 1e-9,
       py::arg("atol") = 0.0, py::arg("check") = false, py::arg("check_delta") = 1e-5,
       py::arg("check_seed") = 20261122u, py::arg("check_warn") = 1e-3, py::arg("check_fail") = 5e-2,
-      py::arg("progress") = py::none(),
-      "Responses and their design gradients (§4.3) by one method, as `lsmbs sensitivity`");
+      py::arg("progress") = py::none(), py::arg("adjoint_memory") = 0.0,
+      "Responses and their design gradients (§4.3) by one method, as `lsmbs sensitivity` "
+      "(method 'adjoint': the discrete adjoint, scalar responses; adjoint_memory: the bound on its "
+      "stored trajectory in MB, as --adjoint-memory)");
 
   // ---------------------------------------------------------------- design problem, optimize
   py::class_<Problem>(m, "DesignProblem",

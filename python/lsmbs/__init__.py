@@ -34,8 +34,8 @@ from ._lsmbs import (  # noqa: F401
     verify,
 )
 
-METHODS = ("semi-analytical", "semi-analytical-central", "direct-analytic", "fd-forward",
-           "fd-central", "idas", "idas-adjoint")
+METHODS = ("semi-analytical", "semi-analytical-central", "direct-analytic", "adjoint",
+           "adjoint-semi-analytical", "fd-forward", "fd-central", "idas", "idas-adjoint")
 from .builder import (  # noqa: E402,F401
     ModelBuilder,
     Variable,

@@ -133,8 +133,9 @@ int main(int argc, char** argv) {
       "--overwrite", overwrite,
       "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   sen->add_option("--method", sen_args.method,
-                  "semi-analytical | semi-analytical-central | direct-analytic | fd-forward | "
-                  "fd-central | idas | "
+                  "semi-analytical | semi-analytical-central | direct-analytic | adjoint (the "
+                  "discrete adjoint: scalar responses, cost independent of the number of "
+                  "variables) | adjoint-semi-analytical | fd-forward | fd-central | idas | "
                   "idas-adjoint (time-integral responses only); several separated by commas are "
                   "all run and compared (methods.csv, methods.png), the first one's results are "
                   "the gradients")
@@ -162,6 +163,12 @@ int main(int argc, char** argv) {
   sen->add_option("--atol", sen_args.atol,
                   "--method idas, idas-adjoint: IDAS absolute tolerance in units of the length "
                   "scale (default: rtol)");
+  sen->add_option("--adjoint-memory", sen_args.adjoint_memory_mb,
+                  "--method adjoint: bound on the memory of the stored trajectory in MB (0: no "
+                  "bound); a trajectory that does not fit is stored at checkpoints and "
+                  "recomputed in the backward pass (summary.json counts)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sen->add_option("--threads", sen_args.threads,
                   "2: the sensitivity update of each step runs on a second thread while the next "
                   "step is computed; "

@@ -175,9 +175,14 @@ fi
 python3 -c "print('[' * 200000 + ']' * 200000)" > "$tmp/deep.json"
 "$exe" simulate "$tmp/deep.json" -o "$tmp/bad4" 2> "$tmp/e4.txt"; rc=$?
 [ $rc -eq 2 ] && grep -q "nested deeper than" "$tmp/e4.txt" || fail "deeply nested JSON: rc $rc $(cat "$tmp/e4.txt")"
-"$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
+"$exe" sensitivity "$spring" --method adjoint-continuous -o "$tmp/sens2" 2> "$tmp/err4.txt"; rc=$?
 [ $rc -eq 2 ] || fail "unknown method returned $rc"
 grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(cat "$tmp/err4.txt")"
+# The discrete adjoint refuses the spring case's per-step response, naming the direct method
+"$exe" sensitivity "$spring" --method adjoint -o "$tmp/sens3" 2> "$tmp/err5.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "piston_x_per_step.*use --method direct-analytic" "$tmp/err5.txt" \
+  || fail "adjoint with a per-step response: rc $rc $(cat "$tmp/err5.txt")"
+[ ! -e "$tmp/sens3/summary.json" ] || fail "a refused adjoint run left a summary.json"
 # Optimization stopped after 4 evaluations by the testing hook (as an interruption would stop it),
 # then resumed: it ends at the same design as an uninterrupted run, simulating only the rest.
 python3 -c "

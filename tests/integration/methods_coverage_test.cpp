@@ -294,3 +294,34 @@ TEST(MethodsCoverage, CliGradientsCsvAndSummaryHoldTheLibraryNumbers) {
   EXPECT_EQ(rows, 2u * (2u + 6u));  // (two scalar responses, six steps in [0.5, 1.0]) x 2 variables
   EXPECT_EQ(compared, 2 * 2 + 2 * 6);
 }
+
+// The discrete adjoint in an optimization: the same closed-form optimum with the gradients of
+// "sensitivity": {"method": "adjoint"} (objective and constraint from one backward pass), and a
+// per-step constraint refused at the optimization's JSON path.
+TEST(MethodsCoverage, OptimizationWithTheDiscreteAdjointReachesTheClosedFormOptimum) {
+  json j = coasting_bodies("mma");
+  j["optimization"]["sensitivity"] = {{"method", "adjoint"}};
+  j["output"]["responses"].push_back(
+      {{"name", "spread_per_step"}, {"measure", "spread"}, {"aggregate", "per_step"}});
+  const OptRun r = optimize_case(j);  // an unused per-step response is skipped, not refused
+  const Vec& p = r.res.p;
+  std::printf("adjoint: %ld evaluations, m = (%.9f, %.9f) [closed form (%.9f, %.9f)], E = %.12f\n",
+              r.res.evaluations, p[0], p[1], kM1, kM2, r.res.final.objective);
+  EXPECT_TRUE(r.res.converged) << r.res.nlopt_status;
+  EXPECT_NEAR(p[0] / kM1, 1, 3e-4);
+  EXPECT_NEAR(p[1] / kM2, 1, 3e-4);
+  EXPECT_NEAR(r.res.final.objective / kE, 1, 1e-7);
+  // de/dm_i = −½/m_i² at the final design from the adjoint's constraint gradient
+  const auto& g = r.res.final.constraint_gradient;
+  ASSERT_EQ(g.rows(), 1);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(g(0, i), -0.5 / (p[i] * p[i]), 1e-10) << i;
+  json bad = j;
+  bad["optimization"]["constraints"] = {{{"response", "spread_per_step"}, {"upper", 0.5}}};
+  Case cs = test::make_case(bad);
+  try {
+    DesignProblem prob(cs, parse_optimization(cs));
+    ADD_FAILURE() << "a per-step constraint was accepted with the adjoint";
+  } catch (const SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("direct-analytic"), std::string::npos) << e.what();
+  }
+}

@@ -46,7 +46,8 @@ struct SensitivityArgs {
   bool full_residual = false;
   double rtol = 1e-9, atol = 0;
   int threads = 2;
-  bool check = false;  ///< gradient check along a random direction
+  double adjoint_memory_mb = 0;  ///< --adjoint-memory (0: no bound)
+  bool check = false;            ///< gradient check along a random direction
   GradientCheckOptions check_options;
 };
 

@@ -114,6 +114,7 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
   lsmbs::SensitivityOptions so;
   so.threads = a.threads;
+  so.adjoint_memory_mb = a.adjoint_memory_mb;
   std::vector<lsmbs::SensitivityOptions::Method> parsed;
   for (const auto& m : methods) {
     if (!lsmbs::SensitivityOptions::parse(m, so.method)) {

@@ -242,6 +242,7 @@ class AlphaRun {
         L_(model.length_scale()) {}
 
   bool start(State s0);
+  bool start_from(const GridCheckpoint& from, long grid_end);
   bool done() const { return grid_ >= n_steps_; }
   double step_size() const { return h_; }
   void predict(const AlphaCoefficients& c);
@@ -370,6 +371,45 @@ bool AlphaRun::start(State s0) {
   n_steps_ = std::lround(std::ceil((opt_.t_end - s0.t) / opt_.h - 1e-9));
   h_ = opt_.h;
   t_grid_next_ = s0.t + opt_.h;
+  started_ = true;
+  sum_.seconds.setup = seconds_since(t_start_);
+  return true;
+}
+
+// A start at a checkpoint of an earlier run on the same grid: that run's state, a_n, k and ζ.
+bool AlphaRun::start_from(const GridCheckpoint& from, long grid_end) {
+  if (auto msg = opt_.validate(); !msg.empty()) return fail("invalid integrator option " + msg);
+  if (auto msg = served_.validate(); !msg.empty()) return fail("invalid observer option " + msg);
+  if (from.state.q.size() != nq_ || from.state.v.size() != nq_ || from.state.a.size() != nq_ ||
+      from.state.lambda.size() != nc_ || from.acc_like.size() != nq_ || !(from.k > 0))
+    return fail("resume: the checkpoint does not belong to this model");
+  lu_.set_ordering(opt_.ordering);
+  lu_.analyze(model_.pattern());
+  sum_.k = k_ = from.k;
+  sum_.zeta = zeta_ = from.zeta;
+  cur_ = from.state;
+  prev_ = from.state;
+  a_cur_ = from.acc_like;
+  a_prev_ = a_cur_;
+  R_.resize(model_.n());
+  r_abs_.resize(nq_);
+  dx_.resize(model_.n());
+  row_floor_.setZero(nq_);
+  const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
+  for (auto* o : observers_) o->on_start(from.state, a_cur_, c0, k_, zeta_, nullptr);
+  std::vector<StepObserver*> concurrent;
+  for (auto* o : observers_)
+    (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
+  if (!concurrent.empty()) {
+    lu_alt_.share_analysis(lu_);
+    worker_.emplace(std::move(concurrent));
+  }
+  tol_phi_ = opt_.tol_phi * L_;
+  t0_ = from.t_origin;
+  grid_ = from.grid;
+  n_steps_ = grid_end;
+  h_ = opt_.h;
+  t_grid_next_ = t0_ + (grid_ + 1) * opt_.h;
   started_ = true;
   sum_.seconds.setup = seconds_since(t_start_);
   return true;
@@ -647,13 +687,11 @@ IntegratorSummary AlphaRun::finish() {
 
 }  // namespace
 
-// Algorithm 1 (with the departures listed in the header).
-IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p, State s0,
-                                        std::vector<StepObserver*> observers, State* final_state) {
-  AlphaRun run(opt_, served_, model, p, std::move(observers), final_state);
-  if (!run.start(std::move(s0))) return run.finish();
+namespace {
+// Algorithm 1's loop over the steps of a started run (with the departures listed in the header).
+IntegratorSummary integrate(AlphaRun& run, const GeneralizedAlphaOptions& opt) {
   while (!run.done()) {
-    const AlphaCoefficients c = AlphaCoefficients::make(opt_.rho_inf, run.step_size());  // (11)
+    const AlphaCoefficients c = AlphaCoefficients::make(opt.rho_inf, run.step_size());  // (11)
     run.predict(c);                         // q̈_{n+1} = 0, λ_{n+1} = 0; a, q, q̇ by (8)–(10)
     const NewtonStatus st = run.newton(c);  // S_t [Δq; Δλ] = −[r; kΦ] (19) until converged
     if (st != NewtonStatus::kConverged) {
@@ -667,6 +705,23 @@ IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p
     if (!go_on) break;
   }
   return run.finish();
+}
+}  // namespace
+
+IntegratorSummary GeneralizedAlpha::run(const Model& model, const ModelParams& p, State s0,
+                                        std::vector<StepObserver*> observers, State* final_state) {
+  AlphaRun run(opt_, served_, model, p, std::move(observers), final_state);
+  if (!run.start(std::move(s0))) return run.finish();
+  return integrate(run, opt_);
+}
+
+IntegratorSummary GeneralizedAlpha::resume(const Model& model, const ModelParams& p,
+                                           const GridCheckpoint& from, long grid_end,
+                                           std::vector<StepObserver*> observers,
+                                           State* final_state) {
+  AlphaRun run(opt_, served_, model, p, std::move(observers), final_state);
+  if (!run.start_from(from, grid_end)) return run.finish();
+  return integrate(run, opt_);
 }
 
 RunStatus IntegratorSummary::status() const {

@@ -87,6 +87,17 @@ struct IntegratorSummary {
   std::string report() const;  ///< outcome and counts, one paragraph
 };
 
+/// Where a run may be resumed: a converged state on the output grid with its acceleration-like
+/// a_n, the scaling of eq. (7) of the run it came from, and its place on that run's grid
+/// (t = t_origin + grid · h). The discrete adjoint recomputes its trajectory from these.
+struct GridCheckpoint {
+  State state;
+  Vec acc_like;
+  double k = 0, zeta = 0;
+  double t_origin = 0;
+  long grid = 0;
+};
+
 class GeneralizedAlpha {
  public:
   /// `served`: how the observers of run() are served (the factorization they see, threads).
@@ -98,6 +109,13 @@ class GeneralizedAlpha {
   /// on failure halve_or_fail, then accept (a_{n+1}), notify_observers and next_step.
   IntegratorSummary run(const Model& model, const ModelParams& p, State s0,
                         std::vector<StepObserver*> observers, State* final_state = nullptr);
+  /// Continues a run from a checkpoint up to grid step `grid_end` of the same grid, with the same
+  /// options and no new start (no projection, no consistent start, the checkpoint's k and ζ):
+  /// the steps are those of the run the checkpoint came from, up to round-off. Observers get
+  /// on_start with the checkpoint's state (start_factor null), then the steps.
+  IntegratorSummary resume(const Model& model, const ModelParams& p, const GridCheckpoint& from,
+                           long grid_end, std::vector<StepObserver*> observers,
+                           State* final_state = nullptr);
   /// Automatic k = ζ: mean of the non-zero |diagonal| entries of β'M + γ'C_t + K_t over the
   /// position unknowns at s.
   static double automatic_scaling(const Model& model, const ModelParams& p, const State& s,

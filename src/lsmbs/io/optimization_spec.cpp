@@ -88,6 +88,8 @@ OptimizationSpec parse_optimization(const Case& cs) {
             s.sensitivity.matrix))
       so->fail("matrix", "expected last, converged or refined");
     s.sensitivity.threads = so->integer("threads", s.sensitivity.threads, 1);
+    s.sensitivity.adjoint_memory_mb =
+        so->non_negative("adjoint_memory_mb", s.sensitivity.adjoint_memory_mb);
     if (s.sensitivity.threads > 2) so->fail("threads", "expected 1 or 2");
     so->finish();
   }

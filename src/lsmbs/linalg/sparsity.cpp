@@ -77,6 +77,18 @@ void BlockAssembler::multiply(std::span<const double> values, const Mat& X, Mat&
     }
 }
 
+void BlockAssembler::multiply_transpose(std::span<const double> values, const Mat& X,
+                                        Mat& Y) const {
+  const auto& p = r_.pattern;
+  Y.setZero(p.n, X.cols());
+  for (Eigen::Index k = 0; k < X.cols(); ++k)
+    for (int c = 0; c < p.n; ++c) {
+      double y = 0;
+      for (int i = p.col_ptr[c]; i < p.col_ptr[c + 1]; ++i) y += values[i] * X(p.row_ind[i], k);
+      Y(c, k) = y;
+    }
+}
+
 SpMat BlockAssembler::to_sparse(std::span<const double> values) const {
   const auto& p = r_.pattern;
   SpMat m(p.n, p.n);

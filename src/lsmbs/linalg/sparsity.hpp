@@ -67,6 +67,8 @@ class BlockAssembler {
   void add_diagonal(std::span<double> values, int i, double v) const;
   /// Y = A X for a block of columns, A given by values on the pattern.
   void multiply(std::span<const double> values, const Mat& X, Mat& Y) const;
+  /// Y = Aᵀ X (the discrete adjoint's refinement of its transposed solves).
+  void multiply_transpose(std::span<const double> values, const Mat& X, Mat& Y) const;
   /// Converts values to an Eigen sparse matrix (tests, small models, output).
   SpMat to_sparse(std::span<const double> values) const;
 

@@ -432,6 +432,31 @@ void Model::mass_damping_product(const State& s, const ModelParams& p, const Mat
   }
 }
 
+void Model::mass_damping_transpose_product(const State& s, const ModelParams& p, const Mat& Y,
+                                           Mat& MtY, Mat& CtY) const {
+  const auto nc = Y.cols();
+  MtY.setZero(nq_, nc);
+  CtY.setZero(nq_, nc);
+  LocalState ls;
+  ls.t = s.t;
+  LocalMat M, C;
+  for (const auto& f : forces_) {
+    const auto d = f->dofs();
+    const auto nd = static_cast<Eigen::Index>(d.size());
+    gather(s.q, d, ls.q);
+    gather(s.v, d, ls.v);
+    gather(s.a, d, ls.a);
+    f->mass_damping(ls, p, M, C);
+    const bool has_c = !C.isZero(0.0);
+    for (Eigen::Index j = 0; j < nd; ++j)
+      for (Eigen::Index i = 0; i < nd; ++i) {
+        const double mij = M(i, j), cij = has_c ? C(i, j) : 0.0;
+        if (mij != 0) MtY.row(d[j]) += mij * Y.row(d[i]);
+        if (cij != 0) CtY.row(d[j]) += cij * Y.row(d[i]);
+      }
+  }
+}
+
 void Model::element_mass_damping_product(int e, const State& s, const ModelParams& p,
                                          const Vec& qdd, const Vec& vd, LocalVec& out) const {
   const auto d = forces_[e]->dofs();
@@ -518,6 +543,44 @@ void Model::residual_param_derivative(const State& s, const ModelParams& p,
       r.setZero(static_cast<Eigen::Index>(d.size()));
       f->param_derivative(ls, p, j, r);
       for (size_t i = 0; i < d.size(); ++i) out[d[i]] += dv * r[i];
+    }
+  }
+}
+
+void Model::residual_param_contraction(const State& s, const ModelParams& p,
+                                       const ParamDirection& support, const Mat& Y, Mat& fields,
+                                       Mat& scalars) const {
+  const auto ncols = Y.cols();
+  fields.setZero(static_cast<Eigen::Index>(support.fields.size()), ncols);
+  scalars.setZero(static_cast<Eigen::Index>(support.scalars.size()), ncols);
+  LocalVec r;
+  for (size_t k = 0; k < support.fields.size(); ++k) {
+    const auto& f = support.fields[k];
+    const FlexibleBody* body = nullptr;
+    for (const auto& b : flex_)
+      if (b->field == f.field) body = b.get();
+    if (!body) continue;
+    const int e = body->first_force + f.element;
+    element_residual(e, s, p, r);
+    const double mu = p.fields[f.field][f.element];  // r_e linear in μ_e (eq. 3)
+    const auto d = forces_[e]->dofs();
+    for (size_t i = 0; i < d.size(); ++i)
+      fields.row(static_cast<Eigen::Index>(k)) += (r[i] / mu) * Y.row(d[i]);
+  }
+  LocalState ls;
+  ls.t = s.t;
+  for (size_t k = 0; k < support.scalars.size(); ++k) {
+    const int j = support.scalars[k].first;
+    for (const auto& f : forces_) {
+      if (!f->uses_parameter(j)) continue;
+      const auto d = f->dofs();
+      gather(s.q, d, ls.q);
+      gather(s.v, d, ls.v);
+      gather(s.a, d, ls.a);
+      r.setZero(static_cast<Eigen::Index>(d.size()));
+      f->param_derivative(ls, p, j, r);
+      for (size_t i = 0; i < d.size(); ++i)
+        scalars.row(static_cast<Eigen::Index>(k)) += r[i] * Y.row(d[i]);
     }
   }
 }

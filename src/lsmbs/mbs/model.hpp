@@ -128,6 +128,18 @@ class Model {
   /// (eq. 3: ∂r_e/∂μ_e = r_e/μ_e), scalar parameters through ForceElement::param_derivative.
   void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d,
                                  Vec& out) const;
+  /// The transposes of mass_damping_product: MtY = Mᵀ Y, CtY = Cᵀ Y (Y: nq × ncols), element
+  /// by element (the discrete adjoint's backward pass, adjoint_method.cpp).
+  void mass_damping_transpose_product(const State& s, const ModelParams& p, const Mat& Y, Mat& MtY,
+                                      Mat& CtY) const;
+  /// The adjoint contraction Yᵀ ∂R/∂p over the parameters a direction set touches: `support`
+  /// lists the material-field entries (field, element) and scalar parameters, and row k of
+  /// `fields` (`scalars`) receives the contraction of ∂r/∂(entry k) with the columns of Y
+  /// (n × ncols, the position rows used): exact as residual_param_derivative, but once per entry
+  /// for all columns, whatever the number of directions that share it.
+  void residual_param_contraction(const State& s, const ModelParams& p,
+                                  const ParamDirection& support, const Mat& Y, Mat& fields,
+                                  Mat& scalars) const;
   /// Residual contribution of one force element (local vector over its dofs()).
   void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
   /// Ṁ w = Σ_e [∂(M_e(q) w_e)/∂q_e] q̇_e (size nq): the rate of the mass matrix along the motion

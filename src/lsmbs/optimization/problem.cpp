@@ -46,6 +46,17 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
       throw SetupError("optimization.constraints", "unknown response '" + c.response + "'");
     constraint_index_.push_back(k);
   }
+  // the discrete adjoint takes scalar responses; those the optimization does not use are skipped
+  if (spec_.sensitivity.is_adjoint()) {
+    for (size_t j = 0; j < constraint_index_.size(); ++j)
+      if (cs_.responses[constraint_index_[j]].kind == ResponseSpec::Kind::kPerStep)
+        throw SetupError("optimization.constraints",
+                         "constraint on '" + spec_.constraints[j].response +
+                             "' is per_step (one constraint per grid step): the adjoint method "
+                             "takes scalar responses; constrain an aggregate (max, ks) or use "
+                             "sensitivity method direct-analytic");
+    spec_.sensitivity.adjoint_skip_per_step = true;
+  }
   // per-step constraints: count the steps of the window on the time grid
   for (size_t j = 0; j < constraint_index_.size(); ++j) {
     const auto& r = cs_.responses[constraint_index_[j]];

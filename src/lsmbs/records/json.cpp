@@ -95,6 +95,18 @@ void to_json(nlohmann::json& j, const SensitivityOptions& o) {
     j = {{"method", SensitivityOptions::name(o.method)}, {"idas", o.idas}};
     return;
   }
+  if (o.is_adjoint()) {
+    j = {{"method", SensitivityOptions::name(o.method)},
+         {"adjoint_memory_mb", o.adjoint_memory_mb},
+         {"pseudo_load", o.method == SensitivityOptions::Method::kAdjoint
+                             ? "exact"
+                             : "semi_analytical (forward difference of element residuals)"}};
+    if (o.method == SensitivityOptions::Method::kAdjointSemiAnalytical) {
+      j["delta"] = o.delta;
+      j["delta_mode"] = o.relative ? "relative" : "absolute";
+    }
+    return;
+  }
   j = {{"method", SensitivityOptions::name(o.method)},
        {"delta", o.delta},
        {"delta_mode", o.relative ? "relative" : "absolute"},
@@ -119,6 +131,9 @@ void to_json(nlohmann::json& j, const SensitivityCounts& c) {
        {"refinement_solves", c.refinement_solves},
        {"sensitivity_factorizations", c.sensitivity_factorizations},
        {"predictor_matrix_steps", c.predictor_matrix_steps},
+       {"adjoint_solves", c.adjoint_solves},
+       {"adjoint_recomputed_steps", c.adjoint_recomputed_steps},
+       {"adjoint_memory_bytes", c.adjoint_memory_bytes},
        {"wall_seconds", c.wall_seconds},
        {"primal_wall_seconds", c.primal_wall_seconds}};
 }

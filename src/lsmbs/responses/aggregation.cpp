@@ -53,10 +53,6 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
   const Eigen::Index nv = G ? G->cols() : 0;
   const auto n = static_cast<Eigen::Index>(idx.size());
   out.count = static_cast<int>(n);
-  // row i of G (df_i/dp), or nothing when no derivatives were given
-  auto add_row = [&](double w, Eigen::Index i) {
-    if (nv) out.gradient.row(0) += w * G->row(i);
-  };
   if (n == 0) {
     out.gradient.setZero(0, nv);
     return out;
@@ -70,7 +66,14 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
     }
     return out;
   }
+  // the scalar kinds: the value, its derivative with respect to each step's value f_n (the
+  // weights w_n) and the gradient Σ_n w_n df_n/dp
+  out.weights.assign(t.size(), 0.0);
   out.gradient.setZero(1, nv);
+  auto add_row = [&](double w, Eigen::Index i) {
+    out.weights[i] += w;
+    if (nv) out.gradient.row(0) += w * G->row(i);
+  };
   double val = 0;
   switch (r.kind) {
     case K::kAverage:
@@ -83,6 +86,7 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
       for (auto i : idx) val += v[i], add_row(1, i);
       val /= div;
       out.gradient /= div;
+      for (auto& w : out.weights) w /= div;
       break;
     }
     case K::kRms: {
@@ -106,7 +110,7 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
       for (auto i : idx)
         if (r.kind == K::kMax ? v[i] > v[best] : v[i] < v[best]) best = i;
       val = v[best];
-      add_row(1, best);
+      add_row(1, best);  // a subgradient: the extreme step's derivative
       break;
     }
     case K::kFinal:

@@ -40,6 +40,9 @@ struct Aggregate {
   std::vector<double> times;   ///< per_step: the step time of each value (empty otherwise)
   Mat gradient;                ///< values.size() × n_v (n_v = 0 when no derivatives were given)
   int count = 0;               ///< grid steps in the window
+  /// Scalar kinds: ∂(value)/∂f_n for every step n of the input (zero outside the window), so
+  /// that the gradient is Σ_n w_n df_n/dp (the adjoint's source terms); per_step: empty.
+  std::vector<double> weights;
   /// The response as one number: the value, or the largest per-step value (NaN: empty window or
   /// average_eq45 of one step).
   double scalar() const;

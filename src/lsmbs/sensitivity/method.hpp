@@ -5,6 +5,8 @@
 //   DirectSensitivity          Algorithm 2: semi-analytical (forward or central Δp) and
 //                              direct-analytic pseudo-loads, back-solves per step (eqs. 30–40)
 //   FiniteDifferenceSensitivity  whole re-simulations per design variable (forward or central)
+//   AdjointSensitivity         the discrete adjoint of the generalized-α solution: one backward
+//                              pass of transposed solves for all responses
 //   IdasSensitivity            SUNDIALS IDAS on the GGL form: forward sensitivities, or the
 //                              adjoint of the time-integral responses
 #include <memory>
@@ -36,6 +38,15 @@ class SensitivityMethod {
 
 /// semi-analytical, semi-analytical-central, direct-analytic.
 class DirectSensitivity final : public SensitivityMethod {
+ public:
+  using SensitivityMethod::SensitivityMethod;
+
+ protected:
+  SensitivityResult run(Study& study, const Vec& p) const override;
+};
+
+/// adjoint: the discrete adjoint of generalized-α (adjoint_method.cpp).
+class AdjointSensitivity final : public SensitivityMethod {
  public:
   using SensitivityMethod::SensitivityMethod;
 

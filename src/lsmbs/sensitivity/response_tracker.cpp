@@ -114,6 +114,10 @@ double ResponseTracker::evaluate(const Measure* measure, int component, const St
   return value;
 }
 
+Aggregate ResponseTracker::aggregate_response(size_t r) const {
+  return aggregate(cs_.responses[r], times_, cols_[response_column_[r]].values);
+}
+
 std::vector<ResponseSensitivity> ResponseTracker::results() const {
   std::vector<ResponseSensitivity> out;
   const int nv = static_cast<int>(dirs_.size());

@@ -18,6 +18,11 @@ class ResponseTracker {
   void record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
               const Mat* dl);
   std::vector<ResponseSensitivity> results() const;
+  /// Response r aggregated from the recorded values (no gradient): its value and the weights
+  /// ∂(value)/∂f_n of the recorded grid steps (aggregation.hpp).
+  Aggregate aggregate_response(size_t r) const;
+  /// Number of grid steps recorded.
+  size_t recorded() const { return times_.size(); }
   /// The run's constraint scaling k (constraint forces are kλ).
   void set_scaling(double k);
   /// Value of response r's measure component at s and, with the state derivatives, its total

@@ -17,6 +17,8 @@ const std::pair<const char*, Method> kNames[] = {
     {"semi-analytical", Method::kSemiAnalytical},
     {"semi-analytical-central", Method::kSemiAnalyticalCentral},
     {"direct-analytic", Method::kDirectAnalytic},
+    {"adjoint", Method::kAdjoint},
+    {"adjoint-semi-analytical", Method::kAdjointSemiAnalytical},
     {"fd-forward", Method::kFdForward},
     {"fd-central", Method::kFdCentral},
     {"idas", Method::kIdas},
@@ -62,6 +64,8 @@ std::string SensitivityOptions::validate() const {
     return "delta: expected a positive finite step";
   if (refinement_steps < 0) return "refinement_steps: expected a non-negative number of iterations";
   if (threads < 1 || threads > 2) return "threads: expected 1 or 2";
+  if (!(adjoint_memory_mb >= 0) || !std::isfinite(adjoint_memory_mb))
+    return "adjoint_memory: expected a non-negative number of megabytes (0: no bound)";
   return {};  // the IDAS options are the IDAS driver's to check (IdasOptions::validate)
 }
 
@@ -128,7 +132,9 @@ namespace {
 
 // A result that finished but holds a NaN or an infinity is a numerical failure, never a complete
 // run with null entries (a too large --delta can make a perturbed simulation meaningless).
-void flag_non_finite(SensitivityResult& res, const Design& d, bool grid_gradients) {
+// skip_per_step: per-step responses carry no gradient (adjoint_skip_per_step)
+void flag_non_finite(SensitivityResult& res, const Design& d, bool grid_gradients,
+                     bool skip_per_step) {
   if (!res.ok) return;
   auto fail = [&](const std::string& what) {
     res.ok = false;
@@ -139,7 +145,7 @@ void flag_non_finite(SensitivityResult& res, const Design& d, bool grid_gradient
   for (const auto& r : res.responses) {
     for (size_t k = 0; k < r.values.size(); ++k)
       if (!std::isfinite(r.values[k])) return fail("the value of response '" + r.name + "'");
-    if (!grid_gradients) continue;
+    if (!grid_gradients || (skip_per_step && !r.times.empty())) continue;
     for (Eigen::Index k = 0; k < r.gradient.rows(); ++k)
       for (Eigen::Index i = 0; i < r.gradient.cols(); ++i)
         if (!std::isfinite(r.gradient(k, i)))
@@ -185,7 +191,8 @@ SensitivityResult SensitivityMethod::compute(Study& cs, const Vec& p) const {
         "interrupted by signal " + std::to_string(interrupted()) + " (" + res.message + ")";
     return res;
   }
-  flag_non_finite(res, *cs.design, grid_gradients());
+  flag_non_finite(res, *cs.design, grid_gradients(),
+                  options_.is_adjoint() && options_.adjoint_skip_per_step);
   return res;
 }
 
@@ -201,6 +208,9 @@ std::unique_ptr<SensitivityMethod> make_sensitivity_method(const SensitivityOpti
     case Method::kIdas:
     case Method::kIdasAdjoint:
       return std::make_unique<IdasSensitivity>(o);
+    case Method::kAdjoint:
+    case Method::kAdjointSemiAnalytical:
+      return std::make_unique<AdjointSensitivity>(o);
   }
   throw std::logic_error("make_sensitivity_method: unknown method");
 }

@@ -8,6 +8,13 @@
 //  direct-analytic          the same linear pseudo-problem (37) with exact ∂r/∂p_i
 //                           (element-local, from ∂μ_e/∂p_i) plus M q̈*_i + C q̇*_i — no Δp;
 //  fd-forward, fd-central   whole re-simulations per design variable;
+//  adjoint                  the discrete adjoint of the generalized-α solution (Algorithm 1 as
+//                           implemented): the exact gradient of the same discrete solution as
+//                           direct-analytic, one transposed solve per step for all responses
+//                           at once, whatever the number of variables (adjoint_method.cpp);
+//  adjoint-semi-analytical  the same backward pass, ∂r/∂p contracted with the adjoint by a forward
+//                           difference of the element residuals (Δp as semi-analytical): the
+//                           paper's semi-analytical idea in adjoint form, not exact (O(Δp));
 //  idas                     SUNDIALS IDAS forward sensitivities on the GGL index-2 form
 //                           (independent reference, integrators/idas_ggl.hpp);
 //  idas-adjoint             IDAS adjoint sensitivities (IDASolveB) of the time-integral
@@ -35,13 +42,19 @@ struct SensitivityOptions {
     kFdForward,
     kFdCentral,
     kIdas,
-    kIdasAdjoint
+    kIdasAdjoint,
+    kAdjoint,
+    kAdjointSemiAnalytical
   };
   bool is_idas() const { return method == Method::kIdas || method == Method::kIdasAdjoint; }
+  bool is_adjoint() const {
+    return method == Method::kAdjoint || method == Method::kAdjointSemiAnalytical;
+  }
   /// Semi-analytical and finite-difference methods: they perturb p by `delta`.
   bool uses_delta() const {
     return method == Method::kSemiAnalytical || method == Method::kSemiAnalyticalCentral ||
-           method == Method::kFdForward || method == Method::kFdCentral;
+           method == Method::kFdForward || method == Method::kFdCentral ||
+           method == Method::kAdjointSemiAnalytical;
   }
   Method method = Method::kDirectAnalytic;
   /// Δp of the semi-analytical methods and step of the finite differences:
@@ -68,6 +81,13 @@ struct SensitivityOptions {
   /// keeps everything on one thread. Same results to round-off. Not machine-dependent: 2 is
   /// also the default on a one-core machine (it then only interleaves).
   int threads = 2;
+  /// Method adjoint: the bound on the memory of the stored trajectory [MB] (0: no bound). A
+  /// trajectory that does not fit is stored at checkpoints and recomputed segment by segment in
+  /// the backward pass.
+  double adjoint_memory_mb = 0;
+  /// Methods adjoint*: per-step responses get their values and NaN gradients instead of an error
+  /// (optimize sets it when the optimization does not use them; the default refuses them).
+  bool adjoint_skip_per_step = false;
   /// IDAS forward sensitivities (method idas): tolerances and options; output grid and final
   /// time are the case's generalized-α h and t_end.
   IdasOptions idas = IdasOptions::reference();
@@ -115,6 +135,10 @@ struct SensitivityCounts {
   /// predictor's (what `--matrix last` back-solves with there)
   long predictor_matrix_steps = 0;
   double wall_seconds = 0, primal_wall_seconds = 0;
+  /// Method adjoint: transposed back-solves (one per step, all responses at once), the peak
+  /// memory of the stored trajectory [bytes], and the steps recomputed from checkpoints.
+  long adjoint_solves = 0, adjoint_recomputed_steps = 0;
+  double adjoint_memory_bytes = 0;
   /// Adds one generalized-α run (a simulation, its steps, iterations, factorizations, residuals).
   void add_run(const IntegratorSummary& s);
 };

@@ -116,8 +116,8 @@ TEST(LoaderErrors, OptimizationSection) {
   expect_error(opt({{"optimizer", "mma-svanberg"}, {"inner_max_evaluations", 3}}),
                "/optimization/inner_max_evaluations", "the classic MMA has no inner iterations",
                true);
-  expect_error(opt({{"sensitivity", {{"method", "adjoint"}}}}), "/optimization/sensitivity/method",
-               "expected one of", true);
+  expect_error(opt({{"sensitivity", {{"method", "adjoint-continuous"}}}}),
+               "/optimization/sensitivity/method", "expected one of", true);
   expect_error(opt({{"sensitivity", {{"threads", 3}}}}), "/optimization/sensitivity/threads",
                "expected 1 or 2", true);
   expect_error(opt({{"sensitivity", {{"delta", -1e-6}}}}), "/optimization/sensitivity/delta",
