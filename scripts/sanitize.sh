@@ -24,7 +24,9 @@ build_start=$(date +%s)
 # --ci builds no examples (their slow ones are not run under --ci; the fast one runs in Release)
 examples=ON
 [ "$mode" = ci ] && examples=OFF
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DLSMBS_WITH_SANITIZERS=ON \
+generator=()  # Ninja for a new folder, as scripts/build.sh
+[ -f "$build/CMakeCache.txt" ] || { command -v ninja >/dev/null && generator=(-G Ninja); }
+cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DLSMBS_WITH_SANITIZERS=ON \
   -DLSMBS_BUILD_TESTS=ON -DLSMBS_BUILD_EXAMPLES=$examples -DCMAKE_UNITY_BUILD=ON >/dev/null
 cmake --build "$build" -j"$(nproc)"
 build_seconds=$(( $(date +%s) - build_start ))

@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libsundials-dev libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev zlib1g-dev
   gnuplot-nox
