@@ -29,7 +29,8 @@ using Method = SensitivityOptions::Method;
 
 namespace {
 
-double worst(const SensitivityResult& a, const SensitivityResult& ref, std::string* where = nullptr) {
+double worst(const SensitivityResult& a, const SensitivityResult& ref,
+             std::string* where = nullptr) {
   return test::worst_relative(a, ref, test::Norm::kPerValue, where);
 }
 
@@ -105,11 +106,10 @@ TEST(Adjoint, EveryTermOfTheRecurrenceIsNeeded) {
   const auto exact = adjoint_sensitivities(cs, p, o, AdjointTerms{});
   ASSERT_TRUE(exact.ok) << exact.message;
   ASSERT_LT(worst(exact, run(cs, Method::kDirectAnalytic)), 1e-9);
-  bool AdjointTerms::*terms[] = {&AdjointTerms::mass,          &AdjointTerms::damping,
-                                 &AdjointTerms::alpha_f,       &AdjointTerms::alpha_m,
-                                 &AdjointTerms::velocity_update,
-                                 &AdjointTerms::acceleration_update,
-                                 &AdjointTerms::start,         &AdjointTerms::multipliers};
+  bool AdjointTerms::*terms[] = {
+      &AdjointTerms::mass,    &AdjointTerms::damping,         &AdjointTerms::alpha_f,
+      &AdjointTerms::alpha_m, &AdjointTerms::velocity_update, &AdjointTerms::acceleration_update,
+      &AdjointTerms::start,   &AdjointTerms::multipliers};
   const char* names[] = {"mass",    "damping",         "alpha_f",
                          "alpha_m", "velocity_update", "acceleration_update",
                          "start",   "multipliers"};
@@ -206,7 +206,8 @@ TEST(Adjoint, CoarseRodOneHoleAgreesWithDirect) {
   json scalar = json::array();
   for (const auto& r : c["output"]["responses"])
     if (r["aggregate"] != "per_step") scalar.push_back(r);
-  scalar.push_back({{"name", "mean_elongation"}, {"measure", "elongation"}, {"aggregate", "average"}});
+  scalar.push_back(
+      {{"name", "mean_elongation"}, {"measure", "elongation"}, {"aggregate", "average"}});
   c["output"]["responses"] = scalar;
   Case cs = load_case_json(c, "<test>", std::string(LSMBS_SOURCE_DIR) + "/data/slider_crank");
   const auto adj = run(cs, Method::kAdjoint), dir = run(cs, Method::kDirectAnalytic);

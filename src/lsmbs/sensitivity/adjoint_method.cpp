@@ -39,16 +39,14 @@ struct Entry {
   long record = -1;  // its index among the tracker's grid records (grid entries)
 };
 
-double entry_bytes(const Model& m) {
-  return 8.0 * (3.0 * m.nq() + m.nc() + 1) + sizeof(Entry);
-}
+double entry_bytes(const Model& m) { return 8.0 * (3.0 * m.nq() + m.nc() + 1) + sizeof(Entry); }
 
 // Stores the steps of a run: every entry (a segment, or the whole trajectory), and optionally
 // a checkpoint at every `stride`-th grid step. Also records the response values (the tracker).
 class TrajectoryRecorder : public StepObserver {
  public:
-  TrajectoryRecorder(ResponseTracker* tracker, const ModelParams& p, bool keep_entries,
-                     long stride, long first_record)
+  TrajectoryRecorder(ResponseTracker* tracker, const ModelParams& p, bool keep_entries, long stride,
+                     long first_record)
       : tracker_(tracker), p_(p), keep_(keep_entries), stride_(stride), record_(first_record) {}
   void on_start(const State& s0, const Vec& a0, const AlphaCoefficients& c, double k, double zeta,
                 const SparseLU*) override {
@@ -105,8 +103,8 @@ struct SemiAnalyticalContraction {
 class Backward {
  public:
   Backward(Study& cs, const ModelParams& p, ResponseTracker& tracker,
-           const std::vector<std::vector<double>>& weights, const ParamDirection& support,
-           double k, double zeta, const AdjointTerms& terms, SensitivityCounts& counts,
+           const std::vector<std::vector<double>>& weights, const ParamDirection& support, double k,
+           double zeta, const AdjointTerms& terms, SensitivityCounts& counts,
            const SemiAnalyticalContraction* semi)
       : cs_(cs),
         m_(*cs.model),
@@ -219,8 +217,7 @@ class Backward {
 
  private:
   void factor(const std::string& what) {
-    if (!lu_.factor(vals_).ok())
-      throw NumericalFailure(what + " is singular (adjoint back-solve)");
+    if (!lu_.factor(vals_).ok()) throw NumericalFailure(what + " is singular (adjoint back-solve)");
     ++counts_.sensitivity_factorizations;
     ++counts_.sensitivity_matrix_assemblies;
   }
@@ -256,8 +253,8 @@ class Backward {
         m_.element_residual(e, s, p_, r0_);
         const auto d = m_.forces()[static_cast<size_t>(e)]->dofs();
         for (size_t j = 0; j < d.size(); ++j) {
-          const double g = (rp_[static_cast<Eigen::Index>(j)] - r0_[static_cast<Eigen::Index>(j)]) /
-                           sc.delta[i];
+          const double g =
+              (rp_[static_cast<Eigen::Index>(j)] - r0_[static_cast<Eigen::Index>(j)]) / sc.delta[i];
           if (g != 0) semi_sum_.col(static_cast<Eigen::Index>(i)) += g * mu_.row(d[j]).transpose();
         }
       }
@@ -332,12 +329,12 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
       }
     if (stride == 0) {
       const double need = 2 * std::sqrt(static_cast<double>(n_grid)) * per_entry / 1e6;
-      throw SetupError("adjoint_memory",
-                       "the adjoint of " + std::to_string(n_grid) + " steps of " +
-                           std::to_string(m.n()) + " unknowns needs at least about " +
-                           std::to_string(static_cast<long>(std::ceil(need))) +
-                           " MB with checkpoints (--adjoint-memory " +
-                           std::to_string(o.adjoint_memory_mb) + ")");
+      throw SetupError("adjoint_memory", "the adjoint of " + std::to_string(n_grid) + " steps of " +
+                                             std::to_string(m.n()) +
+                                             " unknowns needs at least about " +
+                                             std::to_string(static_cast<long>(std::ceil(need))) +
+                                             " MB with checkpoints (--adjoint-memory " +
+                                             std::to_string(o.adjoint_memory_mb) + ")");
     }
   }
 
@@ -411,8 +408,8 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
       if (!sum.ok || sum.aborted)
         throw NumericalFailure("adjoint: recomputing the steps from t = " +
                                std::to_string(ck.state.t) + " s failed: " + sum.message);
-      peak = std::max(peak, static_cast<double>(seg.entries.size() + rec.checkpoints.size()) *
-                                per_entry);
+      peak = std::max(peak,
+                      static_cast<double>(seg.entries.size() + rec.checkpoints.size()) * per_entry);
       sweep(seg.entries);
     }
     s0 = rec.checkpoints.front().state;

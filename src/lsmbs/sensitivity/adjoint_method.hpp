@@ -16,14 +16,14 @@ namespace lsmbs {
 /// Terms of the backward recurrence that a test may drop, to show that each is needed (every
 /// flag true: the exact adjoint; the command line and the library always use that).
 struct AdjointTerms {
-  bool mass = true;          ///< Mᵀ μ: the inertia of the pseudo-load (M q̈*)
-  bool damping = true;       ///< Cᵀ μ: the damping of the pseudo-load (C q̇*)
-  bool alpha_f = true;       ///< α_f q̈_n in the predictor (34)
-  bool alpha_m = true;       ///< α_m a_n in the predictor (34)
+  bool mass = true;                 ///< Mᵀ μ: the inertia of the pseudo-load (M q̈*)
+  bool damping = true;              ///< Cᵀ μ: the damping of the pseudo-load (C q̇*)
+  bool alpha_f = true;              ///< α_f q̈_n in the predictor (34)
+  bool alpha_m = true;              ///< α_m a_n in the predictor (34)
   bool velocity_update = true;      ///< γ' q_,p in the update (38)
   bool acceleration_update = true;  ///< β' q_,p in the update (39)
-  bool start = true;         ///< the consistent start's [M kΦ_qᵀ; kΦ_q 0] system
-  bool multipliers = true;   ///< responses' ∂f/∂λ (constraint forces)
+  bool start = true;                ///< the consistent start's [M kΦ_qᵀ; kΦ_q 0] system
+  bool multipliers = true;          ///< responses' ∂f/∂λ (constraint forces)
 };
 
 /// The adjoint method with some terms dropped (tests only; see AdjointTerms).
