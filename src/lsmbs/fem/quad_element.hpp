@@ -48,6 +48,8 @@ class QuadElement {
   double area() const { return area_; }
   /// Green–Lagrange strain (E11, E22, 2E12) and deformation gradient at the centre.
   void centre_strain(const Vec8& x, Eigen::Vector3d& E_voigt, Mat2& F) const;
+  /// ∇_X N_I at the element centre (rows I), for stresses evaluated there.
+  const Eigen::Matrix<double, 4, 2>& centre_gradients() const { return centre_.G; }
 
  private:
   struct Point {

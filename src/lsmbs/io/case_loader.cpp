@@ -418,9 +418,10 @@ struct Loader {
 
   // ---------------------------------------------------------------- measures and responses
   void measure(const JsonReader& r) {
-    const std::string type = r.one_of(
-        "type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation",
-                 "path_deviation", "constraint_force", "kinetic_energy", "strain_energy", "mass"});
+    const std::string type =
+        r.one_of("type", {"position", "velocity", "angle", "angular_velocity", "distance",
+                          "elongation", "path_deviation", "constraint_force", "kinetic_energy",
+                          "strain_energy", "mass", "stress"});
     const std::string name = r.string("name");
     // constraint_force measures are placeholders (null) until the model is built: their names are
     // pending
@@ -474,7 +475,25 @@ struct Loader {
       m = std::make_unique<KineticEnergyMeasure>(name);
     else if (type == "strain_energy")
       m = std::make_unique<StrainEnergyMeasure>(name);
-    else {
+    else if (type == "stress") {
+      const std::string body = r.string("body");
+      const FlexibleBody& fb =
+          at_key(r, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); });
+      StressMeasure::Options o;
+      o.aggregation = r.one_of("aggregate", {"ks", "pnorm"}, "ks") == "ks"
+                          ? StressMeasure::Aggregation::kKs
+                          : StressMeasure::Aggregation::kPNorm;
+      // σ_ref normalizes the KS exponent; a p-norm needs none
+      o.reference = o.aggregation == StressMeasure::Aggregation::kKs ? r.positive("reference")
+                                                                     : r.positive("reference", 1.0);
+      o.parameter =
+          r.positive("parameter", o.aggregation == StressMeasure::Aggregation::kKs ? 50.0 : 8.0);
+      if (o.aggregation == StressMeasure::Aggregation::kPNorm && o.parameter < 1)
+        r.fail("parameter", "expected a p-norm exponent >= 1");
+      o.relaxation = r.positive("relaxation", 0.5);
+      if (o.relaxation > 1) r.fail("relaxation", "expected the qp exponent q in (0, 1]");
+      m = std::make_unique<StressMeasure>(name, &fb, o);
+    } else {
       const std::string body = r.string("body");
       m = std::make_unique<FlexibleMassMeasure>(
           name,

@@ -142,7 +142,8 @@ std::string xml_attribute(const std::string& s) {
 
 }  // namespace
 
-void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, const ModelParams& p) {
+void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, const ModelParams& p,
+               const CellArrays& cells) {
   const int nn = b.mesh.num_nodes(), ne = b.mesh.num_elements();
   VtuPiece v;
   for (int i = 0; i < nn; ++i) v.points.push_back(q.segment<2>(b.node_dof(i)));
@@ -190,6 +191,7 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
                                   sig(1, 1) * sig(1, 1) + 3 * sig(0, 1) * sig(0, 1)));
   }
   v.cell_data = {{"mu", 1, std::vector<double>(mu.data(), mu.data() + ne)}, std::move(vm)};
+  for (const auto& [name, values] : cells) v.cell_data.push_back({name, 1, values});
   v.write(path);
 }
 
@@ -260,7 +262,8 @@ void write_vtm(const std::string& path,
 }
 
 ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
-                              const std::string& suffix, const Model& m, const Vec& q) {
+                              const std::string& suffix, const Model& m, const Vec& q,
+                              const std::vector<const StressMeasure*>& stress) {
   ModelVtkFiles f;
   std::vector<std::pair<std::string, std::string>> blocks;  // relative to the .vtm
   auto add = [&](const std::string& name) {
@@ -269,7 +272,18 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
     f.bodies.emplace_back(name, folder + file);
     return out_dir + "/" + folder + file;
   };
-  for (const auto& b : m.flexible_bodies()) write_vtu(add(b->name), *b, q, m.params());
+  for (const auto& b : m.flexible_bodies()) {
+    CellArrays cells;
+    for (const StressMeasure* sm : stress)
+      if (&sm->body() == b.get()) {
+        State s;
+        s.q = q;
+        std::vector<double> se;
+        sm->element_stresses(s, m.params(), se);
+        cells.emplace_back(sm->name() + "_relaxed_von_mises", std::move(se));
+      }
+    write_vtu(add(b->name), *b, q, m.params(), cells);
+  }
   for (const auto& b : m.rigid_bodies()) write_rigid_vtu(add(b.name), b, q);
   f.multiblock = folder + kModelVtk + suffix + ".vtm";
   write_vtm(out_dir + "/" + f.multiblock, blocks);

@@ -28,8 +28,11 @@ void write_csv(const std::string& path, const std::vector<std::string>& header,
 /// A flexible body at positions q: points x, the quads, point data total_displacement x − X (X:
 /// the placed mesh at t = 0) and elastic_displacement (x minus the rigid motion that fits the nodes
 /// best in least squares), cell data mu and von_mises.
+/// `cells`: further per-element arrays (name, one value per element), e.g. a stress measure's
+/// relaxed von Mises stresses.
+using CellArrays = std::vector<std::pair<std::string, std::vector<double>>>;
 void write_vtu(const std::string& path, const FlexibleBody& body, const Vec& q,
-               const ModelParams& p);
+               const ModelParams& p, const CellArrays& cells = {});
 /// The body-frame points a rigid body is drawn with: the convex hull (counter-clockwise, collinear
 /// points dropped) of its attachments (RigidBody::attachments) and of its centre of mass when that
 /// is off the reference point; the reference point alone when nothing attaches. One point, two
@@ -59,8 +62,11 @@ struct ModelVtkFiles {
 /// Every body of the model at positions q: OUT/<folder><body><suffix>.vtu (flexible bodies first,
 /// then rigid ones, each in model order) and OUT/<folder>model<suffix>.vtm listing them (folder:
 /// "" or ending in '/'; it must exist).
+/// `stress`: stress measures whose relaxed element stresses are written as the cell array
+/// "<measure>_relaxed_von_mises" of their body.
 ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
-                              const std::string& suffix, const Model& model, const Vec& q);
+                              const std::string& suffix, const Model& model, const Vec& q,
+                              const std::vector<const StressMeasure*>& stress = {});
 
 /// summary.json["design"]: {variable: value} at the design point p (empty: the case's initial
 /// design); null when the study has no design variables.

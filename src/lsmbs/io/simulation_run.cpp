@@ -32,6 +32,9 @@ class Recorder : public StepObserver {
   Recorder(const Case& cs, SimulationResult& res, const RunOptions& ro)
       : cs_(cs), res_(res), ro_(ro) {
     ncols_ = res.columns.size();
+    for (const auto& m : cs.measures)
+      if (const auto* sm = dynamic_cast<const StressMeasure*>(m.get()))
+        stress_measures_.push_back(sm);
   }
   void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double,
                 const SparseLU*) override {
@@ -60,9 +63,16 @@ class Recorder : public StepObserver {
     }
     res_.times.push_back(s.t);
     res_.history.push_back(std::move(row));
+    // the largest relaxed element stress of each stress measure, and where it sits
+    for (const StressMeasure* sm : stress_measures_) {
+      sm->element_stresses(s, cs_.model->params(), stresses_);
+      auto& mx = stress_max_[sm->name()];
+      for (size_t e = 0; e < stresses_.size(); ++e)
+        if (!(stresses_[e] <= mx.value)) mx = {stresses_[e], static_cast<int>(e), s.t};
+    }
     if (!ro_.out_dir.empty() && cs_.output.vtu_stride > 0 && step % cs_.output.vtu_stride == 0) {
-      const ModelVtkFiles f =
-          write_model_vtk(ro_.out_dir, "vtu/", "_" + std::to_string(step), *cs_.model, s.q);
+      const ModelVtkFiles f = write_model_vtk(ro_.out_dir, "vtu/", "_" + std::to_string(step),
+                                              *cs_.model, s.q, stress_measures_);
       for (const auto& [body, rel] : f.bodies) pvd_[body].emplace_back(s.t, rel);
       model_pvd_.emplace_back(s.t, f.multiblock);
     }
@@ -72,8 +82,16 @@ class Recorder : public StepObserver {
   const RunOptions& ro_;
   size_t ncols_ = 0;
   long grid_ = 0;
+  std::vector<double> stresses_;
+  std::vector<const StressMeasure*> stress_measures_;
 
  public:
+  struct StressMax {
+    double value = -1;
+    int element = -1;
+    double t = 0;
+  };
+  std::map<std::string, StressMax> stress_max_;
   std::map<std::string, std::vector<std::pair<double, std::string>>> pvd_;  // per body
   std::vector<std::pair<double, std::string>> model_pvd_;                   // the .vtm files
 };
@@ -204,6 +222,33 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
   S["responses"] = responses;
   S["response_definitions"] = windows;
   S["units"] = units_json(cs);
+  if (!rec.stress_max_.empty()) {
+    nlohmann::json st = nlohmann::json::object();
+    for (const auto& m : cs.measures)
+      if (const auto* sm = dynamic_cast<const StressMeasure*>(m.get())) {
+        const auto& mx = rec.stress_max_[sm->name()];
+        if (mx.element < 0) continue;
+        const FlexibleBody& b = sm->body();
+        Vec2 c = Vec2::Zero();
+        for (int k = 0; k < 4; ++k) c += 0.25 * b.mesh.nodes[b.mesh.quads[mx.element][k]];
+        const auto& o = sm->options();
+        st[sm->name()] = {
+            {"body", b.name},
+            {"max_relaxed_von_mises", mx.value},
+            {"unit", "Pa"},
+            {"element", mx.element},
+            {"t", mx.t},
+            {"element_centre_body_frame", {c.x(), c.y()}},
+            {"aggregate", o.aggregation == StressMeasure::Aggregation::kKs ? "ks" : "pnorm"},
+            {"parameter", o.parameter},
+            {"reference", o.reference},
+            {"relaxation", o.relaxation},
+            {"definition",
+             "s_e = mu_e^relaxation * von Mises of the Cauchy stress at the element centre "
+             "(solid material); the maximum over elements and recorded steps"}};
+      }
+    S["stress"] = st;
+  }
 
   if (!ro.out_dir.empty()) {
     std::vector<std::string> header = {"t"};

@@ -85,23 +85,35 @@ double ResponseTracker::evaluate(const Measure* measure, int component, const St
   for (const auto& [j, w] : g.da) row += w * da->row(j);
   for (const auto& [j, w] : g.dl) row += w * dl->row(j);
   if (measure->depends_on_params()) {
-    // explicit ∂f/∂p_i by a central difference along the parameter direction; the measures
-    // that depend on parameters (mass, energies) are linear in μ and in most parameters
+    // explicit ∂f/∂p_i: ∂f/∂μ exactly where the measure gives it (stress), otherwise a central
+    // difference along the parameter direction; the measures without exact partials (mass,
+    // energies) are linear in μ and in most parameters
+    int field = -1;
+    const bool exact_mu = measure->field_partials(*cs_.model, s, p, component, field, df_dmu_);
     for (int i = 0; i < nv; ++i) {
       const auto& d = dirs_[i];
       if (d.empty()) continue;
+      if (exact_mu)
+        for (const auto& f : d.fields)
+          if (f.field == field) row[i] += f.value * df_dmu_[f.element];
       // step: 1e-3 of μ (the measures are linear in μ, so any step is exact and a large one
       // avoids round-off) and 1e-6 relative for scalar parameters
       double t = 1e300;
-      for (const auto& f : d.fields)
-        if (f.value != 0) t = std::min(t, 1e-3 / std::abs(f.value));
+      if (!exact_mu)
+        for (const auto& f : d.fields)
+          if (f.value != 0) t = std::min(t, 1e-3 / std::abs(f.value));
       for (const auto& [j, v] : d.scalars)
         if (v != 0) t = std::min(t, 1e-6 * std::max(std::abs(p.scalars[j]), 1e-300) / std::abs(v));
       if (!(t < 1e300)) continue;
-      add_direction(scratch_, d, t);
+      auto step = [&](double tt) {
+        if (!exact_mu)
+          for (const auto& f : d.fields) scratch_.fields[f.field][f.element] += tt * f.value;
+        for (const auto& [j, v] : d.scalars) scratch_.scalars[j] += tt * v;
+      };
+      step(t);
       measure->evaluate(*cs_.model, s, scratch_, buf_.data());
       const double fp = buf_[component];
-      add_direction(scratch_, d, -2 * t);
+      step(-2 * t);
       measure->evaluate(*cs_.model, s, scratch_, buf_.data());
       const double fm = buf_[component];
       // restore the touched entries exactly (no copy of the whole parameter set per step)

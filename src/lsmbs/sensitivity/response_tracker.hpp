@@ -53,6 +53,7 @@ class ResponseTracker {
   ModelParams scratch_;
   Mat zero_q_, zero_l_;  // zero state derivatives: the explicit ∂f/∂p alone
   mutable std::vector<double> buf_;
+  Vec df_dmu_;  ///< ∂f/∂μ_e of a measure that gives it exactly
 };
 
 }  // namespace lsmbs
