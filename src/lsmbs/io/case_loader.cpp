@@ -694,10 +694,11 @@ struct Loader {
       for (const auto& other : d->bodies)
         if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
       std::vector<Feature> feats;
-      std::map<std::string, int> by_name;
+      std::map<std::string, int> by_name, fixed;  // design features, non-design ones
       for (const auto& f : g.items("features", true)) {
         const std::string name = f.string("name");
-        if (by_name.count(name)) f.fail("name", "duplicate feature name '" + name + "'");
+        if (by_name.count(name) || fixed.count(name))
+          f.fail("name", "duplicate feature name '" + name + "'");
         bool ok = false;
         const std::string ts = f.one_of("type", {"ellipse", "super_ellipse", "circle"});
         const auto type = Feature::parse_type(ts, &ok);
@@ -708,7 +709,13 @@ struct Loader {
           else
             ps.push_back(binding(f, pn, *d));
         }
-        const bool hole = f.boolean("hole", true);
+        // a non-design feature is solid inside and OR-ed with the region: material there
+        // whatever the design features do
+        const bool non_design = f.boolean("non_design", false);
+        if (non_design && f.has("hole"))
+          f.fail("hole",
+                 "a non_design feature is solid inside (material forced there); drop \"hole\"");
+        const bool hole = non_design ? false : f.boolean("hole", true);
         f.finish();
         Feature feat(name, type, ps, hole);
         // each parameter is monotone in its variable: its extremes are at the bounds
@@ -724,14 +731,37 @@ struct Loader {
         for (const auto* th : {&lo, &hi})
           if (auto msg = feat.check(*th); !msg.empty())
             f.fail("feature '" + name + "' is degenerate within the design bounds: " + msg);
-        by_name[name] = static_cast<int>(feats.size());
+        (non_design ? fixed : by_name)[name] = static_cast<int>(feats.size());
         feats.push_back(std::move(feat));
       }
       LevelSetNode root;
       if (g.has("region")) {
+        for (const auto& [name, i] : fixed)
+          if (g.child("region").raw().dump().find('"' + name + '"') != std::string::npos)
+            g.fail("region", "feature '" + name +
+                                 "' is non_design: it is OR-ed with the region, not part of it");
         root = region(g.child("region"), by_name);
       } else {  // the paper's default: material where every hole feature is positive
-        root = LevelSetNode::all_of(static_cast<int>(feats.size()));
+        root.op = LevelSetNode::Op::kAnd;
+        for (const auto& [name, i] : by_name) {
+          LevelSetNode leaf;
+          leaf.feature = i;
+          root.children.push_back(leaf);
+        }
+        std::sort(root.children.begin(), root.children.end(),
+                  [](const auto& a, const auto& b) { return a.feature < b.feature; });
+      }
+      if (!fixed.empty()) {  // (region) OR every non-design feature (exact max: §2.2)
+        LevelSetNode any;
+        any.op = LevelSetNode::Op::kOr;
+        if (!root.children.empty() || root.op == LevelSetNode::Op::kFeature)
+          any.children.push_back(std::move(root));
+        for (const auto& [name, i] : fixed) {
+          LevelSetNode leaf;
+          leaf.feature = i;
+          any.children.push_back(leaf);
+        }
+        root = std::move(any);
       }
       MappingOptions mo;
       mo.mu_min = g.number("mu_min", mo.mu_min);

@@ -433,3 +433,69 @@ TEST(CaseLoader, RedundantOrConflictingConstraintsAreRefusedNamingTheJoints) {
   EXPECT_NE(e2.find("1 of the 10 constraint equations"), std::string::npos) << e2;
   EXPECT_NE(e2.find("'cyl2'"), std::string::npos) << e2;
 }
+
+TEST(CaseLoader, NonDesignFeatureStaysSolidWithExactDerivatives) {
+  // A circular hole of radius r = 5 mm (variable) and a non-design disc of 2 mm at its centre
+  // (OR-ed with the region): the void is the annulus π(r² − 2²) (the logistic band adds
+  // π³ε²/3 to the convex hole and takes as much from the convex disc), ∂(void mass)/∂r is the
+  // hole's closed form ρ t 2πr (1 − μ_min), which the disc does not touch. A disc that covers
+  // part of the hole's boundary takes that part off the derivative: ∂m/∂r is then checked
+  // against central differences of the mapped mass.
+  json j = with_design();
+  j["bodies"][1]["mesh"]["elements"] = {40, 8};
+  j["design"]["geometry"][0]["features"].push_back({{"name", "keep"},
+                                                    {"type", "circle"},
+                                                    {"cx", 0.05},
+                                                    {"cy", 0.01},
+                                                    {"r", 0.002},
+                                                    {"non_design", true}});
+  const Case cs = test::make_case(j);
+  const double rho_t = 1000 * 0.001, r = 0.005, mu_min = 1e-3;
+  const double ref = rho_t * M_PI * (r * r - 0.002 * 0.002) * (1 - mu_min);
+  const double m = void_mass(cs);
+  std::vector<SpMat> dmu;
+  ModelParams params = cs.model->params();
+  cs.design->apply(cs.design->initial(), params, &dmu);
+  Vec g;
+  Design::mass_gradient(cs.design->bodies[0], dmu[0], params, g);
+  const double dref = rho_t * 2 * M_PI * r * (1 - mu_min);
+  std::printf("annulus: void mass %+.4f %% of the closed form, -dm/dr %+.4f %%\n",
+              100 * (m / ref - 1), 100 * (-g[0] / dref - 1));
+  EXPECT_NEAR(m / ref, 1.0, 1e-3);
+  EXPECT_NEAR(-g[0] / dref, 1.0, 1e-3);
+
+  // a non-design disc of 4 mm centred on the hole's boundary (x = 55 mm)
+  j["design"]["geometry"][0]["features"][1]["cx"] = 0.055;
+  j["design"]["geometry"][0]["features"][1]["r"] = 0.004;
+  const Case c2 = test::make_case(j);
+  ModelParams p2 = c2.model->params();
+  c2.design->apply(c2.design->initial(), p2, &dmu);
+  Design::mass_gradient(c2.design->bodies[0], dmu[0], p2, g);
+  auto mass_at = [&](double rr) {
+    Vec p(1);
+    p[0] = rr;
+    ModelParams pp = c2.model->params();
+    c2.design->apply(p, pp, nullptr);
+    return c2.model->find_flexible("p")->mass(pp);
+  };
+  const double h = 1e-6, fd = (mass_at(r + h) - mass_at(r - h)) / (2 * h);
+  std::printf("disc on the boundary: dm/dr %.6e, central difference %.6e, hole alone %.6e\n", g[0],
+              fd, -dref);
+  EXPECT_NEAR(g[0] / fd, 1.0, 1e-4);
+  EXPECT_GT(g[0], -0.9 * dref) << "the disc does not take its part of the boundary";
+
+  // errors: a non-design hole, a region naming a non-design feature
+  json bad = j;
+  bad["design"]["geometry"][0]["features"][1]["hole"] = true;
+  EXPECT_THROW(test::make_case(bad), Error);
+  bad = j;
+  bad["design"]["geometry"][0]["region"] = {{"and", {"hole", "keep"}}};
+  try {
+    test::make_case(bad);
+    ADD_FAILURE() << "a region naming a non-design feature was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/design/geometry/0/region: feature 'keep' is non_design"),
+              std::string::npos)
+        << e.what();
+  }
+}
