@@ -220,6 +220,32 @@ TEST(MethodsCoverage, MmaSvanbergRespectsItsMoveLimitAndReachesTheOptimum) {
   EXPECT_NEAR(d.res.p[0] / kM1, 1, 3e-4);
 }
 
+TEST(MethodsCoverage, MmaSvanbergAsymptoteInitBoundsTheFirstStep) {
+  // Svanberg (1987): the first asymptotes sit at x ± s (xmax − xmin), and the subproblem's box
+  // keeps x within L + 0.1 (x − L) … U − 0.1 (U − x): with s = asymptote_init = 0.05 the first step
+  // is at most 0.9 × 0.05 × (10 − 0.5) = 0.4275, whatever the (default, 0.5) move limit
+  json j = coasting_bodies("mma-svanberg");
+  j["optimization"]["asymptote_init"] = 0.05;
+  const OptRun r = optimize_case(j);
+  ASSERT_GE(r.res.history.size(), 2u);
+  double first = 0;
+  for (int i = 0; i < 2; ++i)
+    first = std::max(first, std::abs(r.res.history[1].p[i] - r.res.history[0].p[i]));
+  std::printf(
+      "mma-svanberg, asymptote_init 0.05: first step %.6f (bound 0.4275), %ld evaluations\n", first,
+      r.res.evaluations);
+  EXPECT_LE(first, 0.4275 * (1 + 1e-12));
+  EXPECT_GT(first, 0.4275 * 0.99) << "the first step is not limited by the asymptotes";
+  EXPECT_TRUE(r.res.converged);
+  EXPECT_NEAR(r.res.p[0] / kM1, 1, 3e-4);
+  EXPECT_NEAR(r.res.p[1] / kM2, 1, 3e-4);
+  // only the classic MMA has asymptote options
+  json bad = coasting_bodies("mma");
+  bad["optimization"]["asymptote_init"] = 0.2;
+  Case bc = test::make_case(bad);
+  EXPECT_THROW(parse_optimization(bc), Error);
+}
+
 TEST(MethodsCoverage, CliGradientsCsvAndSummaryHoldTheLibraryNumbers) {
   namespace fs = std::filesystem;
   const std::string dir = testing::TempDir() + "lsmbs_cli_numbers";

@@ -68,6 +68,13 @@ OptimizationSpec parse_optimization(const Case& cs) {
     if (s.move_limit > 1)
       r.fail("move_limit", "expected a fraction of the variable range in (0, 1]");
   }
+  if (r.has("asymptote_init")) {
+    if (s.optimizer != "mma-svanberg")
+      r.fail("asymptote_init", "the asymptotes are options of \"optimizer\": \"mma-svanberg\"");
+    s.asymptote_init = r.positive("asymptote_init");
+    if (s.asymptote_init > 1)
+      r.fail("asymptote_init", "expected a fraction of the variable range in (0, 1]");
+  }
   if (auto so = r.optional_child("sensitivity")) {
     const std::string m = so->string("method", "direct-analytic");
     if (!SensitivityOptions::parse(m, s.sensitivity.method)) {

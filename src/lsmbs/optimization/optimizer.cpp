@@ -163,6 +163,7 @@ nlopt_result run_mma_classic(Context& c, std::vector<double>& xs, const Evaluati
   const auto& spec = c.prob.spec();
   MmaOptions mo;
   mo.move = spec.move_limit;
+  mo.asyinit = spec.asymptote_init;
   MmaClassic mma(Vec::Zero(n), Vec::Ones(n), static_cast<int>(e0.constraints.size()), mo);
   Vec x = Eigen::Map<const Vec>(xs.data(), n);
   Evaluation cur = e0;

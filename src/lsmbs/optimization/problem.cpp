@@ -29,7 +29,8 @@ nlohmann::json OptimizationSpec::to_json() const {
           {"tol_constraint", tol_constraint},
           {"max_evaluations", max_evaluations},
           {"inner_max_evaluations", inner_max_evaluations},
-          {"move_limit", move_limit}};
+          {"move_limit", move_limit},
+          {"asymptote_init", asymptote_init}};
 }
 
 DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {

@@ -30,7 +30,8 @@ struct OptimizationSpec {
   };
   std::vector<Constraint> constraints;
   std::string optimizer = "mma";  ///< mma | ccsaq | slsqp (NLopt) | mma-svanberg (classic MMA)
-  double move_limit = 0.5;  ///< mma-svanberg: largest step per iteration, fraction of the range
+  double move_limit = 0.5;      ///< mma-svanberg: largest step per iteration, fraction of the range
+  double asymptote_init = 0.5;  ///< mma-svanberg: initial asymptote distance, fraction of range
   SensitivityOptions sensitivity;
   double tol_objective = 1e-4;     ///< relative objective change between accepted iterates
   double tol_constraint = 2.5e-3;  ///< relative constraint violation allowed at convergence
