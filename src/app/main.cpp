@@ -204,6 +204,13 @@ int main(int argc, char** argv) {
       "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   opt->add_flag("--resume", opt_args.resume,
                 "continue an interrupted run from OUT/checkpoint.json");
+  opt->add_option("--starts", opt_args.starts,
+                  "multi-start: N optimizations from N feasible random initial designs (uniform "
+                  "within the bounds, seeded), in OUT/start_1 … OUT/start_N, 2 at a time; "
+                  "OUT/starts.csv and summary.json rank them")
+      ->check(CLI::Range(1, 1000));
+  opt->add_option("--seed", opt_args.seed, "multi-start: seed of the random initial designs")
+      ->capture_default_str();
   opt->add_option("--optimizer", opt_args.optimizer, "override the case's optimizer")
       ->check(CLI::IsMember({"mma", "ccsaq", "slsqp", "mma-svanberg"}));
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
@@ -298,6 +305,7 @@ int main(int argc, char** argv) {
     if (*sta) return lsmbs::app::static_command(common, static_args);
     if (*opt) {
       opt_args.check = !no_check;
+      opt_args.overwrite = overwrite;
       return lsmbs::app::optimize_command(common, opt_args);
     }
     if (*ben) return lsmbs::app::bench_command(common, ben_args);

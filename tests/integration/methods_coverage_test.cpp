@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -350,4 +351,74 @@ TEST(MethodsCoverage, OptimizationWithTheDiscreteAdjointReachesTheClosedFormOpti
   } catch (const SetupError& e) {
     EXPECT_NE(std::string(e.what()).find("direct-analytic"), std::string::npos) << e.what();
   }
+}
+
+TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
+  // lsmbs optimize --starts 3 --seed 7 on the coasting bodies: every start is drawn within the
+  // bounds and is feasible by the closed form (spread = (1/m1 + 1/m2)/2 <= 0.5), the starts
+  // differ, every start reaches the closed-form optimum (m1, m2) = (1 + sqrt 2, m1/sqrt 2), and
+  // the ranking is the children's own results; the same seed gives the same starts
+  namespace fs = std::filesystem;
+  const std::string dir = testing::TempDir() + "lsmbs_multistart";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string file = dir + "/case.json";
+  std::ofstream(file) << coasting_bodies("mma").dump(1);
+  auto run = [&](const std::string& out, const std::string& extra) {
+    const std::string cmd =
+        std::string(LSMBS_CLI) + " optimize " + file + " -q -o " + dir + "/" + out + extra;
+    const int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  };
+  ASSERT_EQ(run("a", " --starts 3 --seed 7"), 0);
+  ASSERT_EQ(run("b", " --starts 3 --seed 7"), 0);
+  auto starts = [&](const std::string& out) {
+    std::ifstream f(dir + "/" + out + "/starts.csv");
+    std::string line;
+    std::getline(f, line);
+    EXPECT_EQ(line,
+              "start,exit_code,status,objective,max_violation,feasible,evaluations,wall_seconds,"
+              "initial.m1,initial.m2");
+    std::vector<std::vector<std::string>> rows;
+    while (std::getline(f, line)) {
+      std::vector<std::string> cells;
+      std::stringstream ss(line);
+      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+      rows.push_back(cells);
+    }
+    return rows;
+  };
+  const auto a = starts("a"), b = starts("b");
+  ASSERT_EQ(a.size(), 3u);
+  ASSERT_EQ(b.size(), 3u);
+  std::vector<double> objectives;
+  for (size_t k = 0; k < 3; ++k) {
+    ASSERT_EQ(a[k].size(), 10u);
+    const double m1 = std::stod(a[k][8]), m2 = std::stod(a[k][9]);
+    EXPECT_TRUE(m1 >= 0.5 && m1 <= 10 && m2 >= 0.5 && m2 <= 10) << m1 << ", " << m2;
+    EXPECT_LE(spread(m1, m2), 0.5) << "start " << k + 1 << " is not feasible";
+    EXPECT_EQ(a[k][8], b[k][8]) << "same seed, same starts";
+    EXPECT_EQ(a[k][9], b[k][9]);
+    if (k > 0) EXPECT_NE(a[k][8], a[k - 1][8]) << "the starts differ";
+    EXPECT_EQ(a[k][2], "complete");
+    const json S =
+        json::parse(std::ifstream(dir + "/a/start_" + std::to_string(k + 1) + "/summary.json"));
+    EXPECT_NEAR(S["final"]["design"]["m1"].get<double>() / kM1, 1, 3e-4);
+    EXPECT_NEAR(S["final"]["design"]["m2"].get<double>() / kM2, 1, 3e-4);
+    EXPECT_NEAR(S["initial"]["design"]["m1"].get<double>(), m1, 1e-15 * m1);
+    EXPECT_EQ(std::stod(a[k][3]), S["final"]["objective"].get<double>());
+    objectives.push_back(std::stod(a[k][3]));
+    EXPECT_NEAR(objectives.back() / kE, 1, 1e-6);
+  }
+  const json S = json::parse(std::ifstream(dir + "/a/summary.json"));
+  EXPECT_EQ(S["status"], "complete");
+  std::sort(objectives.begin(), objectives.end());
+  EXPECT_EQ(S["ranking"]["best"].get<double>(), objectives[0]);
+  EXPECT_EQ(S["ranking"]["median"].get<double>(), objectives[1]);
+  EXPECT_EQ(S["ranking"]["worst"].get<double>(), objectives[2]);
+  EXPECT_EQ(S["options"]["multistart"]["seed"], 7);
+  // another seed, other starts; --starts 0 is an input error
+  ASSERT_EQ(run("c", " --starts 3 --seed 8"), 0);
+  EXPECT_NE(starts("c")[0][8], a[0][8]);
+  EXPECT_EQ(run("d", " --starts 0"), 2);
 }

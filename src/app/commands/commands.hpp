@@ -53,8 +53,12 @@ struct SensitivityArgs {
 
 struct OptimizeArgs {
   bool resume = false;
-  std::string optimizer;  ///< empty: the case's
-  bool check = true;      ///< gradient check at the initial design
+  bool overwrite = false;
+  int starts = 1;          ///< > 1: multi-start from feasible random designs (one child each)
+  unsigned long seed = 1;  ///< multi-start: seed of the random initial designs
+  int jobs = 2;            ///< multi-start: children run at once
+  std::string optimizer;   ///< empty: the case's
+  bool check = true;       ///< gradient check at the initial design
   GradientCheckOptions check_options;
 };
 

@@ -1,8 +1,11 @@
 // lsmbs optimize: the fully coupled optimization of the case's design (NLopt MMA, CCSAQ, SLSQP,
 // or the classic MMA), with a gradient check at the initial design, checkpoints and --resume.
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +13,8 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <random>
+#include <thread>
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
@@ -53,6 +58,204 @@ bool plot_history(const std::string& out) {
   return ok;
 }
 
+// Multi-start (--starts N): N feasible initial designs drawn uniformly within the bounds
+// (std::mt19937_64 seeded with --seed; a candidate is kept when its evaluation is feasible:
+// max_violation <= 0), each optimized by a child `lsmbs optimize` in OUT/start_k with the same
+// options, two at a time on the two cores (each child with one sensitivity thread). The children
+// are whole runs: each has its summary.json, checkpoint and --resume. OUT/starts.csv and
+// OUT/summary.json rank the feasible results.
+int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
+               lsmbs::DesignProblem& prob) {
+  const auto& d = *cs.design;
+  const int n = d.size();
+  std::mt19937_64 gen(a.seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<lsmbs::Vec> starts;
+  const int max_candidates = 20 * a.starts;
+  int candidates = 0;
+  while (static_cast<int>(starts.size()) < a.starts && candidates < max_candidates) {
+    lsmbs::Vec p(n);
+    for (int i = 0; i < n; ++i)
+      p[i] = d.variables[i].lower + u(gen) * (d.variables[i].upper - d.variables[i].lower);
+    ++candidates;
+    const lsmbs::Evaluation& e = prob.evaluate(p);
+    if (e.ok && e.max_violation <= 0) starts.push_back(p);
+    if (!c.quiet)
+      std::printf("multi-start: candidate %d %s (max violation %.3e)\n", candidates,
+                  e.ok && e.max_violation <= 0 ? "feasible, kept" : "infeasible, skipped",
+                  e.max_violation);
+    if (lsmbs::interrupted()) return 130;
+  }
+  if (static_cast<int>(starts.size()) < a.starts)
+    throw lsmbs::NumericalFailure("multi-start: only " + std::to_string(starts.size()) + " of " +
+                                  std::to_string(max_candidates) +
+                                  " random designs are feasible; " + std::to_string(a.starts) +
+                                  " were asked for (--starts)");
+  const std::string exe = std::filesystem::read_symlink("/proc/self/exe").string();
+  auto child_args = [&](int k) {
+    std::vector<std::string> v = {
+        exe, "optimize", c.case_file, "-o", c.out + "/start_" + std::to_string(k + 1), "-q"};
+    for (const auto& set : c.sets) v.insert(v.end(), {"--set", set});
+    char buf[64];
+    for (int i = 0; i < n; ++i) {
+      std::snprintf(buf, sizeof buf, "%.17g", starts[k][i]);
+      v.insert(v.end(), {"--set", d.variables[i].name + "=" + buf});
+    }
+    // one sensitivity thread per child when two run at once
+    if (a.jobs > 1) {
+      if (cs.optimization.contains("sensitivity"))
+        v.insert(v.end(), {"--set", "/optimization/sensitivity/threads=1"});
+      else
+        v.insert(v.end(), {"--set", "/optimization/sensitivity={\"threads\": 1}"});
+    }
+    if (!a.optimizer.empty()) v.insert(v.end(), {"--optimizer", a.optimizer});
+    if (!a.check) v.push_back("--no-check");
+    std::snprintf(buf, sizeof buf, "%.17g", a.check_options.warn);
+    v.insert(v.end(), {"--check-warn", buf});
+    std::snprintf(buf, sizeof buf, "%.17g", a.check_options.fail);
+    v.insert(v.end(), {"--check-fail", buf});
+    if (a.resume) v.push_back("--resume");
+    if (a.overwrite) v.push_back("--overwrite");
+    return v;
+  };
+  std::vector<int> rc(starts.size(), -1);
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int k; (k = next++) < static_cast<int>(starts.size());) {
+      if (lsmbs::interrupted()) return;
+      auto args = child_args(k);
+      std::vector<char*> argv;
+      for (auto& s : args) argv.push_back(s.data());
+      argv.push_back(nullptr);
+      pid_t pid = 0;
+      if (posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ) != 0) continue;
+      int status = 0;
+      while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      rc[k] = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      if (!c.quiet) std::printf("multi-start: start %d ended (exit %d)\n", k + 1, rc[k]);
+      std::fflush(stdout);
+    }
+  };
+  lsmbs::install_interrupt_handlers();
+  {
+    std::vector<std::thread> pool;
+    for (int j = 0; j < std::max(1, a.jobs); ++j) pool.emplace_back(worker);
+    for (auto& t : pool) t.join();
+  }
+  // the ranking: feasible, completed starts by objective
+  struct Row {
+    int start;
+    int rc;
+    std::string status;
+    double objective = NAN, violation = NAN;
+    long evaluations = 0;
+    double wall = NAN;
+    bool feasible = false;
+  };
+  std::vector<Row> rows;
+  const double tol = prob.spec().tol_constraint;
+  for (size_t k = 0; k < starts.size(); ++k) {
+    Row r{static_cast<int>(k) + 1, rc[k], "not run"};
+    const std::string f = c.out + "/start_" + std::to_string(k + 1) + "/summary.json";
+    std::error_code ec;
+    if (std::filesystem::exists(f, ec)) {
+      nlohmann::json S;
+      try {
+        S = nlohmann::json::parse(std::ifstream(f));
+      } catch (const nlohmann::json::exception&) {
+        S = {{"status", "unreadable summary.json"}};
+      }
+      r.status = S.value("status", "unknown");
+      if (S.contains("final")) {
+        r.objective = S["final"].value("objective", double(NAN));
+        r.violation = S["final"].value("max_violation", double(NAN));
+      }
+      if (S.contains("counts")) r.evaluations = S["counts"].value("evaluations", 0L);
+      r.wall = S.value("wall_seconds", double(NAN));
+      r.feasible = r.status == "complete" && r.violation <= tol;
+    }
+    rows.push_back(r);
+  }
+  std::vector<double> objs;
+  int best = -1;
+  for (const auto& r : rows)
+    if (r.feasible) {
+      objs.push_back(r.objective);
+      if (best < 0 || r.objective < rows[best - 1].objective) best = r.start;
+    }
+  std::sort(objs.begin(), objs.end());
+  {
+    std::vector<std::string> header = {"start",         "exit_code", "status",      "objective",
+                                       "max_violation", "feasible",  "evaluations", "wall_seconds"};
+    for (const auto& v : d.variables) header.push_back("initial." + v.name);
+    std::ofstream f(c.out + "/starts.csv");
+    for (size_t i = 0; i < header.size(); ++i) f << (i ? "," : "") << header[i];
+    f << "\n";
+    char buf[64];
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const auto& r = rows[k];
+      f << r.start << "," << r.rc << "," << r.status;
+      for (double x : {r.objective, r.violation}) {
+        std::snprintf(buf, sizeof buf, "%.17g", x);
+        f << "," << buf;
+      }
+      f << "," << (r.feasible ? 1 : 0) << "," << r.evaluations;
+      std::snprintf(buf, sizeof buf, "%.6g", r.wall);
+      f << "," << buf;
+      for (int i = 0; i < n; ++i) {
+        std::snprintf(buf, sizeof buf, "%.17g", starts[k][i]);
+        f << "," << buf;
+      }
+      f << "\n";
+    }
+  }
+  nlohmann::json S = lsmbs::provenance(c.command_line, cs.file, cs.sha256);
+  S["overrides"] = cs.overrides;
+  S["case_name"] = cs.name;
+  const bool all_ran =
+      std::all_of(rows.begin(), rows.end(), [](const Row& r) { return r.rc >= 0; });
+  S["status"] = lsmbs::interrupted() ? "interrupted" : all_ran && best > 0 ? "complete" : "partial";
+  S["options"] = {{"optimization", prob.spec().to_json()},
+                  {"multistart",
+                   {{"starts", a.starts},
+                    {"seed", a.seed},
+                    {"jobs", a.jobs},
+                    {"sampling", "uniform within the bounds (std::mt19937_64), feasible ones kept"},
+                    {"candidates_evaluated", candidates}}}};
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& r : rows)
+    list.push_back({{"start", r.start},
+                    {"folder", "start_" + std::to_string(r.start)},
+                    {"exit_code", r.rc},
+                    {"status", r.status},
+                    {"objective", r.objective},
+                    {"max_violation", r.violation},
+                    {"feasible", r.feasible},
+                    {"evaluations", r.evaluations}});
+  S["starts"] = list;
+  if (!objs.empty())
+    S["ranking"] = {
+        {"feasible_results", objs.size()},
+        {"best", objs.front()},
+        {"best_start", best},
+        {"median", objs.size() % 2 ? objs[objs.size() / 2]
+                                   : 0.5 * (objs[objs.size() / 2 - 1] + objs[objs.size() / 2])},
+        {"worst", objs.back()}};
+  std::vector<std::string> files = {"starts.csv", "summary.json"};
+  for (const auto& r : rows) files.push_back("start_" + std::to_string(r.start) + "/");
+  S["files"] = lsmbs::file_list(std::move(files));
+  lsmbs::write_json_atomic(c.out + "/summary.json", S);
+  if (!c.quiet && !objs.empty())
+    std::printf(
+        "multi-start: %zu of %zu starts feasible; best %.9g (start %d), median %.9g, worst "
+        "%.9g\n  results in %s\n",
+        objs.size(), rows.size(), objs.front(), best, S["ranking"]["median"].get<double>(),
+        objs.back(), c.out.c_str());
+  if (lsmbs::interrupted()) return 130;
+  return all_ran && best > 0 ? 0 : 1;
+}
+
 }  // namespace
 
 // On a terminal: a table row per evaluation and a progress line of the running simulation; not on
@@ -93,6 +296,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   spec.sensitivity.progress = line.callback();
   std::filesystem::create_directories(out);
   lsmbs::DesignProblem prob(cs, spec);
+  if (a.starts > 1) return multistart(c, a, cs, prob);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
   // a resumed run must see the same case: the file's hash, and the overrides' when there are any
