@@ -4,6 +4,9 @@
 slider_crank_1hole.json   - section 5.2: one elliptical hole (eq. 41), Table 1
 slider_crank_3holes.json  - section 5.3: three elliptical holes (Table 2), Table 3
 *_coarse.json             - the same on rod_coarse.msh (tests, quick looks)
+slider_crank_3holes_rings.json - Table 3 with non-designable rings around both bores
+slider_crank_3holes_stress*.json - beyond the paper: the three-hole rod with the rings under an
+                            aggregated stress constraint, without and with the elongation constraint
 Usage: python3 make_cases.py
 """
 import json
@@ -115,6 +118,40 @@ def optimization(case, max_evaluations):
     }
 
 
+# Allowable stress of the stress-constrained rods: 42CrMo4 quenched and tempered (a common
+# connecting-rod steel), minimum yield strength 650 MPa for a ruling section of 40-100 mm
+# (EN 10083-3), with a safety factor of 1.5.
+SIGMA_ALLOW = 650e6 / 1.5
+
+
+def stress_constraint(case, with_elongation):
+    case["output"]["measures"].append(
+        {"name": "rod_stress", "type": "stress", "body": "rod", "reference": SIGMA_ALLOW,
+         "aggregate": "ks", "parameter": 50, "relaxation": 0.5,
+         "comment": "KS over the elements of the relaxed von Mises stress mu^0.5 sigma_vm at each step"})
+    case["output"]["responses"].append(
+        {"name": "max_stress", "measure": "rod_stress", "aggregate": "max"})
+    cons = [{"response": "max_stress", "upper": SIGMA_ALLOW}]
+    if with_elongation:
+        cons.append({"response": "elongation", "upper": 16e-6})
+    case["optimization"]["constraints"] = cons
+
+
+# Non-designable rings around the bores (issue 25): the bosses of rod.geo, bore radius to boss
+# outer radius, stay solid (the bearing housings). Without them the optimizer opens hole 1 into
+# the big-end bore, whose nodes are rigidly tied to the pin (paper_results/README.md).
+R_BIG, R_SMALL = 0.022, 0.011            # bore radii (rod.geo Rbi, Rsi)
+W_BIG, W_SMALL = 0.0291768 - R_BIG, 0.018 - R_SMALL   # boss walls (Rbo - Rbi, Rso - Rsi)
+
+
+def rings(case, w_big=W_BIG, w_small=W_SMALL):
+    case["design"]["geometry"][0]["features"] += [
+        {"name": "big_end_ring", "type": "circle", "cx": L_ROD, "cy": 0, "r": R_BIG + w_big, "non_design": True,
+         "comment": "solid disc of the bore radius + ring width (the bore itself is not meshed)"},
+        {"name": "small_end_ring", "type": "circle", "cx": 0, "cy": 0, "r": R_SMALL + w_small, "non_design": True},
+    ]
+
+
 def write(path, case):
     with open(path, "w") as f:
         json.dump(case, f, indent=1)
@@ -137,3 +174,25 @@ if __name__ == "__main__":
         design_3holes(c)
         optimization(c, 60)
         write(f"slider_crank_3holes{suffix}.json", c)
+    c = model("slider_crank_3holes_rings",
+              "Table 3 (section 5.3: three elliptical holes, Table 2 features, Table 3 bounds and start) with "
+              "non-designable rings around both bores: the bosses of rod.geo (7.18 mm around the big-end bore, "
+              "7 mm around the small-end one) stay solid.", "rod.msh")
+    design_3holes(c)
+    rings(c)
+    optimization(c, 60)
+    write("slider_crank_3holes_rings.json", c)
+    for with_elongation in (False, True):
+        name = "slider_crank_3holes_stress" + ("_elongation" if with_elongation else "")
+        c = model(name,
+                  "Beyond the paper: the three-hole rod of section 5.3 (Table 2 features, Table 3 bounds and "
+                  "start, non-designable rings around the bores as slider_crank_3holes_rings.json) minimizing its mass under an aggregated stress constraint (KS over elements, max over "
+                  "time, of the qp-relaxed von Mises stress) <= 433 MPa: 42CrMo4+QT, yield 650 MPa, safety "
+                  "factor 1.5" + (", and the paper's elongation constraint <= 16 um." if with_elongation else
+                                  "; no elongation constraint."), "rod.msh")
+        design_3holes(c)
+        rings(c)
+        optimization(c, 60)
+        stress_constraint(c, with_elongation)
+        c["output"]["vtu_stride"] = 0
+        write(f"{name}.json", c)
