@@ -210,7 +210,7 @@ TEST(MethodsCoverage, MmaSvanbergRespectsItsMoveLimitAndReachesTheOptimum) {
   EXPECT_NEAR(r.res.p[1] / kM2, 1, 3e-4);
   EXPECT_NEAR(r.res.final.objective / kE, 1,
               1e-6);  // the classic MMA stops on the same rule (measured 2.4e-7)
-  // the default move limit (0.5) lets the first step go further than 0.475
+  // the default move limit (0.1 of the range: 0.95) lets the first step go further than 0.475
   const OptRun d = optimize_case(coasting_bodies("mma-svanberg"));
   double first = 0;
   for (int i = 0; i < 2; ++i)

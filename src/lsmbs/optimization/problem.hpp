@@ -30,7 +30,9 @@ struct OptimizationSpec {
   };
   std::vector<Constraint> constraints;
   std::string optimizer = "mma";  ///< mma | ccsaq | slsqp (NLopt) | mma-svanberg (classic MMA)
-  double move_limit = 0.5;      ///< mma-svanberg: largest step per iteration, fraction of the range
+  /// mma-svanberg: largest step per iteration, fraction of the range (0.1: the lightest feasible
+  /// robot arm of the move-limit study, docs/methods.md)
+  double move_limit = 0.1;
   double asymptote_init = 0.5;  ///< mma-svanberg: initial asymptote distance, fraction of range
   SensitivityOptions sensitivity;
   double tol_objective = 1e-4;     ///< relative objective change between accepted iterates
