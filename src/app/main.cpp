@@ -294,6 +294,8 @@ int main(int argc, char** argv) {
   }
   bool started = false;  // the output folder is ours: a failure from here on is flagged in it
   try {
+    if (*opt && opt->count("--seed") && !opt->count("--starts"))
+      throw lsmbs::Error("--seed: the seed of --starts' random initial designs; give --starts N");
     if (*sim || *sta || *geo || *opt || *ben || *ver || *sen) {
       lsmbs::check_output_folder(out);
       lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);

@@ -417,8 +417,21 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   EXPECT_EQ(S["ranking"]["median"].get<double>(), objectives[1]);
   EXPECT_EQ(S["ranking"]["worst"].get<double>(), objectives[2]);
   EXPECT_EQ(S["options"]["multistart"]["seed"], 7);
-  // another seed, other starts; --starts 0 is an input error
+  // another seed, other starts; --starts 0 and a --seed without --starts are input errors
   ASSERT_EQ(run("c", " --starts 3 --seed 8"), 0);
   EXPECT_NE(starts("c")[0][8], a[0][8]);
   EXPECT_EQ(run("d", " --starts 0"), 2);
+  EXPECT_EQ(run("e", " --seed 7"), 2);
+  // --resume: another seed or number of starts is refused; a start that never began (its
+  // folder removed) runs afresh from the stored initial design, the others resume
+  EXPECT_EQ(run("a", " --starts 3 --seed 8 --resume"), 2);
+  EXPECT_EQ(run("a", " --starts 2 --seed 7 --resume"), 2);
+  fs::remove_all(dir + "/a/start_3");
+  ASSERT_EQ(run("a", " --starts 3 --seed 7 --resume"), 0);
+  const auto r = starts("a");
+  ASSERT_EQ(r.size(), 3u);
+  EXPECT_EQ(r[2][1], "0");
+  EXPECT_EQ(r[2][2], "complete");
+  EXPECT_EQ(r[2][8], a[2][8]) << "the stored start, not a new draw";
+  EXPECT_EQ(r[2][3], a[2][3]) << "the same optimum (a deterministic run)";
 }

@@ -54,7 +54,7 @@ struct SensitivityArgs {
 struct OptimizeArgs {
   bool resume = false;
   bool overwrite = false;
-  int starts = 1;          ///< > 1: multi-start from feasible random designs (one child each)
+  int starts = 0;          ///< >= 1: multi-start from feasible random designs (one child each)
   unsigned long seed = 1;  ///< multi-start: seed of the random initial designs
   int jobs = 2;            ///< multi-start: children run at once
   std::string optimizer;   ///< empty: the case's

@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -68,11 +70,39 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
                lsmbs::DesignProblem& prob) {
   const auto& d = *cs.design;
   const int n = d.size();
+  lsmbs::install_interrupt_handlers();
   std::mt19937_64 gen(a.seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<lsmbs::Vec> starts;
   const int max_candidates = 20 * a.starts;
   int candidates = 0;
+  // OUT/multistart.json: the starts of this folder, written before any child runs; --resume
+  // reuses them and refuses another seed or number of starts
+  const std::string plan_file = c.out + "/multistart.json";
+  if (a.resume) {
+    std::error_code ec;
+    if (!std::filesystem::exists(plan_file, ec))
+      throw lsmbs::Error(plan_file + ": cannot resume a multi-start: no multistart.json here");
+    nlohmann::json plan;
+    try {
+      plan = nlohmann::json::parse(std::ifstream(plan_file));
+    } catch (const nlohmann::json::exception& e) {
+      throw lsmbs::Error(plan_file + ": unreadable (" + e.what() + ")");
+    }
+    if (plan.value("seed", 0UL) != a.seed || plan.value("starts", 0) != a.starts)
+      throw lsmbs::Error("--resume: " + plan_file + " holds --starts " +
+                         std::to_string(plan.value("starts", 0)) + " --seed " +
+                         std::to_string(plan.value("seed", 0UL)) + "; give the same options");
+    for (const auto& row : plan.at("initial_designs")) {
+      if (row.size() != static_cast<size_t>(n))
+        throw lsmbs::Error(plan_file + ": a start has " + std::to_string(row.size()) +
+                           " variables, the case " + std::to_string(n));
+      lsmbs::Vec p(n);
+      for (int i = 0; i < n; ++i) p[i] = row[i].get<double>();
+      starts.push_back(p);
+    }
+    candidates = plan.value("candidates_evaluated", 0);
+  }
   while (static_cast<int>(starts.size()) < a.starts && candidates < max_candidates) {
     lsmbs::Vec p(n);
     for (int i = 0; i < n; ++i)
@@ -85,6 +115,14 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
                   e.ok && e.max_violation <= 0 ? "feasible, kept" : "infeasible, skipped",
                   e.max_violation);
     if (lsmbs::interrupted()) return 130;
+  }
+  if (static_cast<int>(starts.size()) == a.starts && !a.resume) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& p : starts) rows.push_back(std::vector<double>(p.data(), p.data() + n));
+    lsmbs::write_json_atomic(plan_file, {{"seed", a.seed},
+                                         {"starts", a.starts},
+                                         {"candidates_evaluated", candidates},
+                                         {"initial_designs", rows}});
   }
   if (static_cast<int>(starts.size()) < a.starts)
     throw lsmbs::NumericalFailure("multi-start: only " + std::to_string(starts.size()) + " of " +
@@ -114,7 +152,12 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
     v.insert(v.end(), {"--check-warn", buf});
     std::snprintf(buf, sizeof buf, "%.17g", a.check_options.fail);
     v.insert(v.end(), {"--check-fail", buf});
-    if (a.resume) v.push_back("--resume");
+    std::error_code ec;
+    if (a.resume &&
+        std::filesystem::exists(c.out + "/start_" + std::to_string(k + 1) + "/checkpoint.json", ec))
+      v.push_back("--resume");
+    else if (a.resume)  // never begun, or interrupted in its first evaluation: start it afresh
+      v.push_back("--overwrite");
     if (a.overwrite) v.push_back("--overwrite");
     return v;
   };
@@ -130,14 +173,21 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       pid_t pid = 0;
       if (posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ) != 0) continue;
       int status = 0;
-      while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+      bool forwarded = false;
+      for (;;) {  // an interrupt of this process is passed on to the child (it checkpoints)
+        const pid_t w = waitpid(pid, &status, WNOHANG);
+        if (w == pid || (w < 0 && errno != EINTR)) break;
+        if (lsmbs::interrupted() && !forwarded) {
+          ::kill(pid, SIGINT);
+          forwarded = true;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
       }
       rc[k] = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
       if (!c.quiet) std::printf("multi-start: start %d ended (exit %d)\n", k + 1, rc[k]);
       std::fflush(stdout);
     }
   };
-  lsmbs::install_interrupt_handlers();
   {
     std::vector<std::thread> pool;
     for (int j = 0; j < std::max(1, a.jobs); ++j) pool.emplace_back(worker);
@@ -166,13 +216,21 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       } catch (const nlohmann::json::exception&) {
         S = {{"status", "unreadable summary.json"}};
       }
-      r.status = S.value("status", "unknown");
+      r.status = S.contains("status") && S["status"].is_string() ? S["status"].get<std::string>()
+                                                                 : "unknown";
+      auto number = [](const nlohmann::json& j, const char* key) {
+        return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>()
+                                                                      : double(NAN);
+      };
       if (S.contains("final")) {
-        r.objective = S["final"].value("objective", double(NAN));
-        r.violation = S["final"].value("max_violation", double(NAN));
+        r.objective = number(S["final"], "objective");
+        r.violation = number(S["final"], "max_violation");
       }
-      if (S.contains("counts")) r.evaluations = S["counts"].value("evaluations", 0L);
-      r.wall = S.value("wall_seconds", double(NAN));
+      if (S.contains("counts") && S["counts"].is_object()) {
+        const double e = number(S["counts"], "evaluations");
+        r.evaluations = std::isfinite(e) ? static_cast<long>(e) : 0;
+      }
+      r.wall = number(S, "wall_seconds");
       r.feasible = r.status == "complete" && r.violation <= tol;
     }
     rows.push_back(r);
@@ -213,8 +271,9 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
   nlohmann::json S = lsmbs::provenance(c.command_line, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
+  // every child ended well (exit 0); a start that failed or was refused makes the run partial
   const bool all_ran =
-      std::all_of(rows.begin(), rows.end(), [](const Row& r) { return r.rc >= 0; });
+      std::all_of(rows.begin(), rows.end(), [](const Row& r) { return r.rc == 0; });
   S["status"] = lsmbs::interrupted() ? "interrupted" : all_ran && best > 0 ? "complete" : "partial";
   S["options"] = {{"optimization", prob.spec().to_json()},
                   {"multistart",
@@ -242,10 +301,15 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
         {"median", objs.size() % 2 ? objs[objs.size() / 2]
                                    : 0.5 * (objs[objs.size() / 2 - 1] + objs[objs.size() / 2])},
         {"worst", objs.back()}};
-  std::vector<std::string> files = {"starts.csv", "summary.json"};
+  std::vector<std::string> files = {"starts.csv", "summary.json", "multistart.json"};
   for (const auto& r : rows) files.push_back("start_" + std::to_string(r.start) + "/");
   S["files"] = lsmbs::file_list(std::move(files));
   lsmbs::write_json_atomic(c.out + "/summary.json", S);
+  if (!all_ran && !c.quiet)
+    std::fprintf(stderr, "multi-start: %d of %zu starts did not end well (starts.csv: exit_code)\n",
+                 static_cast<int>(std::count_if(rows.begin(), rows.end(),
+                                                [](const Row& r) { return r.rc != 0; })),
+                 rows.size());
   if (!c.quiet && !objs.empty())
     std::printf(
         "multi-start: %zu of %zu starts feasible; best %.9g (start %d), median %.9g, worst "
@@ -296,7 +360,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   spec.sensitivity.progress = line.callback();
   std::filesystem::create_directories(out);
   lsmbs::DesignProblem prob(cs, spec);
-  if (a.starts > 1) return multistart(c, a, cs, prob);
+  if (a.starts >= 1) return multistart(c, a, cs, prob);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
   // a resumed run must see the same case: the file's hash, and the overrides' when there are any

@@ -734,6 +734,10 @@ struct Loader {
         (non_design ? fixed : by_name)[name] = static_cast<int>(feats.size());
         feats.push_back(std::move(feat));
       }
+      if (by_name.empty())
+        g.fail("features",
+               "every feature is non_design: non-design regions only keep material that the "
+               "design features would remove; give at least one design feature");
       LevelSetNode root;
       if (g.has("region")) {
         for (const auto& [name, i] : fixed)

@@ -484,7 +484,10 @@ TEST(CaseLoader, NonDesignFeatureStaysSolidWithExactDerivatives) {
   EXPECT_NEAR(g[0] / fd, 1.0, 1e-4);
   EXPECT_GT(g[0], -0.9 * dref) << "the disc does not take its part of the boundary";
 
-  // errors: a non-design hole, a region naming a non-design feature
+  // errors: a non-design hole, a region naming a non-design feature, only non-design features
+  json only = j;
+  only["design"]["geometry"][0]["features"][0]["non_design"] = true;
+  EXPECT_THROW(test::make_case(only), Error) << "every feature non_design left the body void";
   json bad = j;
   bad["design"]["geometry"][0]["features"][1]["hole"] = true;
   EXPECT_THROW(test::make_case(bad), Error);
