@@ -1,5 +1,6 @@
 #include "lsmbs/fem/quad_element.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "lsmbs/core/error.hpp"
@@ -142,6 +143,17 @@ double QuadElement::strain_energy(const Vec8& x, double E, double nu, double t) 
   for (const auto& p : gauss_) W += point_energy(p.G, t * p.w, x, D);
   if (sri) W += point_energy(centre_.G, t * centre_.w, x, plane_stress(E, nu, false, true));
   return W;
+}
+
+double QuadElement::min_det_F(const Vec8& x) const {
+  auto det_at = [&](const Point& p) {
+    Mat2 F = Mat2::Zero();
+    for (int i = 0; i < 4; ++i) F += Vec2(x[2 * i], x[2 * i + 1]) * p.G.row(i);
+    return F.determinant();
+  };
+  double m = det_at(centre_);
+  for (const auto& p : gauss_) m = std::min(m, det_at(p));
+  return m;
 }
 
 void QuadElement::centre_strain(const Vec8& x, Eigen::Vector3d& Ev, Mat2& F) const {

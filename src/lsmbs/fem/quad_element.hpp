@@ -48,6 +48,10 @@ class QuadElement {
   double area() const { return area_; }
   /// Green–Lagrange strain (E11, E22, 2E12) and deformation gradient at the centre.
   void centre_strain(const Vec8& x, Eigen::Vector3d& E_voigt, Mat2& F) const;
+  /// The smallest det F over the integration points (2×2 Gauss and the centre). det F ≤ 0 is an
+  /// inverted element: E = ½(FᵀF − I) does not see a reflection, so a reflected element is
+  /// stress-free and a spurious solution of the equations of motion.
+  double min_det_F(const Vec8& x) const;
   /// ∇_X N_I at the element centre (rows I), for stresses evaluated there.
   const Eigen::Matrix<double, 4, 2>& centre_gradients() const { return centre_.G; }
 

@@ -221,6 +221,7 @@ enum class NewtonStatus {
   kSingular,               ///< S_t singular: the motion of an unknown is not determined
   kNotConverged,           ///< max_iter iterations, residual test not met
   kNotConvergedPositions,  ///< max_iter iterations, residual test met, position corrections not
+  kInverted,               ///< converged to a state with an inverted element (a spurious solution)
 };
 
 // One run of GeneralizedAlpha: its named steps (the boxes of Algorithm 1), the workspace (sized
@@ -293,8 +294,9 @@ class AlphaRun {
 
   // The last Newton iteration (StepInfo, failure reports).
   int iterations_ = 0;
-  double rn_ = 0, pn_ = 0;  // ‖r‖∞ [N], ‖Φ‖∞ [length]
-  int bad_column_ = -1;     // kNonFiniteMatrix: the first column with NaN or Inf
+  double rn_ = 0, pn_ = 0;      // ‖r‖∞ [N], ‖Φ‖∞ [length]
+  int bad_column_ = -1;         // kNonFiniteMatrix: the first column with NaN or Inf
+  Model::Inversion inversion_;  // kInverted: the element with the smallest det F
 
   // Factorizations. Concurrent observers: a second numeric factorization of the same symbolic
   // analysis, so that step n+1 is factorized into one while the worker back-solves with step n's
@@ -516,6 +518,14 @@ NewtonStatus AlphaRun::newton(const AlphaCoefficients& c) {
       if (!std::isfinite(inc)) return NewtonStatus::kNonFiniteCorrection;
       if (inc <= 1 || (inc > 0.5 * prev_inc && inc <= kRoundOffIncrement)) {
         apply_correction(c);
+        // A reflected element is stress-free (E = ½(FᵀF − I)): Newton can converge to such a
+        // far solution of the step equations from the predictor of a long step. Reject it; the
+        // step is redone with h/2, whose predictor lies closer to the physical solution.
+        inversion_ = model_.most_compressed_element(cur_.q);
+        if (inversion_.inverted()) {
+          ++sum_.inverted_element_rejections;
+          return NewtonStatus::kInverted;
+        }
         return NewtonStatus::kConverged;
       }
       ++sum_.increment_rejections;
@@ -583,6 +593,11 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
     case NewtonStatus::kSingular:
       why = "singular iteration matrix: the motion of " +
             model_.describe_unknown(step_lu_->singular_column()) + " is not determined";
+      break;
+    case NewtonStatus::kInverted:
+      why = "the step converged to a state with an inverted element, " + inversion_.describe() +
+            ": a reflected St Venant–Kirchhoff element is stress-free, a spurious solution of "
+            "the step equations (a smaller h or ρ∞, or a finer mesh, may avoid it)";
       break;
     case NewtonStatus::kNotConvergedPositions:
       why = "Newton did not converge in " + std::to_string(opt_.max_iter) +

@@ -14,7 +14,9 @@
 //  - convergence: per-row residual scales and round-off floors, ‖Φ‖ in length units, and the next
 //    Newton correction within tol_q·L, applied before the step is accepted (Algorithm 1 tests
 //    one residual norm);
-//  - at least min_iter Newton corrections per step; a failed step is retried with halved steps.
+//  - at least min_iter Newton corrections per step; a failed step is retried with halved steps;
+//    so is a converged step with an inverted element (det F ≤ 0: a stress-free reflection, a
+//    spurious solution of the step equations; docs/methods.md "Inverted elements").
 // Sparse KLU: one symbolic analysis per run, numeric (re)factorization per Newton iteration
 // (full Newton), or reuse while convergence is fast: within a step (modified Newton) or across
 // steps of equal h (modified_across_steps; primal runs of large models), both opt-in.
@@ -73,6 +75,8 @@ struct IntegratorSummary {
   long fresh_factor_retries =
       0;  ///< steps redone with a fresh factorization (modified_across_steps)
   long increment_rejections = 0;  ///< residual test passed, Newton correction still above tol_q
+  /// converged steps rejected (then halved) because an element was inverted (det F ≤ 0)
+  long inverted_element_rejections = 0;
   /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
   /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations,
   /// back-solves.

@@ -10,6 +10,10 @@ std::string shown(const nlohmann::json& v) {
   std::string s = v.dump();
   return s.size() > 60 ? s.substr(0, 57) + "..." : s;
 }
+// "string \"abc\"", "boolean true", "null" (a null shows once)
+std::string described(const nlohmann::json& v) {
+  return v.is_null() ? type_name(v) : type_name(v) + " " + shown(v);
+}
 }  // namespace
 
 bool JsonReader::has(const std::string& key) const { return j_->is_object() && j_->contains(key); }
@@ -55,7 +59,7 @@ std::vector<std::string> JsonReader::keys() const {
 }
 
 double JsonReader::checked_number(const nlohmann::json& v, const std::string& key) const {
-  if (!v.is_number()) fail(key, "expected a number, got " + type_name(v) + " " + shown(v));
+  if (!v.is_number()) fail(key, "expected a number, got " + described(v));
   const double d = v.get<double>();
   if (!std::isfinite(d)) fail(key, "expected a finite number");
   return d;
@@ -86,8 +90,7 @@ double JsonReader::non_negative(const std::string& key, double def) const {
 
 int JsonReader::integer(const std::string& key, int min_value) const {
   const auto& v = get(key);
-  if (!v.is_number_integer())
-    fail(key, "expected an integer, got " + type_name(v) + " " + shown(v));
+  if (!v.is_number_integer()) fail(key, "expected an integer, got " + described(v));
   const long long i = v.get<long long>();
   if (i < min_value || i > 100000000)
     fail(key, "expected an integer >= " + std::to_string(min_value) + ", got " + shown(v));
@@ -99,7 +102,7 @@ int JsonReader::integer(const std::string& key, int def, int min_value) const {
 
 std::string JsonReader::string(const std::string& key) const {
   const auto& v = get(key);
-  if (!v.is_string()) fail(key, "expected a string, got " + type_name(v) + " " + shown(v));
+  if (!v.is_string()) fail(key, "expected a string, got " + described(v));
   const auto s = v.get<std::string>();
   if (s.empty()) fail(key, "expected a non-empty string");
   return s;

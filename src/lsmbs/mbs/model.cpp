@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
@@ -288,6 +289,67 @@ SpMat Model::constraint_jacobian(double t, const Vec& q, const ModelParams& p) c
   return m;
 }
 
+void Model::constraint_jacobian_products(double t, const Vec& q, const ModelParams& p, const Vec& x,
+                                         const Vec& y, Vec& Jx, Vec& Jty) const {
+  Jx.setZero(nc_);
+  Jty.setZero(nq_);
+  LocalEqVec ph;
+  LocalJac J;
+  LocalVec ql;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    gather(q, d, ql);
+    cons_[c]->evaluate(t, ql, p, ph, &J);
+    const int o = eq_offset_[c];
+    for (int i = 0; i < cons_[c]->size(); ++i)
+      for (size_t j = 0; j < d.size(); ++j) {
+        Jx[o + i] += J(i, j) * x[d[j]];
+        Jty[d[j]] += J(i, j) * y[o + i];
+      }
+  }
+}
+
+void Model::constraint_hessian_product(double t, const Vec& q, const Vec& w, const Mat& X,
+                                       Mat& out) const {
+  out.setZero(nq_, X.cols());
+  LocalVec ql;
+  LocalEqVec wl;
+  LocalMat H;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    gather(q, d, ql);
+    wl = w.segment(eq_offset_[c], cons_[c]->size());
+    cons_[c]->hessian(t, ql, wl, H);
+    for (size_t j = 0; j < d.size(); ++j)
+      for (size_t i = 0; i < d.size(); ++i) {
+        const double h = H(i, j);
+        if (h != 0) out.row(d[i]) += h * X.row(d[j]);
+      }
+  }
+}
+
+void Model::velocity_constraint_jacobian_product(double t, const Vec& q, const Vec& v, const Mat& X,
+                                                 Mat& out) const {
+  out.setZero(nc_, X.cols());
+  LocalVec ql, vl, hv;
+  LocalEqVec w;
+  LocalMat H;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    const int m = cons_[c]->size();
+    gather(q, d, ql);
+    gather(v, d, vl);
+    for (int i = 0; i < m; ++i) {  // row i: (∂²Φ_i/∂q² q̇)ᵀ
+      w.setZero(m);
+      w[i] = 1;
+      cons_[c]->hessian(t, ql, w, H);
+      hv = H * vl;
+      for (size_t j = 0; j < d.size(); ++j)
+        if (hv[j] != 0) out.row(eq_offset_[c] + i) += hv[j] * X.row(d[j]);
+    }
+  }
+}
+
 void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& /*p*/,
                                   Vec& phi_t, Vec& gamma) const {
   phi_t.setZero(nc_);
@@ -386,6 +448,29 @@ double Model::strain_energy(const Vec& q, const ModelParams& p) const {
     }
   }
   return W;
+}
+
+Model::Inversion Model::most_compressed_element(const Vec& q) const {
+  Inversion w;
+  for (const auto& b : flex_)
+    for (int e = 0; e < b->mesh.num_elements(); ++e) {
+      QuadElement::Vec8 x;
+      for (int i = 0; i < 4; ++i)
+        x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
+      if (const double d = b->elements[e].min_det_F(x); !(d >= w.det_F)) {  // NaN counts too
+        w.det_F = d;
+        w.body = b.get();
+        w.element = e;
+      }
+    }
+  return w;
+}
+
+std::string Model::Inversion::describe() const {
+  char b[96];
+  std::snprintf(b, sizeof b, "%.3g", det_F);
+  return "flexible body '" + (body ? body->name : std::string("?")) + "', element " +
+         std::to_string(element) + " (det F = " + b + ")";
 }
 
 }  // namespace lsmbs

@@ -9,6 +9,7 @@
 //
 // The unknown vector of the Newton iteration is [q; λ] (n = nq + nc); λ is the scaled
 // multiplier, the physical constraint force is kλ.
+#include <cmath>
 #include <memory>
 #include <span>
 #include <string>
@@ -156,11 +157,32 @@ class Model {
   /// (and with it q̈ and λ): a variable-step integrator stops and restarts there. Loads are left
   /// out: every load law is continuous, so the accelerations are too.
   std::vector<double> time_kinks(double t0, double t1) const;
+  /// Jx = Φ_q x (size nc) and Jty = Φ_qᵀ y (size nq), constraint by constraint (no matrix).
+  void constraint_jacobian_products(double t, const Vec& q, const ModelParams& p, const Vec& x,
+                                    const Vec& y, Vec& Jx, Vec& Jty) const;
+  /// out = (Σ_i w_i ∂²Φ_i/∂q²) X (nq × cols), constraint by constraint (no matrix).
+  void constraint_hessian_product(double t, const Vec& q, const Vec& w, const Mat& X,
+                                  Mat& out) const;
+  /// out = ∂(Φ_q q̇)/∂q X (nc × cols), constraint by constraint (no matrix).
+  void velocity_constraint_jacobian_product(double t, const Vec& q, const Vec& v, const Mat& X,
+                                            Mat& out) const;
   /// Σ_i w_i ∂²Φ_i/∂q² (nq × nq) with the full local pattern of every constraint (explicit zeros
   /// kept, so the pattern does not change between calls).
   SpMat constraint_hessian(double t, const Vec& q, const Vec& w) const;
   /// ∂(Φ_q q̇)/∂q (nc × nq): row i is (∂²Φ_i/∂q² q̇)ᵀ, full local pattern kept.
   SpMat velocity_constraint_jacobian(double t, const Vec& q, const Vec& v) const;
+  /// The flexible element with the smallest det F at its integration points
+  /// (QuadElement::min_det_F); det_F = +inf and body = null for a model without flexible bodies.
+  /// det_F ≤ 0 is an inverted (reflected) element: a stress-free spurious state of the St
+  /// Venant–Kirchhoff material, which the integrators reject.
+  struct Inversion {
+    double det_F = INFINITY;
+    const FlexibleBody* body = nullptr;
+    int element = -1;
+    bool inverted() const { return !(det_F > 0); }
+    std::string describe() const;  ///< "flexible body 'b', element 7 (det F = -0.99)"
+  };
+  Inversion most_compressed_element(const Vec& q) const;
   /// Kinetic energy ½ q̇ᵀ M q̇ (M from the force elements).
   double kinetic_energy(const State& s, const ModelParams& p) const;
   /// Strain energy of all flexible bodies.

@@ -128,7 +128,11 @@ const RigidBody& ModelBuilder::rigid(const Entity& e, const std::string& field,
 const FlexibleBody& ModelBuilder::flexible(const Entity& e, const std::string& field,
                                            const std::string& name) const {
   const FlexibleBody* b = m_->find_flexible(name);
-  if (!b) fail(e, field, "unknown flexible body '" + name + "'");
+  if (!b) {
+    if (m_->find_rigid(name))
+      fail(e, field, "'" + name + "' is a rigid body; a flexible body is expected here");
+    fail(e, field, "unknown flexible body '" + name + "'");
+  }
   return *b;
 }
 

@@ -37,6 +37,7 @@ void to_json(nlohmann::json& j, const IntegratorSummary& s) {
        {"halving_times", s.halving_times},
        {"fresh_factor_retries", s.fresh_factor_retries},
        {"increment_rejections", s.increment_rejections},
+       {"inverted_element_rejections", s.inverted_element_rejections},
        {"seconds",
         {{"setup", s.seconds.setup},
          {"residual", s.seconds.residual},

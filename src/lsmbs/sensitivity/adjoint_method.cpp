@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <optional>
 
@@ -303,9 +304,10 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
                                         const AdjointTerms& terms) {
   const Design& d = *cs.design;
   SensitivityResult res;
-  for (const auto& r : cs.responses)
-    if (r.kind == ResponseSpec::Kind::kPerStep && !o.adjoint_skip_per_step)
-      throw SetupError("responses",
+  for (size_t i = 0; i < cs.responses.size(); ++i)
+    if (const auto& r = cs.responses[i];
+        r.kind == ResponseSpec::Kind::kPerStep && !o.adjoint_skip_per_step)
+      throw SetupError("responses." + std::to_string(i),
                        "response \"" + r.name +
                            "\" is per_step (one value per grid step): the adjoint method takes "
                            "scalar responses (one backward pass each); use --method "
@@ -322,18 +324,18 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
   long stride = 0;
   if (budget > 0 && (n_grid + 1) * per_entry > budget) {
     const double capacity = budget / per_entry;  // states that fit
-    for (long k = 1; k <= n_grid; ++k)
-      if ((n_grid + k - 1) / k + 1 + k <= capacity) {
-        stride = k;
-        break;
-      }
+    long fewest = n_grid + 1;                    // the fewest states any stride needs
+    for (long k = 1; k <= n_grid; ++k) {
+      const long states = (n_grid + k - 1) / k + 1 + k;  // checkpoints and one segment
+      fewest = std::min(fewest, states);
+      if (stride == 0 && states <= capacity) stride = k;
+    }
     if (stride == 0) {
-      const double need = 2 * std::sqrt(static_cast<double>(n_grid)) * per_entry / 1e6;
+      char need[32];
+      std::snprintf(need, sizeof need, "%.3g", fewest * per_entry / 1e6);
       throw SetupError("adjoint_memory", "the adjoint of " + std::to_string(n_grid) + " steps of " +
-                                             std::to_string(m.n()) +
-                                             " unknowns needs at least about " +
-                                             std::to_string(static_cast<long>(std::ceil(need))) +
-                                             " MB with checkpoints (--adjoint-memory " +
+                                             std::to_string(m.n()) + " unknowns needs at least " +
+                                             need + " MB with checkpoints (--adjoint-memory " +
                                              std::to_string(o.adjoint_memory_mb) + ")");
     }
   }

@@ -213,3 +213,28 @@ TEST(QuadElement, InvertedElementIsRejected) {
   EXPECT_THROW(
       QuadElement({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)}, QuadIntegration::kFull), Error);
 }
+
+TEST(QuadElement, DeterminantOfTheDeformationGradientFollowsTheClosedForms) {
+  const auto X = distorted_quad();
+  auto map = [&](const Mat2& F) {  // x = F X + c at every node: a homogeneous deformation
+    QuadElement::Vec8 x;
+    for (int i = 0; i < 4; ++i) x.segment<2>(2 * i) = F * X[i] + Vec2(0.3, -0.2);
+    return x;
+  };
+  const QuadElement el(X, QuadIntegration::kSelectiveShear);
+  Mat2 stretch;
+  stretch << 1.3, 0.2, 0.0, 0.7;  // det 0.91
+  EXPECT_NEAR(el.min_det_F(map(rotation(0.7) * stretch)), 0.91, 1e-12);
+  EXPECT_NEAR(el.min_det_F(map(Mat2::Identity())), 1.0, 1e-12);
+  // a reflection: det F = −1, and the St Venant–Kirchhoff energy does not see it (E = 0), which
+  // is why the integrators must reject such states
+  Mat2 reflect;
+  reflect << -1, 0, 0, 1;
+  const auto xr = map(rotation(0.3) * reflect);
+  EXPECT_NEAR(el.min_det_F(xr), -1.0, 1e-12);
+  EXPECT_NEAR(el.strain_energy(xr, 70e9, 0.3, 1e-3), 0.0, 1e-9);
+  // one node pushed through the opposite edge: some integration point inverts
+  QuadElement::Vec8 x = map(Mat2::Identity());
+  x.segment<2>(4) = Vec2(0.3 - 0.004, -0.2 - 0.004);  // node 2 moved past node 0
+  EXPECT_LT(el.min_det_F(x), 0.0);
+}

@@ -324,7 +324,7 @@ TEST(CaseLoader, BadDesignBindingsNameTheJsonPath) {
       {R"([{"op":"replace","path":"/design/variables/0/lower","value":-0.001}])",
        "feature 'hole' is degenerate within the design bounds: radius r must be non-negative"},
       {R"([{"op":"replace","path":"/design/geometry/0/body","value":"bob"}])",
-       "/design/geometry/0/body: unknown flexible body 'bob'"},
+       "/design/geometry/0/body: 'bob' is a rigid body; a flexible body is expected here"},
       {R"([{"op":"add","path":"/design/geometry/0/region","value":{"and":["hole","slot"]}}])",
        "/design/geometry/0/region/and/1: unknown feature 'slot'"},
       {R"([{"op":"add","path":"/design/parameters","value":[{"parameter":"bob.massive","variable":"r"}]}])",

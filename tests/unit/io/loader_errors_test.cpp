@@ -238,3 +238,23 @@ TEST(LoaderErrors, CommandLineOptions) {
   run("sensitivity " + file + " --set k=1e5", "--set k=1e5: outside the bounds");
   run("verify " + file + " --set k", "--set k: expected name=value");
 }
+
+TEST(LoaderErrors, WrongKindsAndNullsAreNamedOnce) {
+  // a stress measure needs a flexible body: the rigid one is named as rigid, not as unknown
+  json j = base();
+  j["output"]["measures"].push_back({{"name", "s"}, {"type", "stress"}, {"body", "bob"}});
+  expect_error(j, "/output/measures/1/body",
+               "'bob' is a rigid body; a flexible body is expected here");
+  // a null where a number is expected reads "got null", not "got null null"
+  json k = base();
+  k["simulation"]["h"] = nullptr;
+  try {
+    Case cs = test::make_case(k);
+    ADD_FAILURE() << "a null step was accepted";
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("/simulation/h"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("got null"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("null null"), std::string::npos) << msg;
+  }
+}
