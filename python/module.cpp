@@ -811,18 +811,19 @@ PYBIND11_MODULE(_lsmbs, m) {
   m.def(
       "verify",
       [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study,
-         bool overwrite) {
+         bool overwrite, double idas_rtol) {
         claim(out_dir, overwrite);
         VerifyOptions o;
         o.out_dir = out_dir;
         o.idas = idas;
         o.mesh_study = mesh_study;
+        o.idas_rtol = idas_rtol;
         o.command_line = "lsmbs.verify (Python)";
         PythonRun run{py::none()};
         const VerifyResult r = run([&] { return run_verify(path, o); });
         return json_to_python(r.summary);
       },
       py::arg("path"), py::arg("out_dir"), py::arg("idas") = true, py::arg("mesh_study") = true,
-      py::arg("overwrite") = false,
+      py::arg("overwrite") = false, py::arg("idas_rtol") = VerifyOptions{}.idas_rtol,
       "The verification report of a case file (as `lsmbs verify`); returns its summary");
 }

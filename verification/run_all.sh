@@ -10,7 +10,8 @@ rc=0
 # rigid spring slider-crank: all methods incl. IDAS
 "$exe" verify "$root/data/slider_crank_rigid/slider_crank_spring.json" -o "$out/slider_crank_spring" --overwrite || rc=1
 # robot arm with five super-ellipses (verification size); geometric fd steps absolute (m); with
-# IDAS (an IDAS gradient column and the h study against IDAS at rtol 1e-10: ~11 of its ~13 minutes)
+# IDAS (directional derivatives along two combinations of the 15 variables and the h study against
+# IDAS at rtol 1e-10, all from two IDAS runs: ~2 of its ~2.5 minutes)
 "$exe" verify "$root/data/robot_arm/robot_arm_verify.json" -o "$out/robot_arm" --overwrite --fd-delta 1e-5 --fd-absolute || rc=1
 # connecting rod of section 5 (3 mm mesh), one and three elliptical holes, at interior design points:
 # at the start (d = 0.001) the holes are far below a sub-cell and every gradient is ~0. IDAS on the

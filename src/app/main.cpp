@@ -255,6 +255,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   ver->add_option("--tol-semi", vo.tol_semi, "threshold semi-analytical-central vs direct-analytic")
       ->capture_default_str();
+  ver->add_option("--idas-rtol", vo.idas_rtol,
+                  "IDAS reference tolerance (atol 1e-3 of it, in units of the length scale); a "
+                  "second run at ten times both estimates the reference's own error")
+      ->capture_default_str();
   ver->add_option("--set", sets, kSetHelp);
 
   lsmbs::BenchOptions& bo = ben_args.options;

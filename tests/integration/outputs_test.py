@@ -301,6 +301,62 @@ if header != ["delta", "forward", "central"] or not np.allclose(dp["delta"], [10
     fail(f"dp_study.csv: {header}, {list(dp['delta'])}")
 print(f"verify: verdicts read as they hold ({checked} tolerance lines), gradients.csv and dp_study.csv read; files ok")
 
+
+# ---- verify's time-step study against IDAS: h_study.csv read by pandas, and one verdict line per
+# scalar response and quantity that says what the numbers say (docs/verification.md): an order
+# fitted on the finest halving whose two differences exceed max(1000 rtol, 4 x the largest IDAS
+# self-difference) (PASS within 1.8-2.2, FAIL outside), PASS when every difference is within
+# 1000 rtol, NOTE (inconclusive) otherwise. The spring slider-crank fits orders; the ramped
+# cantilever cannot decide (its two IDAS runs differ as much as generalized-alpha and IDAS).
+def check_h_study(case, out, rtol=1e-10, want=None):
+    run("verify", case, "-o", out, "--no-mesh-study")  # exit 0: NOTE lines do not fail a run
+    S = check_files(out, "verify")
+    h = pd.read_csv(os.path.join(out, "h_study.csv"))
+    all_csv.append(os.path.relpath(os.path.join(out, "h_study.csv"), work))
+    all_csv.append(os.path.relpath(os.path.join(out, "h_study_plot.csv"), work))
+    if list(h.columns) != ["response", "quantity", "h", "difference", "idas_self_difference"]:
+        fail(f"h_study.csv columns {list(h.columns)}")
+    if S["options"]["idas_rtol"] != rtol or S["options"]["idas_rtol_loose"] != 10 * rtol:
+        fail(f"verify options {S['options']}")
+    kinds = []
+    for (resp, q), g in h.groupby(["response", "quantity"], sort=False):
+        g = g.sort_values("h", ascending=False)
+        d, hs = list(g["difference"]), list(g["h"])
+        floor = max(1e3 * rtol, 4 * max(g["idas_self_difference"]))
+        fit = None
+        for k in range(len(d) - 1, 0, -1):
+            if d[k - 1] > floor and d[k] > floor:
+                fit = (np.log2(d[k - 1] / d[k]), hs[k])
+                break
+        line = [v for v in S["verdicts"] if f"— {resp} {q} " in v]
+        if len(line) != 1:
+            fail(f"{resp} {q}: verdict lines {line}")
+        v = line[0]
+        if fit:
+            ok = 1.8 < fit[0] < 2.2
+            m = re.search(r"order (-?[0-9.]+) \(halving to h = ([0-9.e+-]+);", v)
+            if not m or abs(float(m.group(1)) - fit[0]) > 0.006 or not close(float(m.group(2)), fit[1], 1e-3) \
+                    or v.startswith("PASS") != ok or not (v.startswith("PASS") or v.startswith("FAIL")):
+                fail(f"{resp} {q}: order {fit} from h_study.csv, verdict {v}")
+            kinds.append("fit")
+        elif max(d) <= 1e3 * rtol:
+            if not v.startswith("PASS") or "within 1000" not in v:
+                fail(f"{resp} {q}: agreement expected, verdict {v}")
+            kinds.append("agree")
+        else:
+            if not v.startswith("NOTE") or "inconclusive" not in v:
+                fail(f"{resp} {q}: inconclusive expected, verdict {v}")
+            kinds.append("note")
+    if want and want not in kinds:
+        fail(f"{case}: no '{want}' verdict among {kinds}")
+    return kinds
+
+
+k1 = check_h_study(spring, os.path.join(work, "verify_idas"), want="fit")
+cant = os.path.join(SRC, "tests/integration/data/cantilever_ramp.json")
+k2 = check_h_study(cant, os.path.join(work, "verify_cant"), want="note")
+print(f"verify h study: verdicts follow h_study.csv (spring: {k1}; cantilever: {k2})")
+
 # ---- bench
 bench = os.path.join(work, "bench")
 run("bench", spring, "-o", bench, "--methods", "none", "--matrices", "none", "--repetitions", "1")

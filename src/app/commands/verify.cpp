@@ -24,9 +24,17 @@ int verify_command(const CommonArgs& c, VerifyArgs a) {
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   };
   const auto r = run_verify(c.case_file, vo);
-  for (const auto& v : r.summary["verdicts"]) std::printf("  %s\n", v.get<std::string>().c_str());
-  std::printf("lsmbs verify: %s — report in %s/report.md\n",
-              r.pass ? "all checks pass" : "SOME CHECKS FAIL", c.out.c_str());
+  int notes = 0;
+  for (const auto& v : r.summary["verdicts"]) {
+    std::printf("  %s\n", v.get<std::string>().c_str());
+    notes += v.get<std::string>().rfind("NOTE", 0) == 0;
+  }
+  const std::string undecided = notes ? " (" + std::to_string(notes) +
+                                            (notes == 1 ? " check" : " checks") +
+                                            " could not decide: NOTE)"
+                                      : "";
+  std::printf("lsmbs verify: %s%s — report in %s/report.md\n",
+              r.pass ? "all checks pass" : "SOME CHECKS FAIL", undecided.c_str(), c.out.c_str());
   return r.pass ? 0 : 1;
 }
 

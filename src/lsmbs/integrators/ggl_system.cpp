@@ -6,27 +6,33 @@ namespace lsmbs {
 
 State GglSystem::state(double t, const double* y, const double* yp) const {
   State s;
+  state_into(t, y, yp, s);
+  return s;
+}
+
+void GglSystem::state_into(double t, const double* y, const double* yp, State& s) const {
   s.t = t;
-  s.q = Eigen::Map<const Vec>(y, nq_);
+  s.q = Eigen::Map<const Vec>(y, nq_);  // no allocation once s has its sizes
   s.v = Eigen::Map<const Vec>(y + nq_, nq_);
   s.lambda = Eigen::Map<const Vec>(y + 2 * nq_, nc_);
   s.a = Eigen::Map<const Vec>(yp + nq_, nq_);
-  return s;
 }
 
 bool GglSystem::residual(const ModelParams& p, double t, const double* y, const double* yp,
                          double* F) {
   const int nq = nq_, nc = nc_;
-  const State s = state(t, y, yp);
+  state_into(t, y, yp, st_);
+  const State& s = st_;
   m_.residual(s, p, 1.0, 0.0, R_);
   if (!R_.allFinite()) return false;
-  const SpMat J = m_.constraint_jacobian(t, s.q, p);
+  mu_ = Eigen::Map<const Vec>(y + 2 * nq + nc, nc);
+  m_.constraint_jacobian_products(t, s.q, p, s.v, mu_, jv_, jtmu_);  // Φ_q v, Φ_qᵀ μ
   m_.constraint_time_terms(t, s.q, s.v, p, phi_t_, gamma_);
-  const Eigen::Map<const Vec> qd(yp, nq), mu(y + 2 * nq + nc, nc);
-  Eigen::Map<Vec>(F, nq) = sc_.s1 * (qd - s.v + J.transpose() * mu);
+  const Eigen::Map<const Vec> qd(yp, nq);
+  Eigen::Map<Vec>(F, nq) = sc_.s1 * (qd - s.v + jtmu_);
   Eigen::Map<Vec>(F + nq, nq) = R_.head(nq);
   Eigen::Map<Vec>(F + 2 * nq, nc) = sc_.s3 * R_.tail(nc);
-  Eigen::Map<Vec>(F + 2 * nq + nc, nc) = sc_.s4 * (J * s.v + phi_t_);
+  Eigen::Map<Vec>(F + 2 * nq + nc, nc) = sc_.s4 * (jv_ + phi_t_);
   return true;
 }
 
@@ -83,25 +89,60 @@ void GglSystem::sensitivity_residual(const ModelParams& p, double t, const doubl
                                      std::span<const double* const> yS,
                                      std::span<const double* const> ypS,
                                      std::span<double* const> rS) {
-  const int nq = nq_, N = n_;
-  const State s = state(t, y, yp);
-  // M = S(1, 0, 0) − S(0, 0, 0) (the iteration matrix is linear in its coefficients)
-  m_.iteration_matrix(s, p, Coefficients{0, 0, 0}, 1.0, 0.0, vals_);
-  const std::vector<double> v0 = vals_;
-  m_.iteration_matrix(s, p, Coefficients{1, 0, 0}, 1.0, 0.0, vals_);
-  std::vector<double> vm = vals_;
-  for (size_t k = 0; k < vals_.size(); ++k) vm[k] -= v0[k];
-  const SpMat M = m_.assembler().to_sparse(vm).topLeftCorner(nq, nq);
-  const SpMat Jy = jacobian(p, t, 0.0, y, yp);  // F_y (c_j = 0)
-  for (size_t i = 0; i < rS.size(); ++i) {
+  // F_y yS + F_ẏ ẏS from products with the model's blocks (no GGL matrix is assembled):
+  //   F1: s₁ (q̇S − vS + Φ_qᵀ μS + H_μ qS)        F2: (K_t + H_λ) qS + Φ_qᵀ λS + C vS + M v̇S
+  //   F3: s₃ Φ_q qS                               F4: s₄ (∂(Φ_q v)/∂q qS + Φ_q vS)
+  // plus F_p d_i = ∂r/∂p d_i in F2.
+  const int nq = nq_, nc = nc_, N = n_;
+  const auto nv = static_cast<Eigen::Index>(rS.size());
+  state_into(t, y, yp, st_);
+  const State& s = st_;
+  sq_.resize(nq, nv), sv_.resize(nq, nv), sa_.resize(nq, nv);
+  for (Eigen::Index i = 0; i < nv; ++i) {
+    sq_.col(i) = Eigen::Map<const Vec>(yS[i], nq);
+    sv_.col(i) = Eigen::Map<const Vec>(yS[i] + nq, nq);
+    sa_.col(i) = Eigen::Map<const Vec>(ypS[i] + nq, nq);
+  }
+  m_.mass_damping_product(s, p, sa_, sv_, mc_);  // M v̇S + C vS
+  mu_ = Eigen::Map<const Vec>(y + 2 * nq + nc, nc);
+  m_.constraint_hessian_product(t, s.q, mu_, sq_, hq_);               // H_μ qS
+  m_.velocity_constraint_jacobian_product(t, s.q, s.v, sq_, vq_);     // ∂(Φ_q v)/∂q qS
+  m_.iteration_matrix(s, p, Coefficients{0, 0, 1}, 1.0, 0.0, vals_);  // [K_t+H_λ Φ_qᵀ; Φ_q 0]
+  const CscPattern& P = m_.pattern();
+  for (Eigen::Index i = 0; i < nv; ++i) {
     const Eigen::Map<const Vec> ys(yS[i], N), yps(ypS[i], N);
     Eigen::Map<Vec> out(rS[i], N);
-    out = Jy * ys;
-    // F_ẏ ẏS = [s₁ q̇S; M v̇S; 0; 0]
-    out.head(nq) += sc_.s1 * yps.head(nq);
-    out.segment(nq, nq) += M * yps.segment(nq, nq);
+    auto o1 = out.head(nq), o2 = out.segment(nq, nq), o3 = out.segment(2 * nq, nc),
+         o4 = out.tail(nc);
+    o1 = yps.head(nq) - ys.segment(nq, nq) + hq_.col(i);  // s₁ applied below
+    o2 = mc_.col(i);
+    o3.setZero();
+    o4 = vq_.col(i);
+    const double* qS = yS[i];
+    const double* vS = yS[i] + nq;
+    const double* lS = yS[i] + 2 * nq;
+    const double* mS = yS[i] + 2 * nq + nc;
+    for (int j = 0; j < P.n; ++j)
+      for (int k = P.col_ptr[j]; k < P.col_ptr[j + 1]; ++k) {
+        const int r = P.row_ind[k];
+        const double a = vals_[k];
+        if (j < nq) {
+          if (r < nq) {
+            o2[r] += a * qS[j];  // K_t + H_λ
+          } else {
+            o3[r - nq] += a * qS[j];  // Φ_q
+            o4[r - nq] += a * vS[j];
+          }
+        } else if (r < nq) {
+          o2[r] += a * lS[j - nq];  // Φ_qᵀ
+          o1[r] += a * mS[j - nq];
+        }
+      }
+    o1 *= sc_.s1;
+    o3 *= sc_.s3;
+    o4 *= sc_.s4;
     m_.residual_param_derivative(s, p, dirs[i], dr_);
-    out.segment(nq, nq) += dr_.head(nq);
+    o2 += dr_.head(nq);
   }
 }
 
@@ -121,7 +162,8 @@ bool GglSystem::adjoint_residual(const ModelParams& p, double t, const double* y
                                  const Vec& gv, double* rB) {
   const int nq = nq_, nc = nc_, N = n_;
   const double s1 = sc_.s1, s3 = sc_.s3, s4 = sc_.s4;
-  const State s = state(t, y, yp);
+  state_into(t, y, yp, st_);
+  const State& s = st_;
   const Eigen::Map<const Vec> xi(xi_, N), xid(xid_, N);
   const auto xq = xi.head(nq), xv = xi.segment(nq, nq), xl = xi.segment(2 * nq, nc),
              xm = xi.tail(nc);

@@ -34,6 +34,8 @@ class GglSystem {
 
   /// The model's state (t, q, v, λ, a = v̇) of y, ẏ.
   State state(double t, const double* y, const double* yp) const;
+  /// The same into s (no allocation once s has its sizes).
+  void state_into(double t, const double* y, const double* yp, State& s) const;
 
   /// F(t, y, ẏ) (size N) at the parameters p. False when the model's residual is not finite.
   bool residual(const ModelParams& p, double t, const double* y, const double* yp, double* F);
@@ -41,7 +43,8 @@ class GglSystem {
   /// are kept).
   SpMat jacobian(const ModelParams& p, double t, double cj, const double* y, const double* yp);
   /// r_i = F_y yS_i + F_ẏ ẏS_i + F_p d_i for each parameter direction d_i (F_p: only F2 depends
-  /// on the parameters, F_p = ∂r/∂p). The derivatives are taken at p.
+  /// on the parameters, F_p = ∂r/∂p). The derivatives are taken at p. Products with the model's
+  /// blocks, element by element and on the model's pattern: no matrix is assembled.
   void sensitivity_residual(const ModelParams& p, double t, const double* y, const double* yp,
                             std::span<const ParamDirection> dirs, std::span<const double* const> yS,
                             std::span<const double* const> ypS, std::span<double* const> rS);
@@ -64,8 +67,10 @@ class GglSystem {
   const Model& m_;
   const int nq_, nc_, n_;
   Scales sc_;
-  // workspace
-  Vec R_, phi_t_, gamma_, dr_;
+  // workspace: residual and sensitivity residuals allocate nothing once sized
+  State st_;
+  Vec R_, phi_t_, gamma_, dr_, mu_, jv_, jtmu_;
+  Mat sq_, sv_, sa_, mc_, hq_, vq_;
   std::vector<double> vals_;
   Vec adj_x_, adj_yk_, adj_yc_, adj_yq_, adj_mw_;
   Mat adj_a_, adj_zero_, adj_ma_;

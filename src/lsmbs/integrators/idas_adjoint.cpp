@@ -20,14 +20,14 @@ bool IdasGGL::Impl::adjoint_integrand(int k, const State& s) {
 
 int IdasGGL::Impl::adjoint_residual(int k, double t, const double* y, const double* yp,
                                     const double* yB, const double* ypB, double* rB) {
-  if (!adjoint_integrand(k, state(t, y, yp))) return -1;
+  if (!adjoint_integrand(k, state_ref(t, y, yp))) return -1;
   return ggl.adjoint_residual(nominal, t, y, yp, yB, ypB, adj_gq, adj_gv, rB) ? 0 : 1;
 }
 
 // rhsQB = ξᵀ F_p − ∂g/∂p: integrated from t_b back to t0 it gives ∫_{t0}^{t_b} (∂g/∂p − ξᵀF_p) dt.
 int IdasGGL::Impl::adjoint_quadrature(int k, double t, const double* y, const double* yp,
                                       const double* yB, double* qB) {
-  const State s = state(t, y, yp);
+  const State& s = state_ref(t, y, yp);
   if (!adjoint_integrand(k, s)) return -1;
   const Eigen::Map<const Vec> xv(yB + nq, nq);
   for (size_t i = 0; i < dirs.size(); ++i) {

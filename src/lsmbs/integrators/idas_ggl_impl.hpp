@@ -45,6 +45,16 @@ struct IdasGGL::Impl {
   /// The nominal parameters, or those at the design point IDAS perturbed p to (cached).
   const ModelParams& params();
   State state(double t, const double* y, const double* yp) const { return ggl.state(t, y, yp); }
+  /// The same in a state kept by Impl (no allocation once sized): for the callbacks IDAS calls
+  /// per step or per iteration; valid until the next call.
+  const State& state_ref(double t, const double* y, const double* yp) {
+    ggl.state_into(t, y, yp, cb_state);
+    return cb_state;
+  }
+  State cb_state;
+  // pointer arrays of IDAS's sensitivity vectors (SensitivityArrays, idas_ggl.cpp)
+  std::vector<const double*> ptr_a, ptr_b;
+  std::vector<double*> ptr_c;
 
   // IDAS callbacks of the forward problem (idas_ggl.cpp): 0 success, > 0 recoverable.
   int residual(double t, const double* y, const double* yp, double* F);

@@ -23,4 +23,26 @@ class Parameterization {
                                                             ModelParams& params) const = 0;
 };
 
+/// A parameterization restricted to directions: k variables s with p = p0 + W s (W: n × k) of a
+/// base parameterization. Its sensitivities are the directional derivatives along W's columns:
+/// an integrator differentiates along k directions instead of n variables (the IDAS reference of
+/// `lsmbs verify` checks all variables at once along a few random combinations of them). The
+/// variables' bounds are ±50, so that a difference quotient's scale max(|s|, 1e-2 range) is 1.
+class DirectionalParameterization final : public Parameterization {
+ public:
+  DirectionalParameterization(const Parameterization& base, Vec p0, Mat W);
+  int size() const override { return static_cast<int>(W_.cols()); }
+  Vec lower() const override { return Vec::Constant(size(), -50.0); }
+  Vec upper() const override { return Vec::Constant(size(), 50.0); }
+  void apply(const Vec& s, ModelParams& params) const override;
+  /// Direction j = Σ_i W_ij ∂(ModelParams)/∂p_i (entries of one material-field element merged).
+  std::vector<ParamDirection> apply_with_directions(const Vec& s,
+                                                    ModelParams& params) const override;
+
+ private:
+  const Parameterization& base_;
+  Vec p0_;
+  Mat W_;
+};
+
 }  // namespace lsmbs

@@ -6,6 +6,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/integrators/idas_ggl.hpp"
+#include "lsmbs/mbs/parameterization.hpp"
 #include "lsmbs/sensitivity/method.hpp"
 #include "lsmbs/sensitivity/response_quadrature.hpp"
 #include "lsmbs/sensitivity/response_tracker.hpp"
@@ -14,16 +15,27 @@ namespace lsmbs {
 
 using Method = SensitivityOptions::Method;
 
-SensitivityResult IdasSensitivity::run(Study& cs, const Vec& p) const {
-  const SensitivityOptions& o = options();
-  const Design& d = *cs.design;
-  SensitivityResult res;
+namespace {
+
+// One IDAS run with outputs every h_out; the responses of grid g are recorded at every
+// strides[g]-th output (its step strides[g]·h_out). IDAS's steps do not depend on the output
+// times (IDA_NORMAL interpolates to them; the stop times are the windows' and law kinks', which
+// every grid shares), so each result is what a run on its own grid gives, but for IDAS's initial
+// step, which is chosen from h_out.
+// `d` at `p`: the study's design, or directions in it (DirectionalParameterization).
+std::vector<SensitivityResult> run_idas(Study& cs, const Parameterization& d, const Vec& p,
+                                        const SensitivityOptions& o, double h_out,
+                                        const std::vector<int>& strides) {
   ModelParams& params = cs.model->params();
   const bool adjoint = o.method == Method::kIdasAdjoint;
-  ResponseTracker tracker(cs, d.apply_with_directions(p, params));
-  tracker.set_scaling(1.0);  // IDAS carries the physical multipliers
+  std::vector<ResponseTracker> trackers;
+  trackers.reserve(strides.size());
+  for (size_t g = 0; g < strides.size(); ++g) {
+    trackers.emplace_back(cs, d.apply_with_directions(p, params));
+    trackers.back().set_scaling(1.0);  // IDAS carries the physical multipliers
+  }
   IdasOptions io = o.idas;
-  io.h_out = cs.simulation.h;
+  io.h_out = h_out;
   io.t_end = cs.simulation.t_end;
   IdasGGL idas(*cs.model, params, io);
   ResponseQuadrature quad(cs, d.apply_with_directions(p, params), cs.initial.t, io.t_end);
@@ -33,26 +45,49 @@ SensitivityResult IdasSensitivity::run(Study& cs, const Vec& p) const {
                      "integral, average, "
                      "average_eq45 or rms), and the case has none");
   if (!quad.empty()) idas.set_quadrature(&quad);
+  long k_out = 0;  // outputs so far (t0 is output 0)
   const IdasGGL::Output out = [&](const State& s, const Mat* dq, const Mat* dv, const Mat* da,
                                   const Mat* dl) {
-    tracker.record(s, params, dq, dv, da, dl);
+    for (size_t g = 0; g < strides.size(); ++g)
+      if (k_out % strides[g] == 0) trackers[g].record(s, params, dq, dv, da, dl);
+    ++k_out;
     if (o.progress) o.progress(Progress{"IDAS", s.t, io.t_end, 0, 0});
   };
   const auto st = adjoint ? idas.run_adjoint(cs.initial, d, p, out)
                           : idas.run_with_sensitivities(cs.initial, d, p, out);
-  res.ok = st.ok;
-  res.message = st.message;
-  res.idas = st;
-  res.counts.simulations = 1;
-  res.counts.steps = st.steps;
-  res.counts.residual_evaluations = st.residual_evaluations;
-  res.counts.factorizations = st.jacobian_evaluations;
-  res.counts.newton_iterations = st.nonlinear_iterations;
-  res.responses = tracker.results();
-  if (adjoint)  // values only: the adjoint differentiates the quadratures, not the grid aggregates
-    for (auto& r : res.responses) r.gradient.setConstant(NAN);
-  if (!quad.empty()) res.quadratures = quad.results();
-  return res;
+  std::vector<SensitivityResult> results(strides.size());
+  for (size_t g = 0; g < strides.size(); ++g) {
+    SensitivityResult& res = results[g];
+    res.ok = st.ok;
+    res.message = st.message;
+    res.idas = st;
+    res.counts.simulations = 1;
+    res.counts.steps = st.steps;
+    res.counts.residual_evaluations = st.residual_evaluations;
+    res.counts.factorizations = st.jacobian_evaluations;
+    res.counts.newton_iterations = st.nonlinear_iterations;
+    res.responses = trackers[g].results();
+    if (adjoint)  // values only: the adjoint differentiates the quadratures, not the aggregates
+      for (auto& r : res.responses) r.gradient.setConstant(NAN);
+    if (!quad.empty()) res.quadratures = quad.results();
+  }
+  return results;
+}
+
+}  // namespace
+
+SensitivityResult IdasSensitivity::run(Study& cs, const Vec& p) const {
+  return std::move(run_idas(cs, *cs.design, p, options(), cs.simulation.h, {1})[0]);
+}
+
+std::vector<SensitivityResult> IdasSensitivity::run_on_grids(
+    Study& cs, const Vec& p, const Mat* directions, double h_fine,
+    const std::vector<int>& strides) const {
+  if (!directions) return run_idas(cs, *cs.design, p, options(), h_fine, strides);
+  const DirectionalParameterization along(*cs.design, p, *directions);
+  auto results = run_idas(cs, along, Vec::Zero(directions->cols()), options(), h_fine, strides);
+  cs.design->apply(p, cs.model->params());  // the study's parameters are left at p
+  return results;
 }
 
 }  // namespace lsmbs

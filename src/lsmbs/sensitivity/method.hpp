@@ -10,6 +10,7 @@
 //   IdasSensitivity            SUNDIALS IDAS on the GGL form: forward sensitivities, or the
 //                              adjoint of the time-integral responses
 #include <memory>
+#include <vector>
 
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
@@ -67,6 +68,10 @@ class FiniteDifferenceSensitivity final : public SensitivityMethod {
 class IdasSensitivity final : public SensitivityMethod {
  public:
   using SensitivityMethod::SensitivityMethod;
+  /// Method idas on several output grids from one run, along the columns of `directions` when
+  /// given (idas_on_grids, sensitivity.hpp): no checks, no timing.
+  std::vector<SensitivityResult> run_on_grids(Study& study, const Vec& p, const Mat* directions,
+                                              double h_fine, const std::vector<int>& strides) const;
 
  protected:
   SensitivityResult run(Study& study, const Vec& p) const override;

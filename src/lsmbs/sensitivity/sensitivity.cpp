@@ -1,5 +1,6 @@
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -194,6 +195,47 @@ SensitivityResult SensitivityMethod::compute(Study& cs, const Vec& p) const {
   flag_non_finite(res, *cs.design, grid_gradients(),
                   options_.is_adjoint() && options_.adjoint_skip_per_step);
   return res;
+}
+
+std::vector<SensitivityResult> idas_on_grids(Study& cs, const Vec& p, SensitivityOptions o,
+                                             double h_fine, const std::vector<int>& strides,
+                                             const Mat* directions) {
+  o.method = Method::kIdas;
+  if (!cs.design)
+    throw SetupError("design", "sensitivities need a design section (design variables)");
+  if (cs.responses.empty())
+    throw SetupError("responses", "sensitivities need at least one response");
+  if (auto msg = o.validate(); !msg.empty()) throw Error("sensitivity option " + msg);
+  if (!(h_fine > 0) || strides.empty() ||
+      std::any_of(strides.begin(), strides.end(), [](int k) { return k < 1; }))
+    throw Error("idas_on_grids: expected h_fine > 0 and positive strides");
+  if (directions && (directions->rows() != cs.design->size() || directions->cols() < 1))
+    throw Error("idas_on_grids: directions must have a row per design variable");
+  const auto t0 = std::chrono::steady_clock::now();
+  auto results = IdasSensitivity(o).run_on_grids(cs, p, directions, h_fine, strides);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (auto& res : results) {
+    res.counts.wall_seconds = wall;
+    if (!res.ok && interrupted()) {
+      res.interrupted = true;
+      res.message =
+          "interrupted by signal " + std::to_string(interrupted()) + " (" + res.message + ")";
+      continue;
+    }
+    if (!directions) {
+      flag_non_finite(res, *cs.design, true, false);
+      continue;
+    }
+    for (const auto& r : res.responses)  // along directions: no variable to name
+      if (res.ok &&
+          (!r.gradient.allFinite() ||
+           !Eigen::Map<const Vec>(r.values.data(), static_cast<Eigen::Index>(r.values.size()))
+                .allFinite())) {
+        res.ok = false;
+        res.message = "IDAS: response '" + r.name + "' or a directional derivative is not finite";
+      }
+  }
+  return results;
 }
 
 std::unique_ptr<SensitivityMethod> make_sensitivity_method(const SensitivityOptions& o) {

@@ -176,4 +176,14 @@ std::vector<ResponseSensitivity> simulate_responses_at_current_design(
 /// Sensitivities at design p (the case's model parameters are left at p).
 SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o);
 
+/// Method idas on several output grids from one IDAS run (the time-step study of `lsmbs verify`):
+/// outputs every h_fine, result k recorded on the grid of step strides[k]·h_fine. IDAS's steps do
+/// not depend on the output grid but through its initial step (chosen from h_fine), so result k
+/// agrees with compute_sensitivities on that grid to IDAS's tolerance. With `directions` (n_v ×
+/// k), the gradients are the k directional derivatives ∂f/∂p · W (one IDAS sensitivity per
+/// column instead of one per variable). o.method is ignored (idas).
+std::vector<SensitivityResult> idas_on_grids(Study& cs, const Vec& p, SensitivityOptions o,
+                                             double h_fine, const std::vector<int>& strides,
+                                             const Mat* directions = nullptr);
+
 }  // namespace lsmbs
