@@ -302,6 +302,10 @@ int main(int argc, char** argv) {
       throw lsmbs::Error("--seed: the seed of --starts' random initial designs; give --starts N");
     if (*sim || *sta || *geo || *opt || *ben || *ver || *sen) {
       lsmbs::check_output_folder(out);
+      if (overwrite) {  // invalid input exits 2 before --overwrite removes the earlier run
+        if (*ver) lsmbs::app::check_verify_options(vo);
+        (void)lsmbs::app::load_case_with_sets(case_file, sets, /*design_as_initial=*/bool(*opt));
+      }
       lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);
       started = true;
     }

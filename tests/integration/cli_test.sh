@@ -183,6 +183,19 @@ grep -q "expected one of semi-analytical" "$tmp/err4.txt" || fail "message: $(ca
 [ $rc -eq 2 ] && grep -q "piston_x_per_step.*use --method direct-analytic" "$tmp/err5.txt" \
   || fail "adjoint with a per-step response: rc $rc $(cat "$tmp/err5.txt")"
 [ ! -e "$tmp/sens3/summary.json" ] || fail "a refused adjoint run left a summary.json"
+grep -q "/output/responses/[0-9]" "$tmp/err5.txt" || fail "the refusal names no response entry: $(cat "$tmp/err5.txt")"
+# A memory bound the checkpoints cannot meet names the command's option (not a case path) and the
+# least memory that works
+python3 -c "
+import json
+c=json.load(open('$spring')); c['output']['responses']=[r for r in c['output']['responses'] if r['aggregate']!='per_step']
+json.dump(c, open('$tmp/noper.json','w'))"
+"$exe" sensitivity "$tmp/noper.json" --method adjoint --adjoint-memory 0.0001 -o "$tmp/sens_mem" 2> "$tmp/err_mem.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q -- "--adjoint-memory 0.0001: the adjoint of .* needs at least [0-9.e-]* MB" "$tmp/err_mem.txt" \
+  || fail "adjoint memory bound: rc $rc $(cat "$tmp/err_mem.txt")"
+need=$(sed -n 's/.*needs at least \([0-9.e-]*\) MB.*/\1/p' "$tmp/err_mem.txt")
+"$exe" sensitivity "$tmp/noper.json" --method adjoint --adjoint-memory "$need" -o "$tmp/sens_mem2" -q \
+  || fail "the stated least memory $need MB is refused"
 # Optimization stopped after 4 evaluations by the testing hook (as an interruption would stop it),
 # then resumed: it ends at the same design as an uninterrupted run, simulating only the rest.
 python3 -c "
@@ -259,6 +272,26 @@ echo "my notes" > "$tmp/reuse/notes.txt"
 [ $rc -eq 2 ] && grep -q "holds an earlier run" "$tmp/er.txt" || fail "reused folder: rc $rc $(cat "$tmp/er.txt")"
 "$exe" simulate "$spring" -o "$tmp/reuse" -q --overwrite || fail "--overwrite"
 [ ! -e "$tmp/reuse/plate.pvd" ] && [ ! -e "$tmp/reuse/vtu" ] && [ -f "$tmp/reuse/notes.txt" ] || fail "--overwrite: $(ls "$tmp/reuse")"
+# --overwrite with an input that does not load exits 2 and leaves the earlier run as it was
+cp "$tmp/reuse/summary.json" "$tmp/reuse_before.json"
+"$exe" simulate "$spring" -o "$tmp/reuse" -q --overwrite --set /simulation/h=-1 2> "$tmp/er2.txt"; rc=$?
+[ $rc -eq 2 ] && cmp -s "$tmp/reuse/summary.json" "$tmp/reuse_before.json" \
+  || fail "--overwrite with bad input: rc $rc, summary changed or removed: $(cat "$tmp/er2.txt")"
+"$exe" verify "$spring" -o "$tmp/reuse" --overwrite --idas-rtol 0 2> "$tmp/er3.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q -- "--idas-rtol: expected a relative tolerance in \[1e-14, 1e-4\], got 0" "$tmp/er3.txt" \
+  && cmp -s "$tmp/reuse/summary.json" "$tmp/reuse_before.json" || fail "verify --idas-rtol 0: rc $rc $(cat "$tmp/er3.txt")"
+# a static run writes <body>.vtu and model.vtm beside summary.json; a run that replaces it with
+# --overwrite leaves none of them: the folder holds exactly what the new summary.json lists
+cant="$src/tests/integration/data/cantilever_ramp.json"
+"$exe" static "$cant" -o "$tmp/st" -q || fail "static"
+[ -f "$tmp/st/pl.vtu" ] || fail "static wrote no pl.vtu: $(ls "$tmp/st")"
+"$exe" simulate "$spring" -o "$tmp/st" -q --overwrite || fail "simulate --overwrite over a static run"
+python3 -c "
+import json, os
+d='$tmp/st'; listed=set(json.load(open(d+'/summary.json'))['files'])
+on_disk={os.path.relpath(os.path.join(r,n),d) for r,_,ns in os.walk(d) for n in ns}
+assert on_disk == listed | {'summary.json'} or on_disk == listed, (sorted(on_disk - listed), sorted(listed - on_disk))" \
+  || fail "files of the replaced static run remain"
 # Interruptions of simulate: SIGINT finishes the step, writes everything with status partial and
 # reason interrupted, exits 130; SIGKILL over an earlier complete run leaves no complete-looking
 # summary.json beside the new files.

@@ -76,6 +76,8 @@ int geometry_command(const CommonArgs& c, const GeometryArgs& a);
 int static_command(const CommonArgs& c, const StaticArgs& a);
 int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a);
 int optimize_command(const CommonArgs& c, const OptimizeArgs& a);
+/// Exits 2 (lsmbs::Error naming the option, --idas-rtol …) for invalid verify options.
+void check_verify_options(const VerifyOptions& vo);
 int verify_command(const CommonArgs& c, VerifyArgs a);
 int bench_command(const CommonArgs& c, BenchArgs a);
 

@@ -6,11 +6,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/io/sha256.hpp"
 
 namespace lsmbs::app {
 
@@ -35,7 +38,13 @@ void flag_failed_run(const std::string& out, const std::string& cmdline,
                      const std::string& case_file, const std::string& what) {
   try {
     std::filesystem::create_directories(out);
-    nlohmann::json S = lsmbs::provenance(cmdline, case_file, "");
+    std::string sha;  // of the case file's bytes, as a complete run records it
+    if (std::ifstream in(case_file, std::ios::binary); in) {
+      const std::string text((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+      sha = lsmbs::sha256_hex(text);
+    }
+    nlohmann::json S = lsmbs::provenance(cmdline, case_file, sha);
     S["status"] = "partial";
     S["failure"] = what;
     lsmbs::write_json_atomic(out + "/summary.json", S);

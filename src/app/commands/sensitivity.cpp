@@ -152,12 +152,23 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   so.progress = line.callback();
   lsmbs::install_interrupt_handlers();  // an interrupt stops the generalized-α runs at the next
                                         // step
-  const auto res = lsmbs::compute_sensitivities(cs, p, so);
+  // the adjoint's memory bound is this command's option, not a value of the case file
+  auto compute = [&](const lsmbs::SensitivityOptions& o) {
+    try {
+      return lsmbs::compute_sensitivities(cs, p, o);
+    } catch (const lsmbs::SetupError& e) {
+      if (e.subject() != "optimization.sensitivity.adjoint_memory_mb") throw;
+      char v[32];
+      std::snprintf(v, sizeof v, "%g", a.adjoint_memory_mb);
+      throw lsmbs::Error(std::string("--adjoint-memory ") + v + ": " + e.reason());
+    }
+  };
+  const auto res = compute(so);
   std::vector<lsmbs::SensitivityResult> compared = {res};  // every method, the first one first
   for (size_t k = 1; k < parsed.size() && res.ok; ++k) {
     lsmbs::SensitivityOptions sk = so;
     sk.method = parsed[k];
-    compared.push_back(lsmbs::compute_sensitivities(cs, p, sk));
+    compared.push_back(compute(sk));
   }
   std::optional<lsmbs::GradientCheckResult> checked;
   if (check && res.ok) checked = lsmbs::check_gradients(cs, p, res.responses, *check);

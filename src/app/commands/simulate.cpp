@@ -61,6 +61,9 @@ int simulate_command(const CommonArgs& c, const SimulateArgs& a) {
     if (s.halvings)
       std::printf("  step halvings: %ld (first at t = %g s)\n", s.halvings,
                   s.halving_times.front());
+    if (res.summary.contains("warnings"))
+      for (const auto& w : res.summary["warnings"])
+        std::printf("  warning: %s\n", w.get<std::string>().c_str());
     if (s.ok)
       for (const auto& [name, v] : res.responses) std::printf("  %-28s %.10g\n", name.c_str(), v);
     std::printf("  results in %s\n", out.c_str());

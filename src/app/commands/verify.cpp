@@ -1,5 +1,6 @@
 // lsmbs verify: the verification report of a case (every sensitivity method against central
 // differences and IDAS, the Δp, time-step and mesh studies), with pass/fail verdicts.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -8,8 +9,18 @@
 
 namespace lsmbs::app {
 
+void check_verify_options(const VerifyOptions& vo) {
+  if (auto msg = vo.validate(); !msg.empty()) {  // named as the command line spells the option
+    const auto colon = msg.find(':');
+    std::string option = "--" + msg.substr(0, colon);
+    std::replace(option.begin(), option.end(), '_', '-');
+    throw Error(option + msg.substr(colon));
+  }
+}
+
 int verify_command(const CommonArgs& c, VerifyArgs a) {
   VerifyOptions& vo = a.options;
+  check_verify_options(vo);
   vo.out_dir = c.out;
   vo.command_line = c.command_line;
   for (const auto& st : c.sets) {

@@ -69,6 +69,13 @@ QuadElement::QuadElement(const std::array<Vec2, 4>& X, QuadIntegration integrati
   }
   Eigen::Vector4d N;
   make(0, 0, 4.0, centre_, N);
+  for (int c = 0; c < 4; ++c) {
+    Eigen::Matrix<double, 4, 2> dN;
+    shape(kXi[c], kEta[c], N, dN);
+    Mat2 J = Mat2::Zero();
+    for (int i = 0; i < 4; ++i) J += X[i] * dN.row(i);
+    corner_det_J_[c] = J.determinant();
+  }
 }
 
 namespace {
@@ -153,6 +160,20 @@ double QuadElement::min_det_F(const Vec8& x) const {
   };
   double m = det_at(centre_);
   for (const auto& p : gauss_) m = std::min(m, det_at(p));
+  return m;
+}
+
+double QuadElement::min_corner_det_F(const Vec8& x) const {
+  double m = INFINITY;
+  for (int c = 0; c < 4; ++c) {
+    if (!(corner_det_J_[c] > 0)) continue;
+    Eigen::Vector4d N;
+    Eigen::Matrix<double, 4, 2> dN;
+    shape(kXi[c], kEta[c], N, dN);
+    Mat2 j = Mat2::Zero();  // ∂x/∂ξ
+    for (int i = 0; i < 4; ++i) j += Vec2(x[2 * i], x[2 * i + 1]) * dN.row(i);
+    m = std::min(m, j.determinant() / corner_det_J_[c]);
+  }
   return m;
 }
 

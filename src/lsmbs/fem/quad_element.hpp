@@ -52,6 +52,9 @@ class QuadElement {
   /// inverted element: E = ½(FᵀF − I) does not see a reflection, so a reflected element is
   /// stress-free and a spurious solution of the equations of motion.
   double min_det_F(const Vec8& x) const;
+  /// The smallest det F at the element's corners (where the reference quad is convex): ≤ 0 with a
+  /// positive min_det_F is a folded (bow-tie) element, a state the integration points do not see.
+  double min_corner_det_F(const Vec8& x) const;
   /// ∇_X N_I at the element centre (rows I), for stresses evaluated there.
   const Eigen::Matrix<double, 4, 2>& centre_gradients() const { return centre_.G; }
 
@@ -61,6 +64,7 @@ class QuadElement {
     double w = 0;                   // weight × det J
   };
   std::array<Point, 4> gauss_{};
+  std::array<double, 4> corner_det_J_{};  // det ∂X/∂ξ at the corners (≤ 0: not checked)
   Point centre_{};
   QuadIntegration integration_ = QuadIntegration::kSelectiveShear;
   Mat4 unit_mass_ = Mat4::Zero();

@@ -222,6 +222,7 @@ enum class NewtonStatus {
   kNotConverged,           ///< max_iter iterations, residual test not met
   kNotConvergedPositions,  ///< max_iter iterations, residual test met, position corrections not
   kInverted,               ///< converged to a state with an inverted element (a spurious solution)
+  kFolded,  ///< converged to a state where an element folded within the step (retried)
 };
 
 // One run of GeneralizedAlpha: its named steps (the boxes of Algorithm 1), the workspace (sized
@@ -297,6 +298,7 @@ class AlphaRun {
   double rn_ = 0, pn_ = 0;      // ‖r‖∞ [N], ‖Φ‖∞ [length]
   int bad_column_ = -1;         // kNonFiniteMatrix: the first column with NaN or Inf
   Model::Inversion inversion_;  // kInverted: the element with the smallest det F
+  bool prev_folded_ = false;    // the last accepted state has a folded element
 
   // Factorizations. Concurrent observers: a second numeric factorization of the same symbolic
   // analysis, so that step n+1 is factorized into one while the worker back-solves with step n's
@@ -350,6 +352,7 @@ bool AlphaRun::start(State s0) {
 
   cur_ = s0;
   prev_ = s0;
+  prev_folded_ = model_.most_compressed_element(s0.q, p_).folded();
   a_cur_ = s0.a;  // a_0 = q̈_0
   a_prev_ = a_cur_;
   R_.resize(model_.n());
@@ -391,6 +394,7 @@ bool AlphaRun::start_from(const GridCheckpoint& from, long grid_end) {
   sum_.zeta = zeta_ = from.zeta;
   cur_ = from.state;
   prev_ = from.state;
+  prev_folded_ = model_.most_compressed_element(from.state.q, p_).folded();
   a_cur_ = from.acc_like;
   a_prev_ = a_cur_;
   R_.resize(model_.n());
@@ -521,10 +525,24 @@ NewtonStatus AlphaRun::newton(const AlphaCoefficients& c) {
         // A reflected element is stress-free (E = ½(FᵀF − I)): Newton can converge to such a
         // far solution of the step equations from the predictor of a long step. Reject it; the
         // step is redone with h/2, whose predictor lies closer to the physical solution.
-        inversion_ = model_.most_compressed_element(cur_.q);
+        inversion_ = model_.most_compressed_element(cur_.q, p_);
         if (inversion_.inverted()) {
           ++sum_.inverted_element_rejections;
           return NewtonStatus::kInverted;
+        }
+        // An element that folds within one step (det F ≤ 0 at a corner only) is retried with
+        // h/2 like an inverted one: on a soft block indented by a sudden load Newton converged
+        // from a 1 ms predictor to a far, folded state that h/2 avoids. A fold that remains at the
+        // smallest step, or that the previous state already had, is the discrete solution of a
+        // mesh too coarse for the deformation: accepted and reported.
+        if (inversion_.folded()) {
+          if (!prev_folded_ && depth_ < opt_.max_halvings) {
+            ++sum_.folded_element_rejections;
+            return NewtonStatus::kFolded;
+          }
+          if (!sum_.folded_element_steps++)
+            sum_.folded_first =
+                "t = " + std::to_string(cur_.t) + " s, " + inversion_.describe_fold();
         }
         return NewtonStatus::kConverged;
       }
@@ -594,10 +612,15 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
       why = "singular iteration matrix: the motion of " +
             model_.describe_unknown(step_lu_->singular_column()) + " is not determined";
       break;
+    case NewtonStatus::kFolded:  // not reached: the smallest step accepts a fold
+      why = "an element folded within the step, " + inversion_.describe_fold();
+      break;
     case NewtonStatus::kInverted:
       why = "the step converged to a state with an inverted element, " + inversion_.describe() +
-            ": a reflected St Venant–Kirchhoff element is stress-free, a spurious solution of "
-            "the step equations (a smaller h or ρ∞, or a finer mesh, may avoid it)";
+            ", after " + std::to_string(opt_.max_halvings) +
+            " halvings: a reflected St Venant–Kirchhoff element is stress-free, a spurious "
+            "solution of the step equations (more halvings, simulation.max_halvings, a smaller h "
+            "or ρ∞, or a finer mesh may avoid it)";
       break;
     case NewtonStatus::kNotConvergedPositions:
       why = "Newton did not converge in " + std::to_string(opt_.max_iter) +
@@ -617,8 +640,10 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
     }
   }
   std::ostringstream os;
-  os << "t = " << cur_.t << " (step " << sum_.steps + 1 << ", h = " << h_ << "): " << why
-     << "; ‖r‖∞ = " << rn_ << " N, ‖Φ‖∞ = " << pn_ << "; worst: " << model_.describe_unknown(worst);
+  os << "t = " << cur_.t << " (step " << sum_.steps + 1 << ", h = " << h_ << "): " << why;
+  if (st != NewtonStatus::kInverted && st != NewtonStatus::kFolded)  // converged: no residual
+    os << "; ‖r‖∞ = " << rn_ << " N, ‖Φ‖∞ = " << pn_
+       << "; worst: " << model_.describe_unknown(worst);
   return fail(os.str());
 }
 
@@ -642,6 +667,7 @@ bool AlphaRun::factor_for_observers(const AlphaCoefficients& c) {
 void AlphaRun::accept(const AlphaCoefficients& c) {
   retried_fresh_ = false;
   a_cur_ += (1 - c.alpha_f) / (1 - c.alpha_m) * cur_.a;
+  prev_folded_ = inversion_.folded();
   ++sum_.steps;
   on_grid_ = std::abs(cur_.t - t_grid_next_) <= 1e-9 * opt_.h;
   if (on_grid_) cur_.t = t_grid_next_;
@@ -752,7 +778,21 @@ std::string IntegratorSummary::report() const {
                 "residual evaluations, %ld step halvings, %.3f s",
                 run_status_name(status()), t_reached, steps, newton_iterations, factorizations,
                 residual_evaluations, halvings, wall_seconds);
-  return message.empty() ? std::string(b) : std::string(b) + "\n  " + message;
+  std::string r = b;
+  for (const auto& w : warnings()) r += "\n  warning: " + w;
+  return message.empty() ? r : r + "\n  " + message;
+}
+
+std::vector<std::string> IntegratorSummary::warnings() const {
+  std::vector<std::string> w;
+  if (folded_element_steps > 0)
+    w.push_back(std::to_string(folded_element_steps) +
+                " steps ended with a folded element (det F <= 0 at a corner, positive at the "
+                "integration points), first at " +
+                folded_first +
+                ": the mesh is too coarse for this deformation, or the step converged to a far "
+                "solution; compare with a smaller h or with IDAS");
+  return w;
 }
 
 }  // namespace lsmbs

@@ -16,7 +16,8 @@
 //    one residual norm);
 //  - at least min_iter Newton corrections per step; a failed step is retried with halved steps;
 //    so is a converged step with an inverted element (det F ≤ 0: a stress-free reflection, a
-//    spurious solution of the step equations; docs/methods.md "Inverted elements").
+//    spurious solution of the step equations), or with an element folded within the step (det F
+//    ≤ 0 at a corner; docs/methods.md "Inverted elements").
 // Sparse KLU: one symbolic analysis per run, numeric (re)factorization per Newton iteration
 // (full Newton), or reuse while convergence is fast: within a step (modified Newton) or across
 // steps of equal h (modified_across_steps; primal runs of large models), both opt-in.
@@ -77,6 +78,12 @@ struct IntegratorSummary {
   long increment_rejections = 0;  ///< residual test passed, Newton correction still above tol_q
   /// converged steps rejected (then halved) because an element was inverted (det F ≤ 0)
   long inverted_element_rejections = 0;
+  /// converged steps rejected (then halved) because an element folded within the step (det F ≤ 0
+  /// at a corner only)
+  long folded_element_rejections = 0;
+  /// accepted steps whose state has a folded element (det F ≤ 0 at a corner only), and the first
+  long folded_element_steps = 0;
+  std::string folded_first;
   /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
   /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations,
   /// back-solves.
@@ -89,6 +96,8 @@ struct IntegratorSummary {
   double wall_seconds = 0;
   RunStatus status() const;
   std::string report() const;  ///< outcome and counts, one paragraph
+  /// What the user should know of a run that completed (a folded element, …): one line each.
+  std::vector<std::string> warnings() const;
 };
 
 /// Where a run may be resumed: a converged state on the output grid with its acceleration-like

@@ -179,11 +179,14 @@ bool GglSystem::adjoint_residual(const ModelParams& p, double t, const double* y
   pattern_transpose_product(vals_, adj_x_, adj_yc_);
   adj_x_ << xq, Vec::Zero(nc);
   pattern_transpose_product(vals_, adj_x_, adj_yq_);
-  const SpMat Hmu = m_.constraint_hessian(t, s.q, Eigen::Map<const Vec>(y + 2 * nq + nc, nc));
-  const SpMat Vj = m_.velocity_constraint_jacobian(t, s.q, s.v);
+  mu_ = Eigen::Map<const Vec>(y + 2 * nq + nc, nc);
+  adj_col_ = xq;
+  m_.constraint_hessian_product(t, s.q, mu_, adj_col_, adj_hx_);  // H_μ ξ_q
+  adj_col_ = xm;
+  m_.velocity_constraint_jacobian_transpose_product(t, s.q, s.v, adj_col_, adj_vx_);  // Vjᵀ ξ_μ
   Eigen::Map<Vec> r(rB, N);
   r.head(nq) =
-      s1 * xid.head(nq) - (s1 * (Hmu * xq) + adj_yk_.head(nq) + s4 * (Vj.transpose() * xm)) + gq;
+      s1 * xid.head(nq) - (s1 * adj_hx_.col(0) + adj_yk_.head(nq) + s4 * adj_vx_.col(0)) + gq;
   adj_a_ = xid.segment(nq, nq);
   adj_zero_.setZero(nq, 1);
   m_.mass_damping_product(s, p, adj_a_, adj_zero_, adj_ma_);  // M ξ̇_v (C·0)

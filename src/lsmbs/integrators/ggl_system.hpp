@@ -73,7 +73,7 @@ class GglSystem {
   Mat sq_, sv_, sa_, mc_, hq_, vq_;
   std::vector<double> vals_;
   Vec adj_x_, adj_yk_, adj_yc_, adj_yq_, adj_mw_;
-  Mat adj_a_, adj_zero_, adj_ma_;
+  Mat adj_a_, adj_zero_, adj_ma_, adj_col_, adj_hx_, adj_vx_;
 };
 
 }  // namespace lsmbs

@@ -499,7 +499,7 @@ IdasStats IdasGGL::run_mode(State s0, const Parameterization* design, const Vec&
     }
     // a reflected element is stress-free: a spurious state, not the structure's (docs/methods.md
     // "Inverted elements"); IDAS's error control makes it rare, and it is never reported
-    if (const auto inv = m.most_compressed_element(y.head(nq)); inv.inverted()) {
+    if (const auto inv = m.most_compressed_element(y.head(nq), im.nominal); inv.inverted()) {
       st.ok = false;
       st.message = "IDAS reached a state with an inverted element at t = " + std::to_string(tout) +
                    ": " + inv.describe();

@@ -58,7 +58,7 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
     if (res.residual_norm <= std::max(o.tol_r * scale, floor) &&
         pn <= o.tol_phi * model.length_scale()) {
       // a reflected element is stress-free: a spurious equilibrium, not the structure's
-      if (const auto inv = model.most_compressed_element(s.q); inv.inverted()) {
+      if (const auto inv = model.most_compressed_element(s.q, p); inv.inverted()) {
         res.message = "static Newton converged to a state with an inverted element, " +
                       inv.describe() +
                       ": a reflected St Venant–Kirchhoff element is stress-free, a spurious "

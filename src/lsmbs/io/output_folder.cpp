@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <vector>
 
@@ -43,12 +45,27 @@ void claim_output_folder(const std::string& out, bool overwrite, bool resume,
                                                "checkpoint.json", "report.md",   "bench.json",
                                                "convergence.png"};
   static const std::set<std::string> kFolders = {"vtu", "final_design"};
-  static const std::set<std::string> kExtensions = {".pvd", ".png", ".csv", ".gp"};
+  static const std::set<std::string> kExtensions = {".pvd", ".png", ".csv", ".gp", ".vtu", ".vtm"};
+  // what the earlier run's summary.json lists is its own too (a static run's <body>.vtu and
+  // model.vtm, a multi-start's start_k/ folders): the first component of each listed path
+  std::set<std::string> listed;
+  try {
+    const auto S = nlohmann::json::parse(std::ifstream(fs::path(out) / "summary.json"));
+    if (S.is_object() && S.contains("files") && S["files"].is_array())
+      for (const auto& f : S["files"])
+        if (f.is_string()) {
+          const fs::path rel = fs::path(f.get<std::string>()).lexically_normal();
+          if (!rel.empty() && rel.is_relative() && *rel.begin() != "..")
+            listed.insert(rel.begin()->string());
+        }
+  } catch (const std::exception&) {  // no summary, or not ours: the names above decide
+  }
   std::vector<fs::path> ours;
   for (const auto& e : fs::directory_iterator(out, ec)) {
     const std::string name = e.path().filename().string();
     if (kFiles.count(name) || (e.is_directory() && kFolders.count(name)) ||
-        (e.is_regular_file() && kExtensions.count(e.path().extension().string())))
+        (e.is_regular_file() && kExtensions.count(e.path().extension().string())) ||
+        listed.count(name))
       ours.push_back(e.path());
   }
   if (ours.empty()) return;

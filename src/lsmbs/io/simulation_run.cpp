@@ -217,6 +217,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
                 {"rigid_bodies", m.rigid_bodies().size()},
                 {"flexible_bodies", bodies}};
   S["counts"] = ro.idas ? nlohmann::json(res.idas) : nlohmann::json(res.integrator);
+  if (const auto w = res.integrator.warnings(); !w.empty()) S["warnings"] = w;
   if (!res.quadratures.empty()) S["quadratures"] = quadratures_json(res.quadratures, {});
   S["wall_seconds"] = res.integrator.wall_seconds;
   S["responses"] = responses;

@@ -57,14 +57,17 @@ std::string within(bool ok, const std::string& range) {
 }  // namespace
 
 std::string VerifyOptions::validate() const {
+  auto got = [](double v) { return ", got " + fmt("%g", v); };
   if (!(fd_delta > 0 && fd_delta < 1) && !fd_absolute)
-    return "fd_delta: expected a relative step in (0, 1)";
+    return "fd_delta: expected a relative step in (0, 1)" + got(fd_delta);
   if (!(fd_delta > 0) || !std::isfinite(fd_delta))
-    return "fd_delta: expected a positive finite step";
-  if (!(tol_fd > 0) || !std::isfinite(tol_fd)) return "tol_fd: expected a positive threshold";
-  if (!(tol_semi > 0) || !std::isfinite(tol_semi)) return "tol_semi: expected a positive threshold";
+    return "fd_delta: expected a positive finite step" + got(fd_delta);
+  if (!(tol_fd > 0) || !std::isfinite(tol_fd))
+    return "tol_fd: expected a positive threshold" + got(tol_fd);
+  if (!(tol_semi > 0) || !std::isfinite(tol_semi))
+    return "tol_semi: expected a positive threshold" + got(tol_semi);
   if (!(idas_rtol >= 1e-14 && idas_rtol <= 1e-4))
-    return "idas_rtol: expected a relative tolerance in [1e-14, 1e-4]";
+    return "idas_rtol: expected a relative tolerance in [1e-14, 1e-4]" + got(idas_rtol);
   return {};
 }
 
@@ -95,17 +98,19 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   // a check that could not decide (its reference is not accurate enough): said, not failed
   auto note = [&](const std::string& what) { verdicts.push_back("NOTE — " + what); };
   md << "# Verification report: " << cs.name << "\n\nCase `" << file << "` (SHA-256 "
-     << cs.sha256.substr(0, 16) << "…), " << d.size() << " design variables, "
-     << cs.responses.size() << " responses, h = " << cs.simulation.h
-     << " s, t_end = " << cs.simulation.t_end << " s. Produced by `" << o.command_line
-     << "`.\n\nDesign point:";
+     << cs.sha256.substr(0, 16) << "…), " << d.size()
+     << (d.size() == 1 ? " design variable, " : " design variables, ") << cs.responses.size()
+     << " responses, h = " << cs.simulation.h << " s, t_end = " << cs.simulation.t_end
+     << " s. Produced by `" << o.command_line << "`.\n\nDesign point:";
   for (int i = 0; i < d.size(); ++i)
     md << (i ? ", " : " ") << d.variables[i].name << " = " << fmt("%.6g", p[i]);
   md << (o.design_overrides.empty() ? " (the case's initial design).\n\n" : ".\n\n");
 
   // ---- primal and all methods
   auto t_primal = std::chrono::steady_clock::now();
-  run_simulation(cs);
+  if (const auto pr = run_simulation(cs); !pr.integrator.ok)
+    throw NumericalFailure("verify: the simulation at the design point failed: " +
+                           pr.integrator.message);
   const double primal =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_primal).count();
   struct Run {
@@ -113,6 +118,12 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     SensitivityResult r;
   };
   std::vector<Run> runs;
+  // a failed run has no numbers to compare: the verification stops, saying which run and why
+  auto checked = [&](SensitivityResult r, const std::string& what) {
+    if (!r.ok)
+      throw NumericalFailure("verify: " + what + " at the design point failed: " + r.message);
+    return r;
+  };
   auto sens = [&](Method m, double delta, bool absolute, SensitivityOptions::Matrix mx) {
     Case c = load_case(file, o.case_overrides);
     SensitivityOptions so;
@@ -120,7 +131,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     so.delta = delta;
     so.relative = !absolute;
     so.matrix = mx;
-    return compute_sensitivities(c, p, so);
+    return checked(compute_sensitivities(c, p, so), SensitivityOptions::name(m));
   };
   using M = SensitivityOptions::Matrix;
   // the generalized-α methods share the exact matrix (refined), so that their columns differ only
@@ -193,7 +204,10 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     idas_tight = idas_runs(rtol_tight);
     idas_loose = idas_runs(rtol_loose);
     for (const auto* r : {&idas_tight[0], &idas_loose[0]})
-      if (!r->ok) throw NumericalFailure("verify: the IDAS reference failed: " + r->message);
+      if (!r->ok)
+        throw NumericalFailure("verify: the IDAS reference failed: " + r->message +
+                               " (--idas-rtol with a looser tolerance may pass; --no-idas "
+                               "verifies without IDAS)");
   }
   stage("gradients by every method");
   runs.push_back({"direct-analytic", sens(Method::kDirectAnalytic, 1e-6, false, M::kRefined)});
@@ -209,7 +223,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     runs.push_back(
         {"default options (" + std::string(SensitivityOptions::name(SensitivityOptions{}.method)) +
              ", --matrix " + SensitivityOptions::matrix_name(SensitivityOptions{}.matrix) + ")",
-         compute_sensitivities(c, p, SensitivityOptions{})});
+         checked(compute_sensitivities(c, p, SensitivityOptions{}), "the default method")});
   }
   const auto& defaults = runs.back().r;
   const auto& ref = runs[0].r;
@@ -388,33 +402,46 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     if (plotted) files.push_back("dp_study.png");
     md << "\n"
        << (plotted ? "![dp study](dp_study.png)\n\n"
-                   : "(gnuplot unavailable: see dp_study.csv)\n\n");
+                   : "(no picture: gnuplot is not installed, or no error is positive to draw on "
+                     "log axes; the numbers are in dp_study.csv)\n\n");
     auto decade = [&](size_t k) {
       return " (" + fmt("%.0e", dl[k]) + " → " + fmt("%.0e", dl[k + 1]) + ")";
     };
-    const bool ok_f = fitted_f && std::abs(slope_f - 1) < 0.2;
-    verdict(ok_f, fitted_f ? "forward slope " + fmt("%.2f", slope_f) + decade(kf) + " " +
-                                 within(ok_f, "1 ± 0.2")
-                           : std::string("forward differences: no decade of Δp above the "
-                                         "round-off floor to fit a slope on"));
-    // central differences of a residual at most quadratic in the parameters are exact: the
-    // errors are round-off at every Δp
-    const double ec_max = *std::max_element(ec.begin(), ec.begin() + 5);  // Δp ≥ 1e-6
-    if (ec_max < 1e-9)
-      verdict(true, "central differences exact to round-off (largest error " + fmt("%.1e", ec_max) +
-                        " for Δp ≥ 1e-6): the residual is at most quadratic in the perturbation");
-    else {
-      const bool ok_c = fitted_c && std::abs(slope_c - 2) < 0.3;
-      verdict(ok_c, fitted_c ? "central slope " + fmt("%.2f", slope_c) + decade(kc) + " " +
-                                   within(ok_c, "2 ± 0.3")
-                             : std::string("central differences: no decade of Δp above the "
-                                           "round-off floor to fit a slope on"));
-    }
+    // Exact to round-off: no truncation error anywhere in the table — the error at the largest
+    // Δp stands within 10× of the smallest (a residual linear in the variable for forward
+    // differences, at most quadratic for central ones), or every error for Δp ≥ 1e-6 is below
+    // 1e-9. Then there is no slope to fit, and none is asked for.
+    auto round_off_only = [&](const std::vector<double>& e) {
+      const double lowest = *std::min_element(e.begin(), e.end());
+      return e.front() <= 10 * lowest || *std::max_element(e.begin(), e.begin() + 5) < 1e-9;
+    };
+    auto slope_verdict = [&](const char* what, const std::vector<double>& e, bool fitted, size_t k,
+                             double slope, double expected, double band) {
+      if (round_off_only(e)) {
+        verdict(true, std::string(what) + " differences exact to round-off (error " +
+                          fmt("%.1e", e.front()) + " at Δp = 1e-2, smallest " +
+                          fmt("%.1e", *std::min_element(e.begin(), e.end())) +
+                          "): the residual is " + (expected == 1 ? "linear" : "at most quadratic") +
+                          " in the perturbation");
+        return;
+      }
+      const bool ok = fitted && std::abs(slope - expected) < band;
+      const std::string range = fmt("%.0f", expected) + " ± " + fmt("%.1f", band);
+      verdict(ok, fitted ? std::string(what) + " slope " + fmt("%.2f", slope) + decade(k) + " " +
+                               within(ok, range)
+                         : std::string(what) +
+                               " differences: no decade of Δp above the round-off "
+                               "floor to fit a slope on");
+    };
+    slope_verdict("forward", ef, fitted_f, kf, slope_f, 1, 0.2);
+    slope_verdict("central", ec, fitted_c, kc, slope_c, 2, 0.3);
   }
 
   // ---- 4. h study against IDAS, response by response
   if (o.idas) {
-    stage("time-step study against IDAS (generalized-α at 4h, 2h, h, h/2)");
+    std::string at;
+    for (double h : steps) at += (at.empty() ? "" : ", ") + fmt("%g", h) + " s";
+    stage("time-step study against IDAS (generalized-α at h = " + at + ")");
     md << "## 4. Time-step study against IDAS\n\nFor each h, generalized-α (direct-analytic, "
           "refined matrix, tol_r 1e-12) and IDAS (GGL, rtol "
        << fmt("%.0e", rtol_tight) << ", atol " << fmt("%.0e", 1e-3 * rtol_tight)
@@ -425,7 +452,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
        << fmt("%.0e", rtol_loose) << ", atol " << fmt("%.0e", 1e-3 * rtol_loose)
        << " (\"IDAS self\": the difference of the two IDAS runs). An order is fitted on the "
           "finest halving whose two differences both exceed the reference's accuracy floor, "
-          "max(1000 × rtol, 4 × the largest IDAS self-difference of that quantity): 4× the "
+          "max(100 × rtol, 4 × the largest IDAS self-difference of that quantity): 4× the "
           "self-difference is about 36× the tight run's error when IDAS's error is proportional "
           "to its tolerance, which moves a fitted order by less than 0.1; below the floor the "
           "differences are the reference's own error and carry no order.\n\n";
@@ -478,29 +505,34 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     }
     write_file_atomic(o.out_dir + "/h_study.csv", c.str());
     files.push_back("h_study.csv");
-    md << "| h |";
-    for (const auto& sr : series) md << " " << sr.name << " | IDAS self |";
-    md << "\n|---|";
-    for (size_t i = 0; i < series.size(); ++i) md << "---|---|";
-    md << "\n";
+    if (series.empty())
+      md << "The case has no scalar response (its per-step responses are compared with IDAS at "
+            "the case's h in section 1 only): nothing to fit.\n\n";
+    if (!series.empty()) {
+      md << "| h |";
+      for (const auto& sr : series) md << " " << sr.name << " | IDAS self |";
+      md << "\n|---|";
+      for (size_t i = 0; i < series.size(); ++i) md << "---|---|";
+      md << "\n";
+    }
     cw << "h";
     for (const auto& sr : series) cw << "," << csv_field(sr.name);
     cw << "\n";
     for (size_t k = 0; k < steps.size(); ++k) {
-      md << "| " << fmt("%.3e", steps[k]) << " |";
+      if (!series.empty()) md << "| " << fmt("%.3e", steps[k]) << " |";
       cw << csv_number(steps[k]);
       for (const auto& sr : series) {
         md << " " << fmt("%.2e", sr.diff[k]) << " | " << fmt("%.1e", sr.self[k]) << " |";
         cw << "," << csv_number(sr.diff[k]);
       }
-      md << "\n";
+      if (!series.empty()) md << "\n";
       cw << "\n";
     }
     md << "\n";
     // an order from the finest halving above the floor, or a statement of why there is none
     for (const auto& sr : series) {
       const double self = *std::max_element(sr.self.begin(), sr.self.end());
-      const double floor = std::max(1e3 * rtol_tight, 4 * self);
+      const double floor = std::max(1e2 * rtol_tight, 4 * self);
       bool fitted = false;
       double order = 0, h_fit = 0;
       for (size_t k = sr.diff.size() - 1; k >= 1 && !fitted; --k)
@@ -520,24 +552,37 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
               ": the differences barely fall with h, so these steps are not in the "
               "asymptotic range (e.g. undamped high-frequency vibration that each h damps "
               "differently); try smaller h, or a smoother load";
+        else if (!ok)
+          line +=
+              ": the differences may still be pre-asymptotic at these h (a max or KS "
+              "aggregate converges irregularly until its peak is resolved); a smaller case h "
+              "(--set /simulation/h=…) may decide";
         verdict(ok, line);
         md << "- " << sr.name << ": order " << fmt("%.2f", order)
            << " (halving to h = " << fmt("%.3e", h_fit) << ", floor " << fmt("%.1e", floor)
            << ").\n";
-      } else if (largest <= 1e3 * rtol_tight) {
+      } else if (largest <= 1e2 * rtol_tight && 1e2 * rtol_tight <= 1e-6) {
         verdict(true, sr.name +
-                          " agrees with IDAS within 1000 × its rtol at every h (largest "
+                          " agrees with IDAS within 100 × its rtol at every h (largest "
                           "difference " +
                           fmt("%.1e", largest) + "; no order to fit)");
         md << "- " << sr.name
-           << ": every difference within 1000 × IDAS's rtol (agreement, no "
+           << ": every difference within 100 × IDAS's rtol (agreement, no "
               "order to fit).\n";
       } else {
-        note(sr.name + " against IDAS: inconclusive, IDAS's two runs differ by " +
-             fmt("%.1e", self) + ", as much as generalized-α and IDAS (up to " +
-             fmt("%.1e", largest) + "); a tighter --idas-rtol may decide");
-        md << "- " << sr.name << ": inconclusive, the reference's own error (IDAS self-difference "
-           << fmt("%.1e", self) << ") hides generalized-α's; try a tighter `--idas-rtol`.\n";
+        // what keeps the differences from an order: the reference's measured error, its
+        // tolerance, or (a loose --idas-rtol) an agreement too coarse to call a pass
+        const std::string why =
+            4 * self >= 1e2 * rtol_tight
+                ? "IDAS's two runs differ by " + fmt("%.1e", self) +
+                      ", and the differences (up to " + fmt("%.1e", largest) +
+                      ") do not stand above 4× that on two consecutive h"
+                : "the differences (up to " + fmt("%.1e", largest) +
+                      ") do not stand above 100 × IDAS's rtol = " + fmt("%.1e", floor) +
+                      " on two consecutive h";
+        note(sr.name + " against IDAS: inconclusive, " + why +
+             "; a tighter --idas-rtol may decide");
+        md << "- " << sr.name << ": inconclusive, " << why << ".\n";
       }
     }
     md << "\n";
@@ -553,10 +598,13 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
           {o.out_dir + "/h_study_plot.csv", 1, static_cast<int>(i) + 2, series[i].name});
     // zero differences (a response IDAS and generalized-α get exactly, like a mass) have no
     // place on a log axis: gnuplot skips them
-    const bool plotted = plot(ps);
+    const bool plotted = !series.empty() && plot(ps);
     files.push_back("h_study_plot.csv");
     if (plotted) files.push_back("h_study.png");
-    md << (plotted ? "![h study](h_study.png)\n\n" : "(gnuplot unavailable: see h_study.csv)\n\n");
+    if (!series.empty())
+      md << (plotted ? "![h study](h_study.png)\n\n"
+                     : "(no picture: gnuplot is not installed, or no difference is positive to "
+                       "draw on log axes; the numbers are in h_study.csv)\n\n");
   } else {
     md << "## 4. Time-step study against IDAS\n\nSkipped (`--no-idas`).\n\n";
   }
@@ -585,7 +633,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         }
       Case c = make(j, file);
       SensitivityOptions so;
-      const auto r = compute_sensitivities(c, p, so);
+      const auto r = checked(compute_sensitivities(c, p, so),
+                             "the mesh study at " + std::to_string(ne) + " elements");
       md << "| " << f << " | " << ne << " | ";
       for (size_t k = 0; k < r.responses.size(); ++k)
         if (r.responses[k].times.empty())
@@ -594,6 +643,11 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       md << "\n";
     }
     md << "\n";
+  } else {
+    md << "## 5. Mesh study\n\nSkipped ("
+       << (o.mesh_study ? "it scales rectangle meshes of flexible bodies; the case has none"
+                        : "`--no-mesh-study`")
+       << ").\n\n";
   }
 
   // ---- 6. verdicts
@@ -607,11 +661,14 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   S["status"] = "complete";
   S["pass"] = vr.pass;
   S["verdicts"] = verdicts;
-  S["options"] = {
-      {"idas", o.idas},          {"fd_delta", o.fd_delta},        {"fd_absolute", o.fd_absolute},
-      {"tol_fd", o.tol_fd},      {"tol_semi", o.tol_semi},        {"mesh_study", rect},
-      {"idas_rtol", rtol_tight}, {"idas_rtol_loose", rtol_loose}, {"idas_atol", 1e-3 * rtol_tight},
-      {"h_study_steps", steps}};
+  S["options"] = {{"idas", o.idas},     {"fd_delta", o.fd_delta}, {"fd_absolute", o.fd_absolute},
+                  {"tol_fd", o.tol_fd}, {"tol_semi", o.tol_semi}, {"mesh_study", rect}};
+  if (o.idas) {
+    S["options"]["idas_rtol"] = rtol_tight;
+    S["options"]["idas_rtol_loose"] = rtol_loose;
+    S["options"]["idas_atol"] = 1e-3 * rtol_tight;
+    S["options"]["h_study_steps"] = steps;
+  }
   if (o.idas && W.size()) {
     json w = json::array();
     for (Eigen::Index j = 0; j < W.cols(); ++j) {
@@ -622,7 +679,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     S["idas_directions"] = w;
   }
   S["wall_seconds"] = wall;
-  S["responses"] = json::object();
+  S["responses"] = json::object();  // at the design point (direct-analytic's run)
+  for (const auto& r : ref.responses)
+    S["responses"][r.name] = r.times.empty() ? json(r.values[0]) : json(r.values);
   S["units"] = units_json(cs);
   S["files"] = file_list(std::move(files));
   write_json_atomic(o.out_dir + "/summary.json", S);

@@ -350,6 +350,28 @@ void Model::velocity_constraint_jacobian_product(double t, const Vec& q, const V
   }
 }
 
+void Model::velocity_constraint_jacobian_transpose_product(double t, const Vec& q, const Vec& v,
+                                                           const Mat& Y, Mat& out) const {
+  out.setZero(nq_, Y.cols());
+  LocalVec ql, vl, hv;
+  LocalEqVec w;
+  LocalMat H;
+  for (size_t c = 0; c < cons_.size(); ++c) {
+    const auto d = cons_[c]->dofs();
+    const int m = cons_[c]->size();
+    gather(q, d, ql);
+    gather(v, d, vl);
+    for (int i = 0; i < m; ++i) {  // column i of the transpose: ∂²Φ_i/∂q² q̇
+      w.setZero(m);
+      w[i] = 1;
+      cons_[c]->hessian(t, ql, w, H);
+      hv = H * vl;
+      for (size_t j = 0; j < d.size(); ++j)
+        if (hv[j] != 0) out.row(d[j]) += hv[j] * Y.row(eq_offset_[c] + i);
+    }
+  }
+}
+
 void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& /*p*/,
                                   Vec& phi_t, Vec& gamma) const {
   phi_t.setZero(nc_);
@@ -450,27 +472,47 @@ double Model::strain_energy(const Vec& q, const ModelParams& p) const {
   return W;
 }
 
-Model::Inversion Model::most_compressed_element(const Vec& q) const {
+Model::Inversion Model::most_compressed_element(const Vec& q, const ModelParams& p) const {
   Inversion w;
-  for (const auto& b : flex_)
+  for (const auto& b : flex_) {
+    const Vec& mu = p.fields[b->field];
     for (int e = 0; e < b->mesh.num_elements(); ++e) {
+      if (!(mu[e] > kVoidMaterial)) continue;
       QuadElement::Vec8 x;
       for (int i = 0; i < 4; ++i)
         x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
       if (const double d = b->elements[e].min_det_F(x); !(d >= w.det_F)) {  // NaN counts too
         w.det_F = d;
+        w.mu = mu[e];
         w.body = b.get();
         w.element = e;
       }
+      if (const double d = b->elements[e].min_corner_det_F(x); !(d >= w.corner_det_F)) {
+        w.corner_det_F = d;
+        w.corner_mu = mu[e];
+        w.corner_body = b.get();
+        w.corner_element = e;
+      }
     }
+  }
   return w;
 }
 
-std::string Model::Inversion::describe() const {
-  char b[96];
-  std::snprintf(b, sizeof b, "%.3g", det_F);
+namespace {
+std::string element_text(const FlexibleBody* body, int element, const char* where, double d,
+                         double mu) {
+  char b[128];
+  std::snprintf(b, sizeof b, " (det F = %.3g%s, μ_e = %.3g)", d, where, mu);
   return "flexible body '" + (body ? body->name : std::string("?")) + "', element " +
-         std::to_string(element) + " (det F = " + b + ")";
+         std::to_string(element) + b;
+}
+}  // namespace
+
+std::string Model::Inversion::describe() const {
+  return element_text(body, element, "", det_F, mu);
+}
+std::string Model::Inversion::describe_fold() const {
+  return element_text(corner_body, corner_element, " at a corner", corner_det_F, corner_mu);
 }
 
 }  // namespace lsmbs

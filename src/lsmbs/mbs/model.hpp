@@ -166,23 +166,36 @@ class Model {
   /// out = ∂(Φ_q q̇)/∂q X (nc × cols), constraint by constraint (no matrix).
   void velocity_constraint_jacobian_product(double t, const Vec& q, const Vec& v, const Mat& X,
                                             Mat& out) const;
+  /// out = (∂(Φ_q q̇)/∂q)ᵀ Y (nq × cols; Y: nc × cols), constraint by constraint (no matrix).
+  void velocity_constraint_jacobian_transpose_product(double t, const Vec& q, const Vec& v,
+                                                      const Mat& Y, Mat& out) const;
   /// Σ_i w_i ∂²Φ_i/∂q² (nq × nq) with the full local pattern of every constraint (explicit zeros
   /// kept, so the pattern does not change between calls).
   SpMat constraint_hessian(double t, const Vec& q, const Vec& w) const;
   /// ∂(Φ_q q̇)/∂q (nc × nq): row i is (∂²Φ_i/∂q² q̇)ᵀ, full local pattern kept.
   SpMat velocity_constraint_jacobian(double t, const Vec& q, const Vec& v) const;
   /// The flexible element with the smallest det F at its integration points
-  /// (QuadElement::min_det_F); det_F = +inf and body = null for a model without flexible bodies.
-  /// det_F ≤ 0 is an inverted (reflected) element: a stress-free spurious state of the St
-  /// Venant–Kirchhoff material, which the integrators reject.
+  /// (QuadElement::min_det_F) and the one with the smallest det F at a corner
+  /// (QuadElement::min_corner_det_F), among the elements with μ_e > kVoidMaterial: a void element
+  /// of a level-set hole (ersatz material) may be squeezed through itself without consequence for
+  /// the structure. det_F = +inf and body = null for a model without such elements. det_F ≤ 0 is an
+  /// inverted (reflected) element: a stress-free spurious state of the St Venant–Kirchhoff
+  /// material, which the integrators reject; a corner det F ≤ 0 alone is a folded element (a mesh
+  /// too coarse for the deformation, or a far solution), which they report.
+  static constexpr double kVoidMaterial = 0.1;
   struct Inversion {
-    double det_F = INFINITY;
+    double det_F = INFINITY, mu = 1;
     const FlexibleBody* body = nullptr;
     int element = -1;
+    double corner_det_F = INFINITY, corner_mu = 1;
+    const FlexibleBody* corner_body = nullptr;
+    int corner_element = -1;
     bool inverted() const { return !(det_F > 0); }
-    std::string describe() const;  ///< "flexible body 'b', element 7 (det F = -0.99)"
+    bool folded() const { return !(corner_det_F > 0); }
+    std::string describe() const;  ///< "flexible body 'b', element 7 (det F = -0.99, μ_e = 1)"
+    std::string describe_fold() const;  ///< the same for the corner
   };
-  Inversion most_compressed_element(const Vec& q) const;
+  Inversion most_compressed_element(const Vec& q, const ModelParams& p) const;
   /// Kinetic energy ½ q̇ᵀ M q̇ (M from the force elements).
   double kinetic_energy(const State& s, const ModelParams& p) const;
   /// Strain energy of all flexible bodies.

@@ -331,12 +331,17 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
       if (stride == 0 && states <= capacity) stride = k;
     }
     if (stride == 0) {
+      // the least memory, rounded up to 3 significant digits: the value stated works
+      const double mb = fewest * per_entry / 1e6,
+                   unit = std::pow(10.0, std::floor(std::log10(mb)) - 2);
       char need[32];
-      std::snprintf(need, sizeof need, "%.3g", fewest * per_entry / 1e6);
-      throw SetupError("adjoint_memory", "the adjoint of " + std::to_string(n_grid) + " steps of " +
-                                             std::to_string(m.n()) + " unknowns needs at least " +
-                                             need + " MB with checkpoints (--adjoint-memory " +
-                                             std::to_string(o.adjoint_memory_mb) + ")");
+      std::snprintf(need, sizeof need, "%.3g", std::ceil(mb / unit) * unit);
+      char given[32];
+      std::snprintf(given, sizeof given, "%.3g", o.adjoint_memory_mb);
+      throw SetupError("optimization.sensitivity.adjoint_memory_mb",
+                       "the adjoint of " + std::to_string(n_grid) + " steps of " +
+                           std::to_string(m.n()) + " unknowns needs at least " + need +
+                           " MB with checkpoints; the bound is " + given + " MB");
     }
   }
 
