@@ -45,6 +45,13 @@ json flexible_arm() {
   return c;
 }
 
+// The final tip deviation (a grid value) and its time integral (an IDAS quadrature).
+json deviation_responses() {
+  return json::array(
+      {json{{"name", "final_dev"}, {"measure", "tip_deviation"}, {"aggregate", "final"}},
+       json{{"name", "int_dev"}, {"measure", "tip_deviation"}, {"aggregate", "integral"}}});
+}
+
 // A simulation of the case by IDAS with the given options (default: the reference preset).
 SimulationResult run_idas(const Case& cs, const IdasOptions& io = IdasOptions::reference()) {
   RunOptions ro;
@@ -187,9 +194,7 @@ TEST(Idas, OneRunOnTheFinestGridGivesTheResponsesOfEveryCoarserGrid) {
 // response and a quadrature.
 TEST(Idas, DirectionalSensitivitiesAreTheGradientAlongTheDirections) {
   json c = flexible_arm();
-  c["output"]["responses"] = json::array(
-      {json{{"name", "final_dev"}, {"measure", "tip_deviation"}, {"aggregate", "final"}},
-       json{{"name", "int_dev"}, {"measure", "tip_deviation"}, {"aggregate", "integral"}}});
+  c["output"]["responses"] = deviation_responses();
   Case cs = test::make_case(c);
   const SensitivityOptions o = tight_idas();
   const Vec p = cs.design->initial();
@@ -226,9 +231,7 @@ TEST(Idas, DirectionalSensitivitiesAreTheGradientAlongTheDirections) {
 TEST(Idas, ForwardSensitivitiesOnLevelSetVariablesOfAFlexibleModelAgreeWithFiniteDifferences) {
   json c = flexible_arm();
   c["design"]["geometry"][0]["band"] = 2.0;
-  c["output"]["responses"] = json::array(
-      {json{{"name", "final_dev"}, {"measure", "tip_deviation"}, {"aggregate", "final"}},
-       json{{"name", "int_dev"}, {"measure", "tip_deviation"}, {"aggregate", "integral"}}});
+  c["output"]["responses"] = deviation_responses();
   Case cs = test::make_case(c);
   const SensitivityOptions o = tight_idas();
   const Vec p = cs.design->initial();

@@ -328,48 +328,50 @@ void Model::constraint_hessian_product(double t, const Vec& q, const Vec& w, con
   }
 }
 
-void Model::velocity_constraint_jacobian_product(double t, const Vec& q, const Vec& v, const Mat& X,
-                                                 Mat& out) const {
-  out.setZero(nc_, X.cols());
+namespace {
+// Calls f(row, dofs, hv) for every constraint equation, hv = ∂²Φ_row/∂q² q̇ on the constraint's
+// dofs: row `row` of ∂(Φ_q q̇)/∂q.
+template <class F>
+void for_each_velocity_jacobian_row(const std::vector<std::unique_ptr<ConstraintElement>>& cons,
+                                    const std::vector<int>& eq_offset, double t, const Vec& q,
+                                    const Vec& v, F&& f) {
   LocalVec ql, vl, hv;
   LocalEqVec w;
   LocalMat H;
-  for (size_t c = 0; c < cons_.size(); ++c) {
-    const auto d = cons_[c]->dofs();
-    const int m = cons_[c]->size();
+  for (size_t c = 0; c < cons.size(); ++c) {
+    const auto d = cons[c]->dofs();
+    const int m = cons[c]->size();
     gather(q, d, ql);
     gather(v, d, vl);
-    for (int i = 0; i < m; ++i) {  // row i: (∂²Φ_i/∂q² q̇)ᵀ
+    for (int i = 0; i < m; ++i) {
       w.setZero(m);
       w[i] = 1;
-      cons_[c]->hessian(t, ql, w, H);
+      cons[c]->hessian(t, ql, w, H);
       hv = H * vl;
-      for (size_t j = 0; j < d.size(); ++j)
-        if (hv[j] != 0) out.row(eq_offset_[c] + i) += hv[j] * X.row(d[j]);
+      f(eq_offset[c] + i, d, hv);
     }
   }
+}
+}  // namespace
+
+void Model::velocity_constraint_jacobian_product(double t, const Vec& q, const Vec& v, const Mat& X,
+                                                 Mat& out) const {
+  out.setZero(nc_, X.cols());
+  for_each_velocity_jacobian_row(cons_, eq_offset_, t, q, v,
+                                 [&](int row, std::span<const int> d, const LocalVec& hv) {
+                                   for (size_t j = 0; j < d.size(); ++j)
+                                     if (hv[j] != 0) out.row(row) += hv[j] * X.row(d[j]);
+                                 });
 }
 
 void Model::velocity_constraint_jacobian_transpose_product(double t, const Vec& q, const Vec& v,
                                                            const Mat& Y, Mat& out) const {
   out.setZero(nq_, Y.cols());
-  LocalVec ql, vl, hv;
-  LocalEqVec w;
-  LocalMat H;
-  for (size_t c = 0; c < cons_.size(); ++c) {
-    const auto d = cons_[c]->dofs();
-    const int m = cons_[c]->size();
-    gather(q, d, ql);
-    gather(v, d, vl);
-    for (int i = 0; i < m; ++i) {  // column i of the transpose: ∂²Φ_i/∂q² q̇
-      w.setZero(m);
-      w[i] = 1;
-      cons_[c]->hessian(t, ql, w, H);
-      hv = H * vl;
-      for (size_t j = 0; j < d.size(); ++j)
-        if (hv[j] != 0) out.row(d[j]) += hv[j] * Y.row(eq_offset_[c] + i);
-    }
-  }
+  for_each_velocity_jacobian_row(cons_, eq_offset_, t, q, v,
+                                 [&](int row, std::span<const int> d, const LocalVec& hv) {
+                                   for (size_t j = 0; j < d.size(); ++j)
+                                     if (hv[j] != 0) out.row(d[j]) += hv[j] * Y.row(row);
+                                 });
 }
 
 void Model::constraint_time_terms(double t, const Vec& q, const Vec& v, const ModelParams& /*p*/,
@@ -415,22 +417,11 @@ SpMat Model::constraint_hessian(double t, const Vec& q, const Vec& w) const {
 
 SpMat Model::velocity_constraint_jacobian(double t, const Vec& q, const Vec& v) const {
   std::vector<Eigen::Triplet<double>> trip;
-  LocalVec ql, vl;
-  LocalEqVec w;
-  LocalMat H;
-  for (size_t c = 0; c < cons_.size(); ++c) {
-    const auto d = cons_[c]->dofs();
-    const int m = cons_[c]->size();
-    gather(q, d, ql);
-    gather(v, d, vl);
-    for (int i = 0; i < m; ++i) {
-      w.setZero(m);
-      w[i] = 1;
-      cons_[c]->hessian(t, ql, w, H);
-      const LocalVec row = H * vl;
-      for (size_t j = 0; j < d.size(); ++j) trip.emplace_back(eq_offset_[c] + i, d[j], row[j]);
-    }
-  }
+  for_each_velocity_jacobian_row(cons_, eq_offset_, t, q, v,
+                                 [&](int row, std::span<const int> d, const LocalVec& hv) {
+                                   for (size_t j = 0; j < d.size(); ++j)
+                                     trip.emplace_back(row, d[j], hv[j]);
+                                 });
   SpMat m(nc_, nq_);
   m.setFromTriplets(trip.begin(), trip.end());
   return m;
