@@ -195,15 +195,26 @@ class PythonRun {
 };
 
 // An output folder given from Python is checked and claimed as the command line's -o: a folder
-// that holds an earlier run is refused unless overwrite=True (resume: optimize continues it).
-void claim(const std::string& out_dir, bool overwrite, bool resume = false) {
-  if (out_dir.empty()) return;
-  const OutputFolderNames names{"out_dir", "overwrite=True"};
-  check_output_folder(out_dir, names);
-  claim_output_folder(out_dir, overwrite, resume, names);
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw Error("out_dir " + out_dir + ": cannot create it (" + ec.message() + ")");
+// that holds an earlier run is refused unless overwrite=True (resume: optimize continues it). f
+// runs with the folder claimed; an earlier run that overwrite=True replaces comes back when f
+// stops on bad input (Error), as on the command line.
+template <class F>
+auto claimed(const std::string& out_dir, bool overwrite, bool resume, F&& f) {
+  ReplacedRun replaced;
+  if (!out_dir.empty()) {
+    const OutputFolderNames names{"out_dir", "overwrite=True"};
+    check_output_folder(out_dir, names);
+    replaced = claim_output_folder(out_dir, overwrite, resume, names);
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec) throw Error("out_dir " + out_dir + ": cannot create it (" + ec.message() + ")");
+  }
+  try {
+    return f();
+  } catch (const Error&) {
+    replaced.restore();
+    throw;
+  }
 }
 
 GradientCheckOptions check_options_from(double delta, unsigned seed, double warn, double fail) {
@@ -487,14 +498,15 @@ PYBIND11_MODULE(_lsmbs, m) {
       [](const CasePtr& cs, const py::object& design, const std::string& out_dir, bool overwrite,
          const py::object& progress) {
         const Vec p = design_point(*cs, design);
-        claim(out_dir, overwrite);
-        if (cs->design) cs->design->apply(p, cs->model->params());
-        RunOptions ro;
-        ro.out_dir = out_dir;
-        ro.design_point = p;
-        PythonRun run(progress);
-        ro.progress = run.progress();
-        return run([&] { return located(*cs, [&] { return run_simulation(*cs, ro); }); });
+        return claimed(out_dir, overwrite, false, [&] {
+          if (cs->design) cs->design->apply(p, cs->model->params());
+          RunOptions ro;
+          ro.out_dir = out_dir;
+          ro.design_point = p;
+          PythonRun run(progress);
+          ro.progress = run.progress();
+          return run([&] { return located(*cs, [&] { return run_simulation(*cs, ro); }); });
+        });
       },
       py::arg("case").none(false), py::arg("design") = py::none(), py::arg("out_dir") = "",
       py::arg("overwrite") = false, py::arg("progress") = py::none(),
@@ -526,15 +538,16 @@ PYBIND11_MODULE(_lsmbs, m) {
          const std::string& out_dir, bool overwrite) {
         const Vec p = design_point(*cs, design);
         if (cs->design) cs->design->apply(p, cs->model->params());
-        claim(out_dir, overwrite);
-        StaticRunOptions o;
-        o.out_dir = out_dir;
-        o.t = t;
-        o.max_iter = max_iter;
-        o.design_point = p;
-        o.command_line = "lsmbs.static (Python)";
-        PythonRun run{py::none()};
-        return run([&] { return located(*cs, [&] { return run_static(*cs, o); }); });
+        return claimed(out_dir, overwrite, false, [&] {
+          StaticRunOptions o;
+          o.out_dir = out_dir;
+          o.t = t;
+          o.max_iter = max_iter;
+          o.design_point = p;
+          o.command_line = "lsmbs.static (Python)";
+          PythonRun run{py::none()};
+          return run([&] { return located(*cs, [&] { return run_static(*cs, o); }); });
+        });
       },
       py::arg("case").none(false), py::arg("design") = py::none(), py::arg("t") = 0.0,
       py::arg("max_iter") = 50, py::arg("out_dir") = "", py::arg("overwrite") = false,
@@ -679,83 +692,85 @@ PYBIND11_MODULE(_lsmbs, m) {
         check_options(*cs);
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
-        claim(out_dir, overwrite, resume);
         PythonRun run(progress);
-        return located(*cs, [&] {
-          OptimizationSpec spec = parse_optimization(*cs);
-          if (!optimizer.empty()) spec.optimizer = optimizer;
-          spec.sensitivity.progress = run.progress();
-          DesignProblem prob(*cs, spec);
-          // the check at the initial design of a new run, as `lsmbs optimize` runs it
-          nlohmann::json check_record;
-          if (check && !resume) {
-            const auto checked =
-                run([&] { return check_problem_gradients(prob, cs->design->initial(), co); });
-            if (checked) {
-              check_record = gradient_check_json(*checked, co);
-              const std::string verdict = checked->verdict(co);
-              const std::string what =
-                  checked->ok ? "response '" + checked->worst_response +
-                                    "': the gradient disagrees with central differences by " +
-                                    exact(checked->worst) + " (relative)"
-                              : checked->message;
-              if (verdict == "fail") {
-                py::object exc = py::reinterpret_borrow<py::object>(g_check_failed)(
-                    "gradient check at the initial design failed: " + what + " (above " +
-                    exact(co.fail) + "; check=False skips the check)");
-                exc.attr("gradient_check") = json_to_python(check_record);
-                PyErr_SetObject(g_check_failed, exc.ptr());
-                throw py::error_already_set();
+        return claimed(out_dir, overwrite, resume, [&] {
+          return located(*cs, [&] {
+            OptimizationSpec spec = parse_optimization(*cs);
+            if (!optimizer.empty()) spec.optimizer = optimizer;
+            spec.sensitivity.progress = run.progress();
+            DesignProblem prob(*cs, spec);
+            // the check at the initial design of a new run, as `lsmbs optimize` runs it
+            nlohmann::json check_record;
+            if (check && !resume) {
+              const auto checked =
+                  run([&] { return check_problem_gradients(prob, cs->design->initial(), co); });
+              if (checked) {
+                check_record = gradient_check_json(*checked, co);
+                const std::string verdict = checked->verdict(co);
+                const std::string what =
+                    checked->ok ? "response '" + checked->worst_response +
+                                      "': the gradient disagrees with central differences by " +
+                                      exact(checked->worst) + " (relative)"
+                                : checked->message;
+                if (verdict == "fail") {
+                  py::object exc = py::reinterpret_borrow<py::object>(g_check_failed)(
+                      "gradient check at the initial design failed: " + what + " (above " +
+                      exact(co.fail) + "; check=False skips the check)");
+                  exc.attr("gradient_check") = json_to_python(check_record);
+                  PyErr_SetObject(g_check_failed, exc.ptr());
+                  throw py::error_already_set();
+                }
+                if (verdict == "warn")
+                  PyErr_WarnEx(PyExc_RuntimeWarning,
+                               ("gradient check at the initial design: " + what).c_str(), 1);
               }
-              if (verdict == "warn")
-                PyErr_WarnEx(PyExc_RuntimeWarning,
-                             ("gradient check at the initial design: " + what).c_str(), 1);
             }
-          }
-          OptimizeOptions o;
-          o.out_dir = out_dir;
-          o.resume = resume;
-          // a resumed run must see the same problem: the file, its overrides, and what Python
-          // changed since (simulation options, model parameters)
-          std::string state =
-              cs->sha256 + cs->overrides.dump() + nlohmann::json(cs->simulation).dump();
-          const auto& scalars = cs->model->params().scalars;
-          for (size_t i = 0; i < scalars.size(); ++i) {  // those the design sets excepted
-            bool bound = false;
-            for (const auto& b : cs->design->bindings) bound |= b.parameter == static_cast<int>(i);
-            state += bound ? std::string("design,") : exact(scalars[i]) + ",";
-          }
-          o.input_sha256 = sha256_hex(state);
-          const OptimizeResult r = run([&] { return optimize(prob, o); });
-          if (!out_dir.empty()) {  // every output folder carries a summary.json
-            nlohmann::json S = provenance("lsmbs.optimize (Python)", cs->file, cs->sha256);
-            S["case_name"] = cs->name;
-            S["overrides"] = cs->overrides;
-            S["status"] = run_status_name(r.status());
-            S["report"] = r.report();
-            S["options"] = {{"optimization", spec.to_json()},
-                            {"generalized_alpha", nlohmann::json(cs->simulation)}};
-            nlohmann::json pf = nlohmann::json::object();
-            for (int i = 0; i < cs->design->size(); ++i)
-              pf[cs->design->variables[static_cast<size_t>(i)].name] = r.p[i];
-            S["final"] = {{"design", pf},
-                          {"objective", r.final.objective},
-                          {"max_violation", r.final.max_violation}};
-            S["nlopt_status"] = r.nlopt_status;
-            S["converged"] = r.converged;
-            S["evaluations"] = r.evaluations;
-            S["gradient_check"] = check_record;
-            S["files"] = {"summary.json", "checkpoint.json", "history.csv"};
-            write_json_atomic(out_dir + "/summary.json", S);
-          }
-          py::list history;
-          for (const auto& e : r.history) history.append(evaluation_dict(e));
-          return py::dict(
-              py::arg("status") = run_status_name(r.status()), py::arg("report") = r.report(),
-              py::arg("p") = array(r.p), py::arg("final") = evaluation_dict(r.final),
-              py::arg("history") = history, py::arg("converged") = r.converged,
-              py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations,
-              py::arg("gradient_check") = json_to_python(check_record));
+            OptimizeOptions o;
+            o.out_dir = out_dir;
+            o.resume = resume;
+            // a resumed run must see the same problem: the file, its overrides, and what Python
+            // changed since (simulation options, model parameters)
+            std::string state =
+                cs->sha256 + cs->overrides.dump() + nlohmann::json(cs->simulation).dump();
+            const auto& scalars = cs->model->params().scalars;
+            for (size_t i = 0; i < scalars.size(); ++i) {  // those the design sets excepted
+              bool bound = false;
+              for (const auto& b : cs->design->bindings)
+                bound |= b.parameter == static_cast<int>(i);
+              state += bound ? std::string("design,") : exact(scalars[i]) + ",";
+            }
+            o.input_sha256 = sha256_hex(state);
+            const OptimizeResult r = run([&] { return optimize(prob, o); });
+            if (!out_dir.empty()) {  // every output folder carries a summary.json
+              nlohmann::json S = provenance("lsmbs.optimize (Python)", cs->file, cs->sha256);
+              S["case_name"] = cs->name;
+              S["overrides"] = cs->overrides;
+              S["status"] = run_status_name(r.status());
+              S["report"] = r.report();
+              S["options"] = {{"optimization", spec.to_json()},
+                              {"generalized_alpha", nlohmann::json(cs->simulation)}};
+              nlohmann::json pf = nlohmann::json::object();
+              for (int i = 0; i < cs->design->size(); ++i)
+                pf[cs->design->variables[static_cast<size_t>(i)].name] = r.p[i];
+              S["final"] = {{"design", pf},
+                            {"objective", r.final.objective},
+                            {"max_violation", r.final.max_violation}};
+              S["nlopt_status"] = r.nlopt_status;
+              S["converged"] = r.converged;
+              S["evaluations"] = r.evaluations;
+              S["gradient_check"] = check_record;
+              S["files"] = {"summary.json", "checkpoint.json", "history.csv"};
+              write_json_atomic(out_dir + "/summary.json", S);
+            }
+            py::list history;
+            for (const auto& e : r.history) history.append(evaluation_dict(e));
+            return py::dict(
+                py::arg("status") = run_status_name(r.status()), py::arg("report") = r.report(),
+                py::arg("p") = array(r.p), py::arg("final") = evaluation_dict(r.final),
+                py::arg("history") = history, py::arg("converged") = r.converged,
+                py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations,
+                py::arg("gradient_check") = json_to_python(check_record));
+          });
         });
       },
       py::arg("case").none(false), py::arg("out_dir") = "", py::arg("resume") = false,
@@ -812,16 +827,17 @@ PYBIND11_MODULE(_lsmbs, m) {
       "verify",
       [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study,
          bool overwrite, double idas_rtol) {
-        claim(out_dir, overwrite);
-        VerifyOptions o;
-        o.out_dir = out_dir;
-        o.idas = idas;
-        o.mesh_study = mesh_study;
-        o.idas_rtol = idas_rtol;
-        o.command_line = "lsmbs.verify (Python)";
-        PythonRun run{py::none()};
-        const VerifyResult r = run([&] { return run_verify(path, o); });
-        return json_to_python(r.summary);
+        return claimed(out_dir, overwrite, false, [&] {
+          VerifyOptions o;
+          o.out_dir = out_dir;
+          o.idas = idas;
+          o.mesh_study = mesh_study;
+          o.idas_rtol = idas_rtol;
+          o.command_line = "lsmbs.verify (Python)";
+          PythonRun run{py::none()};
+          const VerifyResult r = run([&] { return run_verify(path, o); });
+          return json_to_python(r.summary);
+        });
       },
       py::arg("path"), py::arg("out_dir"), py::arg("idas") = true, py::arg("mesh_study") = true,
       py::arg("overwrite") = false, py::arg("idas_rtol") = VerifyOptions{}.idas_rtol,

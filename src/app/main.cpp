@@ -297,16 +297,13 @@ int main(int argc, char** argv) {
     return 0;
   }
   bool started = false;  // the output folder is ours: a failure from here on is flagged in it
+  lsmbs::ReplacedRun replaced;  // an earlier run --overwrite replaces: back in place on bad input
   try {
     if (*opt && opt->count("--seed") && !opt->count("--starts"))
       throw lsmbs::Error("--seed: the seed of --starts' random initial designs; give --starts N");
     if (*sim || *sta || *geo || *opt || *ben || *ver || *sen) {
       lsmbs::check_output_folder(out);
-      if (overwrite) {  // invalid input exits 2 before --overwrite removes the earlier run
-        if (*ver) lsmbs::app::check_verify_options(vo);
-        (void)lsmbs::app::load_case_with_sets(case_file, sets, /*design_as_initial=*/bool(*opt));
-      }
-      lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);
+      replaced = lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);
       started = true;
     }
     common.command_line = joined_args(argc, argv);
@@ -330,9 +327,11 @@ int main(int argc, char** argv) {
   } catch (
       const lsmbs::SetupError& e) {  // the library names the subject; the case file has the path
     std::fprintf(stderr, "lsmbs: error: %s\n", lsmbs::locate(case_file, e).what());
+    replaced.restore();
     return 2;
   } catch (const lsmbs::Error& e) {
     std::fprintf(stderr, "lsmbs: error: %s\n", e.what());
+    replaced.restore();
     return 2;
   } catch (const lsmbs::NumericalFailure& e) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", e.what());

@@ -280,6 +280,18 @@ cp "$tmp/reuse/summary.json" "$tmp/reuse_before.json"
 "$exe" verify "$spring" -o "$tmp/reuse" --overwrite --idas-rtol 0 2> "$tmp/er3.txt"; rc=$?
 [ $rc -eq 2 ] && grep -q -- "--idas-rtol: expected a relative tolerance in \[1e-14, 1e-4\], got 0" "$tmp/er3.txt" \
   && cmp -s "$tmp/reuse/summary.json" "$tmp/reuse_before.json" || fail "verify --idas-rtol 0: rc $rc $(cat "$tmp/er3.txt")"
+# an option that only the command can judge (the adjoint's memory is known once the model is
+# built): the earlier run, set aside by --overwrite, comes back whole, and no stash remains
+ls -A "$tmp/reuse" > "$tmp/reuse_ls_before.txt"
+"$exe" sensitivity "$tmp/noper.json" --method adjoint --adjoint-memory 0.0001 -o "$tmp/reuse" --overwrite 2> "$tmp/er4.txt"; rc=$?
+ls -A "$tmp/reuse" > "$tmp/reuse_ls_after.txt"
+[ $rc -eq 2 ] && grep -q -- "--adjoint-memory 0.0001" "$tmp/er4.txt" && cmp -s "$tmp/reuse/summary.json" "$tmp/reuse_before.json" \
+  && cmp -s "$tmp/reuse_ls_before.txt" "$tmp/reuse_ls_after.txt" \
+  || fail "--overwrite with a bad --adjoint-memory: rc $rc $(cat "$tmp/er4.txt"); $(diff "$tmp/reuse_ls_before.txt" "$tmp/reuse_ls_after.txt")"
+# a stash left by a killed run is removed by the next claim
+mkdir -p "$tmp/reuse/.lsmbs-replaced-run" && touch "$tmp/reuse/.lsmbs-replaced-run/old.vtu"
+"$exe" simulate "$spring" -o "$tmp/reuse" -q --overwrite && [ ! -e "$tmp/reuse/.lsmbs-replaced-run" ] \
+  && [ -f "$tmp/reuse/notes.txt" ] || fail "a run over a left stash: $(ls -A "$tmp/reuse")"
 # a static run writes <body>.vtu and model.vtm beside summary.json; a run that replaces it with
 # --overwrite leaves none of them: the folder holds exactly what the new summary.json lists
 cant="$src/tests/integration/data/cantilever_ramp.json"

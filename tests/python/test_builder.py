@@ -194,6 +194,13 @@ def test_an_output_folder_with_an_earlier_run_is_refused_unless_overwrite(tmp_pa
         lsmbs.simulate(case, out_dir=str(out))
     lsmbs.simulate(case, out_dir=str(out), overwrite=True)
     assert json.loads((out / "summary.json").read_text())["status"] == "complete"
+    # bad input found after the claim (verify loads its case itself): the earlier run comes back
+    before = sorted(p.name for p in out.iterdir())
+    summary = (out / "summary.json").read_bytes()
+    with pytest.raises(lsmbs.Error):
+        lsmbs.verify(str(tmp_path / "no_such_case.json"), out_dir=str(out), overwrite=True)
+    assert sorted(p.name for p in out.iterdir()) == before
+    assert (out / "summary.json").read_bytes() == summary
     (tmp_path / "file").write_text("x")
     with pytest.raises(lsmbs.Error, match="out_dir .*not a folder"):
         lsmbs.simulate(case, out_dir=str(tmp_path / "file"))

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
@@ -33,21 +34,18 @@ void check_output_folder(const std::string& out, const OutputFolderNames& names)
     throw Error(o + " " + out + ": cannot create or write in " + q.string());
 }
 
-// An output folder that holds an earlier lsmbs run is refused (its files would be mixed with this
-// run's) unless --overwrite, which removes the earlier run's files first (and only those);
-// optimize --resume continues the run the folder holds.
-void claim_output_folder(const std::string& out, bool overwrite, bool resume,
-                         const OutputFolderNames& names) {
+namespace {
+
+// The entries of `out` that an lsmbs run writes: the known names, and the first component of each
+// path the folder's summary.json lists (a static run's <body>.vtu and model.vtm, a multi-start's
+// start_k/ folders).
+std::vector<std::filesystem::path> run_entries(const std::string& out) {
   namespace fs = std::filesystem;
-  std::error_code ec;
-  if (resume || !fs::is_directory(out, ec)) return;
   static const std::set<std::string> kFiles = {"summary.json",    "history.csv", "gradients.csv",
                                                "checkpoint.json", "report.md",   "bench.json",
                                                "convergence.png"};
   static const std::set<std::string> kFolders = {"vtu", "final_design"};
   static const std::set<std::string> kExtensions = {".pvd", ".png", ".csv", ".gp", ".vtu", ".vtm"};
-  // what the earlier run's summary.json lists is its own too (a static run's <body>.vtu and
-  // model.vtm, a multi-start's start_k/ folders): the first component of each listed path
   std::set<std::string> listed;
   try {
     const auto S = nlohmann::json::parse(std::ifstream(fs::path(out) / "summary.json"));
@@ -60,7 +58,9 @@ void claim_output_folder(const std::string& out, bool overwrite, bool resume,
         }
   } catch (const std::exception&) {  // no summary, or not ours: the names above decide
   }
+  listed.erase(ReplacedRun::stash_name());
   std::vector<fs::path> ours;
+  std::error_code ec;
   for (const auto& e : fs::directory_iterator(out, ec)) {
     const std::string name = e.path().filename().string();
     if (kFiles.count(name) || (e.is_directory() && kFolders.count(name)) ||
@@ -68,18 +68,86 @@ void claim_output_folder(const std::string& out, bool overwrite, bool resume,
         listed.count(name))
       ours.push_back(e.path());
   }
-  if (ours.empty()) return;
+  // summary.json first: a run stopped while the rest moves never leaves the earlier run's summary
+  // next to a half-moved folder
+  std::stable_partition(ours.begin(), ours.end(),
+                        [](const fs::path& p) { return p.filename() == "summary.json"; });
+  return ours;
+}
+
+}  // namespace
+
+const char* ReplacedRun::stash_name() { return ".lsmbs-replaced-run"; }
+
+ReplacedRun::ReplacedRun(std::string out, std::vector<std::string> names)
+    : out_(std::move(out)), names_(std::move(names)) {}
+
+ReplacedRun::ReplacedRun(ReplacedRun&& o) noexcept
+    : out_(std::exchange(o.out_, {})), names_(std::move(o.names_)) {}
+
+ReplacedRun& ReplacedRun::operator=(ReplacedRun&& o) noexcept {
+  if (this != &o) {
+    this->~ReplacedRun();
+    out_ = std::exchange(o.out_, {});
+    names_ = std::move(o.names_);
+  }
+  return *this;
+}
+
+ReplacedRun::~ReplacedRun() {
+  if (out_.empty()) return;
+  std::error_code ec;
+  std::filesystem::remove_all(std::filesystem::path(out_) / stash_name(), ec);
+}
+
+void ReplacedRun::restore() {
+  if (out_.empty()) return;
+  namespace fs = std::filesystem;
+  const fs::path stash = fs::path(out_) / stash_name();
+  std::error_code ec;
+  // this run's own files: a summary.json it wrote lists them, the known names cover the rest
+  for (const auto& p : run_entries(out_)) fs::remove_all(p, ec);
+  // the summary last, so that an interrupted restore never shows the earlier summary beside a
+  // half-restored folder
+  std::vector<std::string> names = names_;
+  std::stable_partition(names.begin(), names.end(),
+                        [](const std::string& n) { return n != "summary.json"; });
+  for (const auto& n : names) fs::rename(stash / n, fs::path(out_) / n, ec);
+  fs::remove_all(stash, ec);
+  out_.clear();
+}
+
+// An output folder that holds an earlier lsmbs run is refused (its files would be mixed with this
+// run's) unless --overwrite, which sets the earlier run's files (and only those) aside: restored
+// if this run stops on bad input, deleted otherwise. optimize --resume continues the run the
+// folder holds.
+ReplacedRun claim_output_folder(const std::string& out, bool overwrite, bool resume,
+                                const OutputFolderNames& names) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (resume || !fs::is_directory(out, ec)) return {};
+  const fs::path stash = fs::path(out) / ReplacedRun::stash_name();
+  fs::remove_all(stash, ec);  // a run killed before it could delete or restore its stash
+  const std::vector<fs::path> ours = run_entries(out);
+  if (ours.empty()) return {};
   if (!overwrite)
     throw Error(
         names.folder + " " + out + ": the folder holds an earlier run (" +
         ours.front().filename().string() +
         (ours.size() > 1 ? ", … " + std::to_string(ours.size()) + " entries" : std::string()) +
         "); give another folder, or " + names.overwrite + " to replace that run");
-  // summary.json first: a run stopped while it removes the rest never leaves the earlier run's
-  // summary next to a half-removed folder
-  std::stable_partition(ours.begin(), ours.end(),
-                        [](const fs::path& p) { return p.filename() == "summary.json"; });
-  for (const auto& p : ours) fs::remove_all(p);
+  fs::create_directory(stash);
+  std::vector<std::string> moved;
+  try {
+    for (const auto& p : ours) {
+      fs::rename(p, stash / p.filename());
+      moved.push_back(p.filename().string());
+    }
+  } catch (...) {  // the folder as it was
+    ReplacedRun(out, moved).restore();
+    throw;
+  }
+  return ReplacedRun(out, std::move(moved));
 }
 
 }  // namespace lsmbs
