@@ -174,8 +174,20 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
     }
   }
   phi_grad(x0, y0, th, phi, gx, gy);
+  // A circle's φ = |x − c| − r is its exact signed distance, also at the centre, where ∇φ
+  // vanishes and φ/|∇φ| was −r/1e-15 (a node at the centre of a hole smaller than the band then
+  // had μ and dμ/dr of a far point)
+  if (type_ == Type::kCircle) return hole_ ? phi : -phi;
   T g2 = gx * gx + gy * gy + T(1e-30);
   const T D0 = phi / sqrt(g2);
+  if (type_ == Type::kSuperEllipse && value(gx) == 0 && value(gy) == 0) {
+    // the centre (ξ, η > 1): ∇φ = 0 and φ/|∇φ| = −1e15; the distance to the nearest axis vertex,
+    // min(a, b), is the true distance for ξ, η ≥ 2 and an upper bound otherwise. Near the centre
+    // of a super-ellipse smaller than the refinement radius φ/|∇φ| still overestimates the
+    // distance (docs/methods.md, "Level-set distances")
+    const T D = value(th[2]) < value(th[3]) ? -th[2] : -th[3];
+    return hole_ ? D : -D;
+  }
   T D = D0;
   const double ad = std::abs(value(D0));
   if (ad < refine_within) {

@@ -77,6 +77,33 @@ TEST(FeatureDistance, CircleIsExactInEveryZone) {
   EXPECT_LT(worst, 1e-11);
 }
 
+// At a feature's centre ∇φ vanishes: the distance there is the closed form, not φ/|∇φ| = −1e13
+TEST(FeatureDistance, CentresHaveTheirClosedFormDistance) {
+  const double cx = 0.15, cy = 0.0, R = 0.01;
+  Feature c("C", Feature::Type::kCircle, {constant(cx), constant(cy), constant(R)}, true);
+  const double tc[3] = {cx, cy, R};
+  for (const double refine : {0.0, 0.02}) {
+    EXPECT_NEAR(c.distance<double>(Vec2(cx, cy), tc, refine), -R, 1e-15);
+    // d/dr of the distance at the centre is −1 (the Dual's derivative along θ = r)
+    const Dual t[3] = {Dual(cx), Dual(cy), Dual::variable(R, 2)};
+    const Dual D = c.distance<Dual>(Vec2(cx, cy), t, refine);
+    EXPECT_NEAR(D.v, -R, 1e-15);
+    EXPECT_NEAR(D.d[2], -1.0, 1e-12);
+  }
+  // super-ellipses with ξ, η ≥ 2: the nearest boundary points from the centre are the vertices
+  // on the shorter axis, at distance min(a, b)
+  for (const double xi : {2.0, 5.0}) {
+    const double a = 0.02, b = 0.008;
+    Feature s("S", Feature::Type::kSuperEllipse,
+              {constant(cx), constant(cy), constant(a), constant(b), constant(xi), constant(xi),
+               constant(0.4)},
+              true);
+    const double ts[7] = {cx, cy, a, b, xi, xi, 0.4};
+    for (const double refine : {0.0, 0.02})
+      EXPECT_NEAR(s.distance<double>(Vec2(cx, cy), ts, refine), -b, 1e-15) << "xi " << xi;
+  }
+}
+
 TEST(FeatureDistance, SuperEllipseAgainstBruteForceInTheRefinedBlendAndPlainZones) {
   // ξ = η = 5 super-ellipse as on the robot arm (eq. 43): a = 20 mm, b = 10 mm, rotated;
   // refinement radius r = 3 mm (the mapping uses 12 bands: ε = 0.25 mm here).
