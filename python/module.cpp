@@ -443,10 +443,9 @@ PYBIND11_MODULE(_lsmbs, m) {
   m.def(
       "_load_case_text",
       [](const std::string& text, const std::string& label, const std::string& base_dir) {
-        check_json_depth(text, label);
         nlohmann::json j;
         try {
-          j = nlohmann::json::parse(text);
+          j = parse_json_document(text, label);
         } catch (const nlohmann::json::exception& e) {
           throw Error(label, "", std::string("invalid JSON: ") + e.what());
         }

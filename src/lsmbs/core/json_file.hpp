@@ -14,4 +14,10 @@ void write_json_atomic(const std::string& path, const nlohmann::json& j);
 /// `max_depth`: nlohmann::json parses recursively, and 200,000 levels exhaust the stack.
 void check_json_depth(const std::string& text, const std::string& file, int max_depth = 256);
 
+/// Parses a case document: the depth check above, then nlohmann::json with every object's keys
+/// checked for duplicates, which JSON parsers otherwise resolve silently (the last one wins).
+/// Throws lsmbs::Error (file, JSON path of the repeated key) on a duplicate; nlohmann's own
+/// exceptions on invalid JSON.
+nlohmann::json parse_json_document(const std::string& text, const std::string& file);
+
 }  // namespace lsmbs

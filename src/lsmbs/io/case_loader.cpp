@@ -1110,10 +1110,9 @@ Case load_case(const std::string& path, const std::vector<CaseOverride>& overrid
   std::stringstream ss;
   ss << f.rdbuf();
   const std::string text = ss.str();
-  check_json_depth(text, path);  // before nlohmann::json, which parses recursively
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(text);
+    j = parse_json_document(text, path);
   } catch (const nlohmann::json::parse_error& e) {
     throw Error(path, "byte " + std::to_string(e.byte), std::string("invalid JSON: ") + e.what());
   } catch (const nlohmann::json::exception&

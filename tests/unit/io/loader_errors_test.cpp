@@ -8,8 +8,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "support/test_models.hpp"
@@ -257,4 +259,38 @@ TEST(LoaderErrors, WrongKindsAndNullsAreNamedOnce) {
     EXPECT_NE(msg.find("got null"), std::string::npos) << msg;
     EXPECT_EQ(msg.find("null null"), std::string::npos) << msg;
   }
+}
+
+// A key given twice in one object: a JSON parser keeps one silently (nlohmann the last), so a
+// case with "h": 0.002, "h": 0.001 ran with either. The file is refused, naming the key's path.
+TEST(LoaderErrors, DuplicateKeysAreRefusedWithTheirPath) {
+  const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "duplicate_keys";
+  std::filesystem::create_directories(dir);
+  std::string text = base().dump(1);
+  const std::string h = "\"h\": 0.01";
+  ASSERT_NE(text.find(h), std::string::npos);
+  text.replace(text.find(h), h.size(), "\"h\": 0.01, \"h\": 0.02");
+  // and inside an array of objects: the second joint's law
+  const std::string to = "\"to\": 1";
+  ASSERT_NE(text.find(to), std::string::npos);
+  std::string nested = base().dump(1);
+  nested.replace(nested.find(to), to.size(), "\"to\": 1, \"to\": 2");
+  for (const auto& [doc, path, key] :
+       {std::tuple{text, std::string("/simulation/h"), std::string("'h'")},
+        std::tuple{nested, std::string("/joints/1/law/to"), std::string("'to'")}}) {
+    const std::string file = (dir / "case.json").string();
+    std::ofstream(file) << doc;
+    try {
+      (void)load_case(file);
+      ADD_FAILURE() << "a duplicate key " << path << " was accepted";
+    } catch (const Error& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(file + ": " + path + ": the key " + key + " appears twice"),
+                std::string::npos)
+          << msg;
+    }
+  }
+  // the same document without the repetition loads
+  std::ofstream((dir / "case.json").string()) << base().dump(1);
+  EXPECT_NO_THROW((void)load_case((dir / "case.json").string()));
 }
