@@ -294,3 +294,19 @@ TEST(LoaderErrors, DuplicateKeysAreRefusedWithTheirPath) {
   std::ofstream((dir / "case.json").string()) << base().dump(1);
   EXPECT_NO_THROW((void)load_case((dir / "case.json").string()));
 }
+
+// A body placed against its driver: the pendulum drawn at 1 rad while its driver's law starts
+// from 0 was rotated silently by the initial projection (a skeptical user's four-bar crank at
+// 90°, whose flexible coupler was then torn). A placement error the projection may correct (1 mm
+// on a 2 m model) still loads, and the projection places the body exactly.
+TEST(LoaderErrors, BodiesPlacedAgainstTheirDriversAreRefused) {
+  json j = base();
+  j["bodies"][0]["angle"] = 1.0;
+  expect_error(j, "/bodies/0",
+               "body 'bob' does not satisfy the joints and drivers at t = 0: projecting the "
+               "initial state onto them rotates it by -1 rad");
+  json ok = base();
+  ok["bodies"][0]["position"] = {1.001, 0.0};
+  Case cs = test::make_case(ok);
+  EXPECT_EQ(cs.initial.q[0], 1.001);  // the case's placement; the run projects it
+}
