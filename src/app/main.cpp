@@ -24,6 +24,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/io/design_picture.hpp"
 #include "lsmbs/io/output_folder.hpp"
 
 namespace {
@@ -119,7 +120,7 @@ int main(int argc, char** argv) {
   geo->add_option("--set", sets, kSetHelp);
   geo->add_option("--width", geo_args.width, "PNG width in pixels")
       ->capture_default_str()
-      ->check(CLI::Range(16, 20000));
+      ->check(CLI::Range(lsmbs::DesignPictureLayout::kMinWidth, 20000));
   geo->add_flag("-q,--quiet", quiet, "print nothing but errors");
 
   auto* sen = app.add_subcommand(

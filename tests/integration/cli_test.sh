@@ -204,6 +204,22 @@ c=json.load(open('$src/data/robot_arm/robot_arm_holes.json')); c['bodies'][2]['m
 c['simulation']['h']=0.01; c['output']['vtu_stride']=0; c['optimization']['stop']['max_evaluations']=12
 json.dump(c,open('$tmp/opt.json','w'))"
 "$exe" optimize "$tmp/opt.json" -o "$tmp/opt_full" -q || fail "optimize"
+# a run that ends outside its constraints says so (it exited 0 with the usual lines only): a
+# deviation bound 50x below the initial design's, two evaluations
+python3 -c "
+import json
+c=json.load(open('$tmp/opt.json')); c['optimization']['constraints'][0]['upper']=1e-5
+c['optimization']['stop']['max_evaluations']=2
+json.dump(c,open('$tmp/opt_infeasible.json','w'))"
+"$exe" optimize "$tmp/opt_infeasible.json" -o "$tmp/opt_infeasible" -q --no-check 2> "$tmp/inf.txt" || fail "optimize ending infeasible: exit $?"
+python3 -c "
+import json
+S = json.load(open('$tmp/opt_infeasible/summary.json'))
+tol = S['options']['optimization']['tol_constraint']
+assert S['final']['max_violation'] > tol and any('final design is infeasible' in w for w in S['warnings']), S['warnings']
+S2 = json.load(open('$tmp/opt_full/summary.json'))
+assert S2['final']['max_violation'] > tol or S2['warnings'] == [], S2['warnings']" \
+  && grep -q "warning: the final design is infeasible" "$tmp/inf.txt" || fail "infeasible final design: $(cat "$tmp/inf.txt")"
 LSMBS_STOP_AFTER_EVALUATIONS=4 "$exe" optimize "$tmp/opt.json" -o "$tmp/opt_killed" -q 2> "$tmp/stop.txt"; rc=$?
 [ $rc -eq 130 ] && grep -q "interrupted after 4 evaluations" "$tmp/stop.txt" || fail "stop hook: rc $rc $(cat "$tmp/stop.txt")"
 [ -f "$tmp/opt_killed/checkpoint.json" ] || fail "no checkpoint after the stop"
@@ -297,6 +313,14 @@ mkdir -p "$tmp/reuse/.lsmbs-replaced-run" && touch "$tmp/reuse/.lsmbs-replaced-r
 cant="$src/tests/integration/data/cantilever_ramp.json"
 "$exe" static "$cant" -o "$tmp/st" -q || fail "static"
 [ -f "$tmp/st/pl.vtu" ] || fail "static wrote no pl.vtu: $(ls "$tmp/st")"
+# units of every column static writes, as simulate's (a tip displacement in m, by hand)
+python3 -c "
+import csv, json
+S = json.load(open('$tmp/st/summary.json'))
+cols = next(csv.reader(open('$tmp/st/history.csv')))
+u = S['units']
+assert u['t'] == 's' and all(c == 't' or c in u['measures'] for c in cols), (cols, u)
+assert all(v == 'm' for k, v in u['measures'].items() if k.startswith('tip.')), u" || fail "static units"
 "$exe" simulate "$spring" -o "$tmp/st" -q --overwrite || fail "simulate --overwrite over a static run"
 python3 -c "
 import json, os

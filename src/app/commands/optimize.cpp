@@ -464,6 +464,17 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   S["responses"] = {{spec.objective, res.final.objective}};
   S["nlopt"] = {{"code", res.nlopt_code}, {"status", res.nlopt_status}};
   S["converged"] = res.converged;
+  // a final design outside the constraints is said, not only flagged in summary.json
+  nlohmann::json warnings = nlohmann::json::array();
+  if (res.final.ok && res.final.max_violation > spec.tol_constraint) {
+    char w[256];
+    std::snprintf(w, sizeof w,
+                  "the final design is infeasible: max relative constraint violation %.3e > "
+                  "%.3e (relative_constraint_violation) after %ld evaluations",
+                  res.final.max_violation, spec.tol_constraint, res.evaluations);
+    warnings.push_back(w);
+  }
+  S["warnings"] = warnings;
   // the KKT report of a failed evaluation would read gradients that were never computed
   const auto kkt = res.final.ok ? lsmbs::kkt_report(prob, res.final) : lsmbs::KktReport{};
   S["kkt"] = res.final.ok ? kkt.to_json() : nlohmann::json(nullptr);
@@ -499,6 +510,8 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
       std::printf("  %-10s %.6g -> %.6g\n", d.variables[i].name.c_str(), init[i], res.p[i]);
     std::printf("  results in %s\n", out.c_str());
   }
+  for (const auto& w : warnings)
+    std::fprintf(stderr, "lsmbs optimize: warning: %s\n", w.get<std::string>().c_str());
   if (!res.failure.empty()) {
     std::fprintf(stderr,
                  "lsmbs optimize: numerical failure: %s (results up to it kept; status partial)\n",

@@ -65,6 +65,7 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   S = provenance(o.command_line.empty() ? "static" : o.command_line, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
+  S["units"] = units_json(cs);  // of every measure column and response, as simulate's
   S["status"] = res.solver.ok ? "complete" : "partial";
   if (!res.solver.ok) S["failure"] = res.solver.message;
   S["options"] = {{"analysis", "static"},   {"t", o.t},
