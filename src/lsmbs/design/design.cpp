@@ -1,5 +1,7 @@
 #include "lsmbs/design/design.hpp"
 
+#include <cmath>
+
 #include "lsmbs/core/error.hpp"
 
 namespace lsmbs {
@@ -84,6 +86,34 @@ std::vector<ParamDirection> Design::apply_with_directions(const Vec& p, ModelPar
             {bodies[b].body->field, static_cast<int>(it.row()), it.value()});
   for (const auto& bd : bindings) dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
   return dirs;
+}
+
+std::string Design::coincident_features(const Vec& p) const {
+  for (const BodyDesign& b : bodies) {
+    const LevelSet& ls = b.map->level_set();
+    const auto values = ls.values(p);
+    const double eps = b.map->epsilon();
+    int ties = 0;
+    Vec2 first = Vec2::Zero();
+    for (const Vec2& x : b.body->mesh.nodes) {
+      if (std::abs(ls.evaluate(x, values, nullptr)) > 12 * eps) continue;  // μ does not see it
+      // a tie that persists one band away in x and in y: the features coincide over an area
+      // (not where two crossing features switch, a curve that μ's integral does not see)
+      const double tol = 1e-7 * eps;
+      if (ls.tie_at(x, values, tol) && ls.tie_at(x + Vec2(eps, 0), values, tol) &&
+          ls.tie_at(x + Vec2(0, eps), values, tol) && ties++ == 0)
+        first = x;
+    }
+    if (ties > 0)
+      return "body '" + b.body->name + "': two level-set features coincide at this design (" +
+             std::to_string(ties) + " mesh nodes near the boundary, the first at (" +
+             std::to_string(first.x()) + ", " + std::to_string(first.y()) +
+             ") in the body frame): their exact min/max combination has a kink here, and the "
+             "gradient is the derivative of one of them only (one-sided; central differences "
+             "average the two). Move one feature, or combine them with \"ks\" "
+             "(docs/case-format.md)";
+  }
+  return {};
 }
 
 double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,

@@ -64,6 +64,11 @@ class Design final : public Parameterization {
   /// (the mapping runs once).
   std::vector<ParamDirection> apply_with_directions(const Vec& p,
                                                     ModelParams& params) const override;
+  /// Empty, or a warning that two level-set features coincide at p within the smoothing bands
+  /// of an exact (ks = 0) Boolean combination: at such a design point μ(p) has a kink and every
+  /// gradient is one-sided (checked at the mesh nodes within 12 bands of the boundary, where the
+  /// two features' distances agree also one band away in x and in y).
+  std::string coincident_features(const Vec& p) const;
   /// Mass of a designed body and its gradient m(p), ∂m/∂p = ρ t Σ_e A_e ∂μ_e/∂p.
   static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
                               Vec& grad);

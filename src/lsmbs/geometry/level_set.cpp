@@ -28,8 +28,15 @@ double LevelSet::evaluate(const Vec2& x, const Values& v, double* grad) const {
   return eval_node(root_, x, v, grad);
 }
 
-double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v,
-                           double* grad) const {
+bool LevelSet::tie_at(const Vec2& x, const Values& v, double tol) const {
+  std::vector<double> grad(static_cast<size_t>(std::max(nv_, 1)));
+  bool tie = false;
+  eval_node(root_, x, v, grad.data(), &tol, &tie);
+  return tie;
+}
+
+double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, double* grad,
+                           const double* tie_tol, bool* tie) const {
   switch (n.op) {
     case LevelSetNode::Op::kFeature: {
       const Feature& f = features_[n.feature];
@@ -45,7 +52,7 @@ double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v
       return D.v;
     }
     case LevelSetNode::Op::kNot: {
-      const double d = eval_node(n.children[0], x, v, grad);
+      const double d = eval_node(n.children[0], x, v, grad, tie_tol, tie);
       if (grad)
         for (int k = 0; k < nv_; ++k) grad[k] = -grad[k];
       return -d;
@@ -57,8 +64,18 @@ double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v
       std::vector<double> d(m);
       std::vector<std::vector<double>> g(grad ? m : 0, std::vector<double>(nv_));
       for (size_t i = 0; i < m; ++i)
-        d[i] = sign * eval_node(n.children[i], x, v, grad ? g[i].data() : nullptr);
+        d[i] = sign * eval_node(n.children[i], x, v, grad ? g[i].data() : nullptr, tie_tol, tie);
       const size_t imin = static_cast<size_t>(std::min_element(d.begin(), d.end()) - d.begin());
+      if (tie && grad && n.ks <= 0)
+        for (size_t i = 0; i < m; ++i) {
+          if (i == imin || d[i] - d[imin] > *tie_tol) continue;
+          double diff = 0, size = 0;
+          for (int k = 0; k < nv_; ++k) {
+            diff = std::max(diff, std::abs(g[i][k] - g[imin][k]));
+            size = std::max({size, std::abs(g[i][k]), std::abs(g[imin][k])});
+          }
+          if (diff > 1e-9 * size) *tie = true;
+        }
       double out = d[imin];
       if (n.ks > 0) {
         double s = 0;

@@ -47,6 +47,10 @@ class LevelSet {
   Values values(const Vec& p) const;
   /// D(x); if grad is non-null (size num_variables) it receives ∂D/∂p.
   double evaluate(const Vec2& x, const Values& v, double* grad) const;
+  /// Whether an exact (ks = 0) AND/OR of the tree has, at x, a second child within `tol` of the
+  /// extremum whose derivative differs: two features coincide there, the combination has a
+  /// kink, and its derivative (one child's) is one-sided.
+  bool tie_at(const Vec2& x, const Values& v, double tol) const;
   /// Design variables that parameters of feature f depend on.
   const std::vector<int>& feature_variables(int f) const { return feat_vars_[f]; }
   /// Distances below this are refined to third order (see Feature::distance); the mapping
@@ -54,7 +58,8 @@ class LevelSet {
   void set_refine_within(double d) { refine_within_ = d; }
 
  private:
-  double eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, double* grad) const;
+  double eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, double* grad,
+                   const double* tie_tol = nullptr, bool* tie = nullptr) const;
   std::vector<Feature> features_;
   LevelSetNode root_;
   int nv_ = 0;

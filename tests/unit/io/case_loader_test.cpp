@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -500,5 +501,57 @@ TEST(CaseLoader, NonDesignFeatureStaysSolidWithExactDerivatives) {
     EXPECT_NE(std::string(e.what()).find("/design/geometry/0/region: feature 'keep' is non_design"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// Two hole features that coincide (a second circle of the same radius on the first, a skeptical
+// user's case; linked symmetric features at their common position are the same): the exact AND
+// is min(D1, D2) with D1 = D2, its derivative with respect to r1 is one-sided (all of the hole's
+// boundary, or none of it), and central differences of the mapped mass average the two: the
+// exact gradient is −ρ t 2πr (1 − μ_min) on one side and 0 on the other, the central difference
+// half of it. The design point is reported; 2 mm apart, with "ks", or with the two circles
+// crossing, nothing is.
+TEST(CaseLoader, CoincidentFeaturesAreReportedWithTheirOneSidedGradient) {
+  json j = with_design();
+  j["bodies"][1]["mesh"]["elements"] = {40, 8};
+  j["design"]["geometry"][0]["features"].push_back(
+      {{"name", "twin"}, {"type", "circle"}, {"cx", 0.05}, {"cy", 0.01}, {"r", 0.005}});
+  const Case cs = test::make_case(j);
+  const Vec p0 = cs.design->initial();
+  const std::string w = cs.design->coincident_features(p0);
+  std::printf("%s\n", w.c_str());
+  EXPECT_NE(w.find("two level-set features coincide"), std::string::npos) << w;
+  std::vector<SpMat> dmu;
+  ModelParams params = cs.model->params();
+  cs.design->apply(p0, params, &dmu);
+  Vec g;
+  Design::mass_gradient(cs.design->bodies[0], dmu[0], params, g);
+  auto mass_at = [&](double r) {
+    Vec p(1);
+    p[0] = r;
+    ModelParams pp = cs.model->params();
+    cs.design->apply(p, pp, nullptr);
+    return cs.model->find_flexible("p")->mass(pp);
+  };
+  const double h = 1e-6, fd = (mass_at(0.005 + h) - mass_at(0.005 - h)) / (2 * h);
+  const double one_side = -1000 * 0.001 * 2 * M_PI * 0.005 * (1 - 1e-3);
+  std::printf("coincident: dm/dr %.6e, central difference %.6e, one side %.6e\n", g[0], fd,
+              one_side);
+  EXPECT_NEAR(fd / (0.5 * one_side), 1.0, 2e-3);  // the average of the two sides
+  EXPECT_TRUE(std::abs(g[0] / one_side - 1) < 2e-3 || std::abs(g[0]) < 1e-3 * std::abs(one_side))
+      << "the exact combination's derivative is one side's";
+
+  for (const auto& [what, edit] : std::vector<std::pair<std::string, std::function<void(json&)>>>{
+           {"2 mm apart", [](json& c) { c["design"]["geometry"][0]["features"][1]["cx"] = 0.052; }},
+           {"ks",
+            [](json& c) {
+              c["design"]["geometry"][0]["region"] = {{"and", {"hole", "twin"}}, {"ks", 2000}};
+            }},
+           {"crossing",
+            [](json& c) { c["design"]["geometry"][0]["features"][1]["cx"] = 0.0575; }}}) {
+    json k = j;
+    edit(k);
+    const Case ck = test::make_case(k);
+    EXPECT_EQ(ck.design->coincident_features(ck.design->initial()), "") << what;
   }
 }
