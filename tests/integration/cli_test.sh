@@ -204,6 +204,20 @@ c=json.load(open('$src/data/robot_arm/robot_arm_holes.json')); c['bodies'][2]['m
 c['simulation']['h']=0.01; c['output']['vtu_stride']=0; c['optimization']['stop']['max_evaluations']=12
 json.dump(c,open('$tmp/opt.json','w'))"
 "$exe" optimize "$tmp/opt.json" -o "$tmp/opt_full" -q || fail "optimize"
+# a design whose two holes coincide (a second circle on the first, the skeptical user's case):
+# its gradients are one-sided, and optimize says so for the initial and the final design
+python3 -c "
+import json
+c=json.load(open('$src/tests/integration/data/cantilever_ramp.json'))
+c['design']['geometry'][0]['features'].append({'name': 'h2', 'type': 'circle', 'cx': 0.06, 'cy': 0.025, 'r': 0.01})
+c['optimization']['stop']['max_evaluations']=1
+json.dump(c,open('$tmp/opt_twin.json','w'))"
+"$exe" optimize "$tmp/opt_twin.json" -o "$tmp/opt_twin" -q --no-check 2> "$tmp/twin.txt" || fail "optimize with coincident holes: exit $?"
+grep -q "warning: initial design: body 'pl': two level-set features coincide" "$tmp/twin.txt" \
+  && python3 -c "
+import json
+S = json.load(open('$tmp/opt_twin/summary.json'))
+assert any(w.startswith('initial design: ') for w in S['warnings']), S['warnings']" || fail "coincident holes in optimize: $(cat "$tmp/twin.txt")"
 # a run that ends outside its constraints says so (it exited 0 with the usual lines only): a
 # deviation bound 50x below the initial design's, two evaluations
 python3 -c "

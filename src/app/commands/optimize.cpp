@@ -474,6 +474,9 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                   res.final.max_violation, spec.tol_constraint, res.evaluations);
     warnings.push_back(w);
   }
+  // coincident features: the gradients at such a design are one-sided (Design::coincident_features)
+  if (auto w = d.coincident_features(init); !w.empty()) warnings.push_back("initial design: " + w);
+  if (auto w = d.coincident_features(res.p); !w.empty()) warnings.push_back("final design: " + w);
   S["warnings"] = warnings;
   // the KKT report of a failed evaluation would read gradients that were never computed
   const auto kkt = res.final.ok ? lsmbs::kkt_report(prob, res.final) : lsmbs::KktReport{};
