@@ -160,7 +160,9 @@ nlohmann::json gradient_check_json(const GradientCheckResult& r, const GradientC
           {"worst", r.worst},
           {"worst_response", r.worst_response},
           {"simulations", r.simulations},
-          {"ok", r.ok},
+          // whether the check's simulations ran ("ok" read as the check passing beside a
+          // verdict "fail"); the verdict judges the gradient
+          {"completed", r.ok},
           {"message", r.message},
           {"verdict", r.verdict(o)}};
 }
