@@ -249,6 +249,15 @@ double void_mass(const Case& cs) {
   return 1000 * 0.001 * 0.1 * 0.02 - cs.model->find_flexible("p")->mass(cs.model->params());
 }
 
+// Mass of the designed plate "p" at the one-variable design p = [r].
+double mass_at(const Case& cs, double r) {
+  Vec p(1);
+  p[0] = r;
+  ModelParams pp = cs.model->params();
+  cs.design->apply(p, pp, nullptr);
+  return cs.model->find_flexible("p")->mass(pp);
+}
+
 // Area added to a convex hole by the logistic smoothing H(φ/ε) of a distance φ (ε = band × the
 // sub-cell size): the void fraction 1 − H differs from the sharp one by an odd function of φ,
 // whose first moment ∫ φ (1 − H − 1_{φ<0}) dφ = π²ε²/6 weights the boundary's curvature; with
@@ -472,14 +481,7 @@ TEST(CaseLoader, NonDesignFeatureStaysSolidWithExactDerivatives) {
   ModelParams p2 = c2.model->params();
   c2.design->apply(c2.design->initial(), p2, &dmu);
   Design::mass_gradient(c2.design->bodies[0], dmu[0], p2, g);
-  auto mass_at = [&](double rr) {
-    Vec p(1);
-    p[0] = rr;
-    ModelParams pp = c2.model->params();
-    c2.design->apply(p, pp, nullptr);
-    return c2.model->find_flexible("p")->mass(pp);
-  };
-  const double h = 1e-6, fd = (mass_at(r + h) - mass_at(r - h)) / (2 * h);
+  const double h = 1e-6, fd = (mass_at(c2, r + h) - mass_at(c2, r - h)) / (2 * h);
   std::printf("disc on the boundary: dm/dr %.6e, central difference %.6e, hole alone %.6e\n", g[0],
               fd, -dref);
   EXPECT_NEAR(g[0] / fd, 1.0, 1e-4);
@@ -526,14 +528,7 @@ TEST(CaseLoader, CoincidentFeaturesAreReportedWithTheirOneSidedGradient) {
   cs.design->apply(p0, params, &dmu);
   Vec g;
   Design::mass_gradient(cs.design->bodies[0], dmu[0], params, g);
-  auto mass_at = [&](double r) {
-    Vec p(1);
-    p[0] = r;
-    ModelParams pp = cs.model->params();
-    cs.design->apply(p, pp, nullptr);
-    return cs.model->find_flexible("p")->mass(pp);
-  };
-  const double h = 1e-6, fd = (mass_at(0.005 + h) - mass_at(0.005 - h)) / (2 * h);
+  const double h = 1e-6, fd = (mass_at(cs, 0.005 + h) - mass_at(cs, 0.005 - h)) / (2 * h);
   const double one_side = -1000 * 0.001 * 2 * M_PI * 0.005 * (1 - 1e-3);
   std::printf("coincident: dm/dr %.6e, central difference %.6e, one side %.6e\n", g[0], fd,
               one_side);
