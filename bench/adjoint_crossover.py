@@ -32,7 +32,7 @@ Cases (identical to the shipped one apart from the design and the outputs):
 Writes DIR/crossover.csv (features, variables, method, wall_s, user_s, peak_rss_mb, agreement;
 agreement = on the adjoint rows, the largest per-response relative difference to direct),
 DIR/agreement.csv (per response), DIR/crossover.json (every run, commands, load averages),
-DIR/crossover.md (a table to paste) and DIR/crossover.png (gnuplot: wall time vs variables).
+DIR/crossover.md (a table to paste) and DIR/crossover.png (matplotlib: wall time vs variables).
 
 For the `--many` case the direct method is only run if a linear fit of the direct wall times of
 the other cases predicts at most --direct-limit seconds (default 600), or with --force-direct.
@@ -43,7 +43,6 @@ import json
 import math
 import os
 import pathlib
-import shutil
 import subprocess
 import sys
 import time
@@ -294,28 +293,27 @@ def main():
             + " |")
     (out / "crossover.md").write_text("\n".join(lines) + "\n")
 
-    # Plot
-    for m in ("primal", "direct-analytic", "adjoint"):
-        with open(out / f"plot_{m}.dat", "w") as f:
-            for r in sorted((r for r in rows if r["method"] == m), key=lambda r: r["variables"]):
-                f.write(f"{r['variables']} {r['wall_s']}\n")
-    gp = out / "crossover.gp"
-    gp.write_text(f"""set terminal pngcairo size 900,600 font ",11"
-set output "{out / 'crossover.png'}"
-set title "Robot arm, 500 steps: wall time of one gradient (2 responses) vs number of design variables"
-set xlabel "design variables n_v (3 per super-ellipse feature)"
-set ylabel "wall time [s] (smallest of {args.repeats} runs)"
-set logscale x
-set xrange [10:500]
-set yrange [0:*]
-set grid
-set key top left
-plot "{out / 'plot_direct-analytic.dat'}" using 1:2 with linespoints lw 2 pt 7 title "direct-analytic (--threads 2)", \\
-     "{out / 'plot_adjoint.dat'}" using 1:2 with linespoints lw 2 pt 5 title "discrete adjoint", \\
-     "{out / 'plot_primal.dat'}" using 1:2 with linespoints lw 2 pt 9 dt 2 title "primal (simulate)"
-""")
-    if shutil.which("gnuplot"):
-        subprocess.run(["gnuplot", str(gp)], check=True)
+    # Plot (matplotlib, no script interpreter: the output path is only ever a file name)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(9, 6))
+    styles = {"direct-analytic": ("o-", "direct-analytic (--threads 2)"),
+              "adjoint": ("s-", "discrete adjoint"), "primal": ("^--", "primal (simulate)")}
+    for m, (style, label) in styles.items():
+        pts = sorted((r["variables"], r["wall_s"]) for r in rows if r["method"] == m)
+        if pts:
+            ax.plot(*zip(*pts), style, lw=2, label=label)
+    ax.set_xscale("log")
+    ax.set_xlim(10, 500)
+    ax.set_ylim(bottom=0)
+    ax.grid(True)
+    ax.legend(loc="upper left")
+    ax.set_title("Robot arm, 500 steps: wall time of one gradient (2 responses) vs number of "
+                 "design variables", fontsize=10)
+    ax.set_xlabel("design variables n_v (3 per super-ellipse feature)")
+    ax.set_ylabel(f"wall time [s] (smallest of {args.repeats} runs)")
+    fig.savefig(out / "crossover.png", dpi=100)
     print((out / "crossover.md").read_text())
 
 

@@ -195,24 +195,33 @@ class PythonRun {
 };
 
 // An output folder given from Python is checked and claimed as the command line's -o: a folder
-// that holds an earlier run is refused unless overwrite=True (resume: optimize continues it). f
-// runs with the folder claimed; an earlier run that overwrite=True replaces comes back when f
+// that holds an earlier run is refused unless overwrite=True (resume: optimize continues it), and
+// only the files an earlier run's summary.json lists are ever replaced (io/output_folder.hpp). f
+// runs with the folder claimed (for `model`; null: f claims it itself through the OutputClaim it
+// gets, once its case has loaded); an earlier run that overwrite=True replaces comes back when f
 // stops on bad input (Error), as on the command line.
-template <class F>
-auto claimed(const std::string& out_dir, bool overwrite, bool resume, F&& f) {
+struct OutputClaim {
+  std::string out;
+  bool overwrite, resume;
   ReplacedRun replaced;
-  if (!out_dir.empty()) {
+  void claim(const Model& model) {
+    if (out.empty()) return;
     const OutputFolderNames names{"out_dir", "overwrite=True"};
-    check_output_folder(out_dir, names);
-    replaced = claim_output_folder(out_dir, overwrite, resume, names);
+    replaced = claim_output_folder(out, overwrite, resume, planned_outputs(model), names);
     std::error_code ec;
-    std::filesystem::create_directories(out_dir, ec);
-    if (ec) throw Error("out_dir " + out_dir + ": cannot create it (" + ec.message() + ")");
+    std::filesystem::create_directories(out, ec);
+    if (ec) throw Error("out_dir " + out + ": cannot create it (" + ec.message() + ")");
   }
+};
+template <class F>
+auto claimed(const Model* model, const std::string& out_dir, bool overwrite, bool resume, F&& f) {
+  OutputClaim c{out_dir, overwrite, resume, {}};
+  if (!out_dir.empty()) check_output_folder(out_dir, {"out_dir", "overwrite=True"});
   try {
-    return f();
+    if (model) c.claim(*model);
+    return f(c);
   } catch (const Error&) {
-    replaced.restore();
+    c.replaced.restore();
     throw;
   }
 }
@@ -497,7 +506,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       [](const CasePtr& cs, const py::object& design, const std::string& out_dir, bool overwrite,
          const py::object& progress) {
         const Vec p = design_point(*cs, design);
-        return claimed(out_dir, overwrite, false, [&] {
+        return claimed(cs->model.get(), out_dir, overwrite, false, [&](OutputClaim&) {
           if (cs->design) cs->design->apply(p, cs->model->params());
           RunOptions ro;
           ro.out_dir = out_dir;
@@ -537,7 +546,7 @@ PYBIND11_MODULE(_lsmbs, m) {
          const std::string& out_dir, bool overwrite) {
         const Vec p = design_point(*cs, design);
         if (cs->design) cs->design->apply(p, cs->model->params());
-        return claimed(out_dir, overwrite, false, [&] {
+        return claimed(cs->model.get(), out_dir, overwrite, false, [&](OutputClaim&) {
           StaticRunOptions o;
           o.out_dir = out_dir;
           o.t = t;
@@ -692,7 +701,7 @@ PYBIND11_MODULE(_lsmbs, m) {
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
         PythonRun run(progress);
-        return claimed(out_dir, overwrite, resume, [&] {
+        return claimed(cs->model.get(), out_dir, overwrite, resume, [&](OutputClaim&) {
           return located(*cs, [&] {
             OptimizationSpec spec = parse_optimization(*cs);
             if (!optimizer.empty()) spec.optimizer = optimizer;
@@ -826,8 +835,9 @@ PYBIND11_MODULE(_lsmbs, m) {
       "verify",
       [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study,
          bool overwrite, double idas_rtol) {
-        return claimed(out_dir, overwrite, false, [&] {
+        return claimed(nullptr, out_dir, overwrite, false, [&](OutputClaim& claim) {
           VerifyOptions o;
+          o.on_loaded = [&](const Case& cs) { claim.claim(*cs.model); };
           o.out_dir = out_dir;
           o.idas = idas;
           o.mesh_study = mesh_study;

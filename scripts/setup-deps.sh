@@ -8,7 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libsundials-dev libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev zlib1g-dev
-  gnuplot-nox
+  libcairo2-dev fonts-dejavu-core
   clang-format
   pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-scipy python3-matplotlib
   python3-pandas python3-yaml python3-pil

@@ -12,6 +12,12 @@ Every function draws on `ax` (a new figure when None) and returns the axes.
 import numpy as np
 
 
+def _text(s):
+    """A name as matplotlib text, never markup: a '$' pair would start mathtext (a name such as
+    'a$b$c' failed to draw)."""
+    return str(s).replace("$", r"\$")
+
+
 def _axes(ax):
     if ax is not None:
         return ax
@@ -50,7 +56,7 @@ def history(result, columns=None, ax=None):
     if isinstance(columns, str):
         columns = [columns]
     for c in columns or result.columns:
-        ax.plot(result.times, result.column(c), label=c)
+        ax.plot(result.times, result.column(c), label=_text(c))
     ax.set_xlabel("t [s]")
     ax.legend()
     ax.grid(True, alpha=0.3)
@@ -87,9 +93,9 @@ def gradients(results, response, ax=None):
         if g.ndim != 1:
             raise ValueError(f"'{response}' is a per-step response: plot one step's gradient, "
                              f"e.g. results[...].gradients['{response}'][k]")
-        ax.bar(x + i * width, g, width, label=lab)
-    ax.set_xticks(x + 0.4 - width / 2, variables)
-    ax.set_ylabel(f"d {response} / d p")
+        ax.bar(x + i * width, g, width, label=_text(lab))
+    ax.set_xticks(x + 0.4 - width / 2, [_text(v) for v in variables])
+    ax.set_ylabel(f"d {_text(response)} / d p")
     ax.axhline(0, color="k", lw=0.5)
     ax.legend()
     return ax

@@ -22,6 +22,8 @@
 #include "app/commands/common.hpp"
 #include "lsmbs/core/allocator.hpp"
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/core/text.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/design_picture.hpp"
@@ -42,6 +44,19 @@ std::string joined_args(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   lsmbs::keep_freed_memory();
+  // SIGINT and SIGTERM from the start: every phase polls the flag and ends with exit 130 and its
+  // results flagged (core/interrupt.hpp); a second signal ends the process at once
+  lsmbs::install_interrupt_handlers();
+  // every argument is recorded in summary.json: text that is not UTF-8 is refused up front
+  for (int i = 1; i < argc; ++i)
+    if (!lsmbs::valid_utf8(argv[i])) {
+      std::fprintf(
+          stderr,
+          "lsmbs: error: argument %d (%s) is not valid UTF-8 (bytes shown as \xEF\xBF\xBD); "
+          "lsmbs records its command line in summary.json as UTF-8 text\n",
+          i, lsmbs::displayable_text(argv[i]).c_str());
+      return 2;
+    }
   static const char* kSetHelp =
       "override a value of the case by JSON path, /simulation/h=1e-3 or "
       "/bodies/1/material/E=70e9, or a design variable, name=value (repeatable; recorded in "
@@ -303,8 +318,11 @@ int main(int argc, char** argv) {
     if (*opt && opt->count("--seed") && !opt->count("--starts"))
       throw lsmbs::Error("--seed: the seed of --starts' random initial designs; give --starts N");
     if (*sim || *sta || *geo || *opt || *ben || *ver || *sen) {
+      // checked now, claimed by the command once its case has loaded (commands/common.hpp)
       lsmbs::check_output_folder(out);
-      replaced = lsmbs::claim_output_folder(out, overwrite, *opt && opt_args.resume);
+      common.overwrite = overwrite;
+      common.resume = *opt && opt_args.resume;
+      common.replaced = &replaced;
       started = true;
     }
     common.command_line = joined_args(argc, argv);
@@ -334,16 +352,31 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "lsmbs: error: %s\n", e.what());
     replaced.restore();
     return 2;
+  } catch (const lsmbs::Interrupted& e) {  // a phase that has no partial result to return
+    std::fprintf(stderr, "lsmbs: %s; what was finished is in %s (status interrupted)\n", e.what(),
+                 out.c_str());
+    if (started)
+      lsmbs::app::flag_failed_run(out, joined_args(argc, argv), case_file, e.what(), "interrupted");
+    return 130;
   } catch (const lsmbs::NumericalFailure& e) {
     std::fprintf(stderr, "lsmbs: numerical failure: %s\n", e.what());
     if (started)
       lsmbs::app::flag_failed_run(out, joined_args(argc, argv), case_file,
                                   std::string("numerical failure: ") + e.what());
     return 1;
+  } catch (const lsmbs::OutputError& e) {  // the disk filled, a quota, an I/O error
+    std::fprintf(stderr, "lsmbs: cannot write the output: %s; the results are partial\n", e.what());
+    if (started)
+      lsmbs::app::flag_failed_run(out, joined_args(argc, argv), case_file,
+                                  std::string("cannot write the output: ") + e.what());
+    return 1;
   } catch (const std::filesystem::filesystem_error& e) {
-    std::fprintf(stderr, "lsmbs: error: cannot write the output (-o %s): %s\n", out.c_str(),
-                 e.code().message().c_str());
-    return 2;
+    std::fprintf(stderr, "lsmbs: cannot write the output (-o %s): %s; the results are partial\n",
+                 out.c_str(), e.code().message().c_str());
+    if (started)
+      lsmbs::app::flag_failed_run(out, joined_args(argc, argv), case_file,
+                                  std::string("cannot write the output: ") + e.what());
+    return 1;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr,
                  "lsmbs: out of memory (the model or a table or mesh of the case is too large for "

@@ -178,15 +178,25 @@ def test_a_rigid_body_is_drawn_as_the_convex_hull_of_its_attachment_points(tmp_p
     assert np.allclose(pts[:, :2], [[3, 0]], atol=1e-12)
 
 
-@pytest.mark.parametrize("name", ["model", "a/b", ".hidden"])
-def test_a_body_name_that_cannot_name_its_output_files_is_an_input_error(tmp_path, name):
+@pytest.mark.parametrize("name, stem", [("model", "model_2"), ("a/b", "a_b"),
+                                        (".hidden", "_hidden"), ("../up", "_._up"),
+                                        ("x\nsystem 'touch MARK'", "x_system__touch_MARK_")])
+def test_a_body_name_is_data_and_its_files_are_named_by_a_safe_stem(tmp_path, name, stem):
+    """Any text names a body: its files are named by the stem of docs/case-format.md (letters,
+    digits, '-', '_', '.'; others '_'; no leading '.'; distinct from 'model'), inside the output
+    folder; the multiblock file names the block by the body's own name."""
+    import xml.etree.ElementTree as ET
     m = lsmbs.ModelBuilder("named")
     m.rigid_body(name, mass=1, inertia=1)
+    m.output(vtu_stride=1)
     m.simulation(t_end=0.01, h=0.01)
-    doc = m.document()
-    (tmp_path / "c.json").write_text(__import__("json").dumps(doc))
+    (tmp_path / "c.json").write_text(__import__("json").dumps(m.document()))
     p = subprocess.run([CLI, "simulate", str(tmp_path / "c.json"), "-o", str(tmp_path / "o"), "-q"],
-                       capture_output=True, text=True)
-    assert p.returncode == 2, p.stderr
-    assert "/bodies/0/name" in p.stderr and "c.json" in p.stderr
-    assert not (tmp_path / "o").exists()
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    S = __import__("json").loads((tmp_path / "o" / "summary.json").read_text())
+    assert f"{stem}.pvd" in S["files"] and (tmp_path / "o" / f"{stem}.pvd").is_file()
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["c.json", "o"]  # nothing outside
+    blocks = ET.parse(tmp_path / "o" / "vtu" / "model_0.vtm").getroot().iter("DataSet")
+    assert [(b.get("name"), b.get("file")) for b in blocks] == [
+        (name.replace("\n", "\ufffd"), f"{stem}_0.vtu")]  # XML 1.0 has no control characters

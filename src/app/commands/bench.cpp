@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "app/commands/commands.hpp"
+#include "app/commands/common.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
@@ -25,6 +26,7 @@ int bench_command(const CommonArgs& c, BenchArgs a) {
     if (!SensitivityOptions::parse_matrix(m, mm))
       throw Error("--matrices " + m + ": expected last, converged or refined");
   }
+  bo.on_loaded = [&](const Case& cs) { claim_output(c, *cs.model); };
   const auto J = run_bench(c.case_file, bo);
   std::printf(
       "lsmbs bench: step %.3f ms, floor %.3f ms (residual %.3f + matrix %.3f + KLU %.3f): ratio "

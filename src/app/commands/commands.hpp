@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lsmbs/io/bench_run.hpp"
+#include "lsmbs/io/output_folder.hpp"
 #include "lsmbs/io/verify_run.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 
@@ -20,6 +21,11 @@ struct CommonArgs {
   std::string command_line;       ///< recorded in summary.json
   std::vector<std::string> sets;  ///< --set name=value design-variable overrides
   bool quiet = false, verbose = false;
+  bool overwrite = false;  ///< --overwrite: replace the earlier run the folder holds
+  bool resume = false;     ///< optimize --resume: continue it
+  /// Where claim_output (common.hpp) keeps the earlier run it sets aside, for main to restore on
+  /// bad input; null: nothing is claimed (a child of a multi-start claims its own folder)
+  ReplacedRun* replaced = nullptr;
 };
 
 struct SimulateArgs {

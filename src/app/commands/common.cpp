@@ -10,6 +10,7 @@
 #include <iterator>
 #include <set>
 
+#include "app/commands/commands.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/io/output.hpp"
@@ -35,7 +36,8 @@ std::pair<std::string, double> parse_set(const std::string& s) {
 // memory exhausted, an internal error) leaves a summary.json with status partial and the reason,
 // replacing any earlier summary: exit 1 always comes with results flagged as partial.
 void flag_failed_run(const std::string& out, const std::string& cmdline,
-                     const std::string& case_file, const std::string& what) {
+                     const std::string& case_file, const std::string& what,
+                     const std::string& status) {
   try {
     std::filesystem::create_directories(out);
     std::string sha;  // of the case file's bytes, as a complete run records it
@@ -45,11 +47,22 @@ void flag_failed_run(const std::string& out, const std::string& cmdline,
       sha = lsmbs::sha256_hex(text);
     }
     nlohmann::json S = lsmbs::provenance(cmdline, case_file, sha);
-    S["status"] = "partial";
+    S["status"] = status;
     S["failure"] = what;
+    // what the run wrote before it failed is its own: a later --overwrite replaces it
+    auto files = lsmbs::files_written_under(out);
+    files.erase(std::remove(files.begin(), files.end(), "summary.json"), files.end());
+    files.push_back("summary.json");
+    S["files"] = files;
     lsmbs::write_json_atomic(out + "/summary.json", S);
   } catch (const std::exception&) {  // the folder cannot be written: the message on stderr remains
   }
+}
+
+void claim_output(const CommonArgs& c, const lsmbs::Model& model) {
+  if (!c.replaced) return;
+  *c.replaced =
+      lsmbs::claim_output_folder(c.out, c.overwrite, c.resume, lsmbs::planned_outputs(model));
 }
 
 // IDAS tolerances from the command line: checked before anything runs

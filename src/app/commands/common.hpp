@@ -9,6 +9,8 @@
 
 namespace lsmbs::app {
 
+struct CommonArgs;
+
 /// "name=value" override of a design variable.
 std::pair<std::string, double> parse_set(const std::string& s);
 /// "--set /json/pointer=value" (the value parsed as JSON, else a string).
@@ -20,9 +22,15 @@ Case load_case_with_sets(const std::string& file, const std::vector<std::string>
                          bool design_as_initial = false);
 /// The case's initial design with the --set overrides (each checked against its bounds).
 Vec design_point(const Case& cs, const std::vector<std::string>& sets);
-/// A run that failed with an exception once started leaves summary.json with status partial.
+/// Claims the output folder for a run of `model` once its case has loaded (io/output_folder.hpp:
+/// an earlier run is replaced only with --overwrite, files no summary lists are never touched);
+/// the earlier run is kept in *c.replaced until the run is past its input checks.
+void claim_output(const CommonArgs& c, const Model& model);
+/// A run that failed with an exception once started leaves summary.json with status partial,
+/// listing the files it wrote.
 void flag_failed_run(const std::string& out, const std::string& cmdline,
-                     const std::string& case_file, const std::string& what);
+                     const std::string& case_file, const std::string& what,
+                     const std::string& status = "partial");
 /// IDAS tolerances from the command line, checked before anything runs.
 void check_idas_tolerances(double rtol, double atol);
 void print_gradient_check(const GradientCheckResult& c, const GradientCheckOptions& o);

@@ -16,6 +16,7 @@ int geometry_command(const CommonArgs& c, const GeometryArgs& a) {
   if (!cs.design)
     throw lsmbs::Error(case_file, "/design", "the case has no design section (nothing to map)");
   const lsmbs::Vec p = design_point(cs, c.sets);
+  claim_output(c, *cs.model);
   lsmbs::GeometryRunOptions o;
   o.out_dir = out;
   o.image_width = a.width;

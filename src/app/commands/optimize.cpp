@@ -38,26 +38,22 @@ namespace lsmbs::app {
 
 namespace {
 
-// Convergence plot (objective and maximum constraint violation per evaluation) with gnuplot,
-// when it is installed; returns false otherwise.
-bool plot_history(const std::string& out) {
-  const std::string script = out + "/convergence.gp";
-  {
-    std::ofstream g(script);
-    g << "set terminal pngcairo size 900,500 noenhanced\nset output "
-      << lsmbs::gnuplot_quote(out + "/convergence.png") << "\n"
-      << "set datafile separator ','\nset key autotitle columnhead\nset xlabel 'evaluation'\n"
-      << "set ylabel 'objective'\nset y2label 'max. relative constraint violation'\nset "
-         "y2tics\nset grid\n"
-      << "plot " << lsmbs::gnuplot_quote(out + "/history.csv")
-      << " using 1:2 with linespoints title 'objective', "
-      << "'' using 1:3 axes x1y2 with linespoints title 'max constraint violation'\n";
-  }
-  const bool ok = lsmbs::run_gnuplot(script);
-  std::filesystem::remove(script);
-  std::error_code ec;
-  if (!ok) std::filesystem::remove(out + "/convergence.png", ec);  // no 0-byte picture
-  return ok;
+// Convergence picture: the objective and (with constraints) the largest relative constraint
+// violation per evaluation, in panels over the evaluation number (history.csv has the numbers).
+bool plot_history(const std::string& out, const lsmbs::OptimizeResult& res, bool constrained) {
+  std::vector<std::vector<double>> rows;
+  for (size_t k = 0; k < res.history.size(); ++k)
+    rows.push_back({double(k + 1), res.history[k].objective, res.history[k].max_violation});
+  lsmbs::PanelPlotSpec ps;
+  ps.png = out + "/convergence.png";
+  ps.title = "convergence";
+  ps.xlabel = "evaluation";
+  ps.points = true;
+  ps.panel_height = 180;
+  ps.panels.push_back({"objective", {{2, "objective"}}});
+  if (constrained)
+    ps.panels.push_back({"max. relative violation", {{3, "max constraint violation"}}});
+  return lsmbs::plot_panels(ps, rows);
 }
 
 // Multi-start (--starts N): N feasible initial designs drawn uniformly within the bounds
@@ -322,13 +318,34 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kInitialCheckPhase = "gradient check at the initial design";
+
+// The folder holds a run interrupted before its first evaluation (during the initial gradient
+// check): no checkpoint to resume from.
+bool interrupted_before_first_evaluation(const std::string& out) {
+  std::error_code ec;
+  if (std::filesystem::exists(out + "/checkpoint.json", ec)) return false;
+  try {
+    const auto S = nlohmann::json::parse(std::ifstream(out + "/summary.json"));
+    return S.value("interrupted_phase", "") == kInitialCheckPhase;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace
+
 // On a terminal: a table row per evaluation and a progress line of the running simulation; not on
 // a terminal: the final summary only (history.csv has every evaluation), unless --verbose.
 int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const std::string& case_file = c.case_file;
   const std::string& out = c.out;
   const std::string& cmdline = c.command_line;
-  const bool quiet = c.quiet, verbose = c.verbose, resume = a.resume;
+  const bool quiet = c.quiet, verbose = c.verbose;
+  // a run interrupted during its initial gradient check has no checkpoint: --resume starts it anew
+  const bool resume = a.resume && !interrupted_before_first_evaluation(out);
   const std::string& optimizer = a.optimizer;
   const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
   lsmbs::Case cs = load_case_with_sets(case_file, c.sets, /*design_as_initial=*/true);
@@ -358,8 +375,9 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const bool table = interactive || (verbose && !quiet);
   ProgressLine line(interactive);
   spec.sensitivity.progress = line.callback();
-  std::filesystem::create_directories(out);
   lsmbs::DesignProblem prob(cs, spec);
+  claim_output(c, *cs.model);
+  std::filesystem::create_directories(out);
   if (a.starts >= 1) return multistart(c, a, cs, prob);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
@@ -385,6 +403,22 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   std::optional<lsmbs::GradientCheckResult> checked;
   if (check && !resume) {
     checked = lsmbs::check_problem_gradients(prob, d.initial(), *check);
+    if (lsmbs::interrupted()) {
+      line.clear();
+      nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+      S["overrides"] = cs.overrides;
+      S["case_name"] = cs.name;
+      S["status"] = "interrupted";
+      S["failure"] = "interrupted by signal " + std::to_string(lsmbs::interrupted()) +
+                     " during the gradient check at the initial design: nothing was optimized";
+      S["interrupted_phase"] = kInitialCheckPhase;
+      S["resumable"] = true;
+      S["files"] = lsmbs::file_list({"summary.json"});
+      lsmbs::write_json_atomic(out + "/summary.json", S);
+      std::fprintf(stderr, "lsmbs optimize: %s; --resume starts it again\n",
+                   S["failure"].get<std::string>().c_str());
+      return 130;
+    }
     if (checked) {
       line.clear();
       const std::string verdict = checked->verdict(*check);
@@ -429,7 +463,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   lsmbs::GeometryRunOptions go;
   go.out_dir = out + "/final_design";
   const auto geo = lsmbs::run_geometry(cs, res.p, go);
-  const bool plotted = plot_history(out);
+  const bool plotted = plot_history(out, res, prob.num_constraints() > 0);
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;

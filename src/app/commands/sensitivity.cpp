@@ -146,6 +146,7 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   if (cs.responses.empty())
     throw lsmbs::Error(case_file, "/output/responses", "sensitivities need at least one response");
   const lsmbs::Vec p = design_point(cs, c.sets);
+  claim_output(c, *cs.model);
   so.idas.h_out = cs.simulation.h;  // what IDAS runs with (recorded in summary.json)
   so.idas.t_end = cs.simulation.t_end;
   ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
@@ -171,8 +172,12 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
     compared.push_back(compute(sk));
   }
   std::optional<lsmbs::GradientCheckResult> checked;
-  if (check && res.ok) checked = lsmbs::check_gradients(cs, p, res.responses, *check);
+  if (check && res.ok && !lsmbs::interrupted())
+    checked = lsmbs::check_gradients(cs, p, res.responses, *check);
   line.clear();
+  // an interrupt in any part (the method, a compared method, the check): what finished is written
+  // and the run is flagged interrupted, never failed or complete
+  const bool stopped = res.interrupted || lsmbs::interrupted() != 0;
   const auto& d = *cs.design;
   // summary.json and gradients.csv
   nlohmann::json responses = nlohmann::json::object(), grads = nlohmann::json::object();
@@ -205,8 +210,12 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
-  S["status"] = res.ok ? "complete" : res.interrupted ? "interrupted" : "partial";
+  S["status"] = stopped ? "interrupted" : res.ok ? "complete" : "partial";
   if (!res.ok) S["failure"] = res.message;
+  if (stopped && res.ok)
+    S["failure"] = std::string("interrupted by signal ") + std::to_string(lsmbs::interrupted()) +
+                   (checked && checked->interrupted ? " during the gradient check"
+                                                    : " after the first method");
   S["design"] = lsmbs::design_json(cs, p);
   S["options"] = {{"sensitivity", nlohmann::json(so)},
                   {"generalized_alpha", nlohmann::json(cs.simulation)}};
@@ -279,9 +288,9 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
     if (checked) print_gradient_check(*checked, *check);
     std::printf("  results in %s\n", out.c_str());
   }
-  if (res.interrupted) {
-    std::fprintf(stderr, "lsmbs sensitivity: %s; partial results in %s\n", res.message.c_str(),
-                 out.c_str());
+  if (stopped) {
+    std::fprintf(stderr, "lsmbs sensitivity: %s; partial results in %s (status interrupted)\n",
+                 S["failure"].get<std::string>().c_str(), out.c_str());
     return 130;
   }
   if (!res.ok) {

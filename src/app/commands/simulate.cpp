@@ -28,6 +28,7 @@ int simulate_command(const CommonArgs& c, const SimulateArgs& a) {
     ro.design_point = design_point(cs, c.sets);
     cs.design->apply(ro.design_point, cs.model->params());
   }
+  claim_output(c, *cs.model);
   ro.out_dir = out;
   ProgressLine line(!quiet && ::isatty(STDERR_FILENO));
   ro.progress = line.callback();

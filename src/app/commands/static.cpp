@@ -19,6 +19,7 @@ int static_command(const CommonArgs& c, const StaticArgs& a) {
     o.design_point = design_point(cs, c.sets);
     cs.design->apply(o.design_point, cs.model->params());
   }
+  claim_output(c, *cs.model);
   const auto r = lsmbs::run_static(cs, o);
   if (!c.quiet)
     std::printf("lsmbs static: %s\n  results in %s\n", r.report().c_str(), c.out.c_str());

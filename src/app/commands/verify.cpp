@@ -34,6 +34,7 @@ int verify_command(const CommonArgs& c, VerifyArgs a) {
     std::fprintf(stderr, "lsmbs verify: %s … (%.1f s)\n", what.c_str(),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   };
+  vo.on_loaded = [&](const Case& cs) { claim_output(c, *cs.model); };
   const auto r = run_verify(c.case_file, vo);
   int notes = 0;
   for (const auto& v : r.summary["verdicts"]) {

@@ -69,6 +69,14 @@ class ModelError : public Error {
   std::string entity_, field_, message_;
 };
 
+/// An output that could not be written although its folder was checked before the run (a full
+/// disk, a quota, an I/O error): exit code 1, the run flagged partial. The message names the file
+/// and the system's reason ("No space left on device").
+class OutputError : public std::runtime_error {
+ public:
+  explicit OutputError(const std::string& message) : std::runtime_error(message) {}
+};
+
 /// A numerical failure (Newton divergence, singular matrix, NaN): exit code 1.
 class NumericalFailure : public std::runtime_error {
  public:

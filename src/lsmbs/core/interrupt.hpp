@@ -5,6 +5,10 @@
 // signal terminates at once.
 #include <atomic>
 #include <csignal>
+#include <cstdlib>
+#include <string>
+
+#include "lsmbs/core/error.hpp"
 
 namespace lsmbs {
 
@@ -24,6 +28,37 @@ extern "C" inline void lsmbs_on_interrupt(int sig) {
   }
 }
 }  // namespace detail
+
+/// A phase that cannot return a partial result (a gradient check's simulations, the writing of
+/// outputs) ends by throwing this once an interrupt was requested; the command line then flags
+/// the run "interrupted" and exits with 130. A NumericalFailure, so that code which turns failed
+/// simulations into a failed result does the same for an interrupted one (and checks
+/// interrupted() to tell them apart).
+class Interrupted : public NumericalFailure {
+ public:
+  explicit Interrupted(const std::string& during)
+      : NumericalFailure("interrupted by signal " + std::to_string(interrupted()) + " " + during) {}
+};
+
+/// Throws Interrupted when an interrupt was requested; `during` says where ("while writing
+/// history.csv").
+inline void throw_if_interrupted(const std::string& during) {
+  if (interrupted()) throw Interrupted(during);
+}
+
+/// Testing hook (docs/verification.md): with LSMBS_TEST_SIGNAL=POINT or POINT:TERM in the
+/// environment, the process sends itself SIGINT (SIGTERM) the first time it reaches the named
+/// point, so that a test interrupts a given phase without depending on timing. The points:
+/// gradient-check, adjoint-backward, adjoint-recompute, verify:<stage number>, write-outputs.
+inline void signal_point(const char* point) {
+  static std::atomic<bool> fired{false};
+  const char* spec = std::getenv("LSMBS_TEST_SIGNAL");
+  if (!spec || fired.load()) return;
+  const std::string s = spec, p = point;
+  const bool term = s == p + ":TERM";
+  if ((s == p || s == p + ":INT" || term) && !fired.exchange(true))
+    std::raise(term ? SIGTERM : SIGINT);
+}
 
 /// Installs the handlers (the command line does, before a run).
 inline void install_interrupt_handlers() {

@@ -1,9 +1,15 @@
 #include "lsmbs/core/json_file.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <set>
 #include <vector>
 
@@ -11,22 +17,73 @@
 
 namespace lsmbs {
 
-void write_file_atomic(const std::string& path, const std::string& content) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) throw Error(path, "", "cannot write output file");
-    f << content;
-    f.flush();
-    if (!f) throw Error(path, "", "error while writing output file");
-  }
+namespace {
+
+struct WrittenFiles {
+  std::mutex mutex;
+  std::vector<std::filesystem::path> paths;  // absolute, normalized
+};
+WrittenFiles& written_files() {
+  static WrittenFiles w;
+  return w;
+}
+
+}  // namespace
+
+std::vector<std::string> files_written_under(const std::string& folder) {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(path, "", "cannot rename temporary output file: " + ec.message());
+  const fs::path root = fs::absolute(folder, ec).lexically_normal();
+  std::vector<std::string> r;
+  auto& w = written_files();
+  std::lock_guard<std::mutex> lock(w.mutex);
+  for (const auto& p : w.paths) {
+    const fs::path rel = p.lexically_relative(root);
+    if (!rel.empty() && *rel.begin() != ".." &&
+        std::find(r.begin(), r.end(), rel.string()) == r.end())
+      r.push_back(rel.string());
+  }
+  return r;
+}
+
+void write_file_atomic(const std::string& path, const std::string& content) {
+  static std::atomic<unsigned> sequence{0};  // two threads writing one path never share a name
+  const std::string tmp =
+      path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(sequence.fetch_add(1));
+  // POSIX calls rather than a stream: their errno names the reason (ENOSPC, EDQUOT, EIO), and the
+  // temporary file is removed whatever fails, so a failed write leaves nothing behind
+  auto fail = [&](const char* what, int err) {
+    ::unlink(tmp.c_str());
+    throw OutputError(path + ": " + what + ": " + std::strerror(err));
+  };
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    const int err = errno;
+    throw OutputError(path + ": cannot create the file: " + std::strerror(err));
+  }
+  for (size_t done = 0; done < content.size();) {
+    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : ENOSPC;
+      ::close(fd);
+      fail("cannot write the file", err);
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::close(fd) != 0) fail("cannot write the file", errno);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) fail("cannot put the file in place", errno);
+  std::error_code ec;
+  const auto abs = std::filesystem::absolute(path, ec).lexically_normal();
+  auto& w = written_files();
+  std::lock_guard<std::mutex> lock(w.mutex);
+  w.paths.push_back(abs);
 }
 
 void write_json_atomic(const std::string& path, const nlohmann::json& j) {
-  write_file_atomic(path, j.dump(2) + "\n");
+  // strings are checked as UTF-8 where they come in (case files, options); U+FFFD for any that
+  // is not rather than an exception after the run's work is done
+  write_file_atomic(path, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 void check_json_depth(const std::string& text, const std::string& file, int max_depth) {

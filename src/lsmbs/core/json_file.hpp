@@ -4,10 +4,16 @@
 // nesting-depth check before JSON parsing.
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace lsmbs {
 
+/// Writes `content` to `path` through a temporary file and a rename. Throws OutputError (the file,
+/// the system's reason) when the file cannot be written; no temporary file is left then.
 void write_file_atomic(const std::string& path, const std::string& content);
+/// The files write_file_atomic has put in place in this process below `folder` (relative paths,
+/// in the order first written): what a run that fails lists in its summary.json.
+std::vector<std::string> files_written_under(const std::string& folder);
 void write_json_atomic(const std::string& path, const nlohmann::json& j);
 
 /// Throws lsmbs::Error (file, byte offset) when `text` nests arrays or objects deeper than

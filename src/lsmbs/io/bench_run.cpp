@@ -41,6 +41,7 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   if (!o.methods.empty() && (!cs.design || cs.responses.empty()))
     throw Error(file, "/design",
                 "sensitivity benchmarks need design variables and responses (or --methods none)");
+  if (o.on_loaded) o.on_loaded(cs);
   std::filesystem::create_directories(o.out_dir);
   const Model& m = *cs.model;
   // ---- floor at the initial state

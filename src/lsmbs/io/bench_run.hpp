@@ -5,9 +5,12 @@
 //  * the average step of the primal run and its ratio to the floor;
 //  * time(primal + sensitivities) / time(primal) for the listed methods (cases with a design);
 //  * peak resident memory.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "lsmbs/io/case.hpp"
 
 namespace lsmbs {
 
@@ -21,6 +24,8 @@ struct BenchOptions {
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
   std::string command_line;
+  /// Called once the case has loaded and passed its checks, before anything is written.
+  std::function<void(const Case&)> on_loaded;
 };
 
 nlohmann::json run_bench(const std::string& case_file, const BenchOptions& o);

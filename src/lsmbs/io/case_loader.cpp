@@ -1064,15 +1064,6 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
   if (bodies.empty()) root.fail("bodies", "expected at least one body");
   for (const auto& b : bodies) {
     const std::string name = b.string("name");
-    // a body's name is part of the names of its output files (vtu/<body>_<step>.vtu, <body>.pvd)
-    if (name.empty() || name[0] == '.' || name.find_first_of("/\\") != std::string::npos)
-      b.fail("name",
-             "a body's name names its output files: expected a name without '/' or '\\' "
-             "that does not start with '.'");
-    if (name == kModelVtk)
-      b.fail("name", std::string("'") + kModelVtk +
-                         "' names the VTK output of all bodies (model.pvd, model.vtm); choose "
-                         "another body name");
     L.entry(b, name, true);
     const std::string type = b.one_of("type", {"rigid", "flexible"});
     if (type == "rigid")

@@ -59,7 +59,8 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
                          {"subgrid", bd.map->options().subgrid},
                          {"band", bd.map->options().band}};
     if (!o.out_dir.empty()) {
-      const std::string base = o.out_dir + "/" + bd.body->name;
+      const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
+      const std::string base = o.out_dir + "/" + stem;
       const Mesh2D& mesh = bd.body->mesh;
       const auto values = bd.map->level_set().values(p);
       Vec phi(mesh.num_nodes());
@@ -67,9 +68,9 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
         phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
       write_design_vtu(base + ".vtu", mesh, mu, phi);
       write_design_png(base + ".png", mesh, mu, mu_min, phi, o.image_width);
-      jb["files"] = {{"vtu", bd.body->name + ".vtu"}, {"png", bd.body->name + ".png"}};
-      files.push_back(bd.body->name + ".vtu");
-      files.push_back(bd.body->name + ".png");
+      jb["files"] = {{"vtu", stem + ".vtu"}, {"png", stem + ".png"}};
+      files.push_back(stem + ".vtu");
+      files.push_back(stem + ".png");
     }
     bodies.push_back(jb);
   }

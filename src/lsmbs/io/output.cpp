@@ -9,9 +9,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <set>
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/text.hpp"
 #include "lsmbs/core/version.hpp"
 
 namespace lsmbs {
@@ -32,11 +34,13 @@ nlohmann::json file_list(std::vector<std::string> files) {
 }
 
 void write_csv(const std::string& path, const std::vector<std::string>& header,
-               const std::vector<std::vector<double>>& rows) {
+               const std::vector<std::vector<double>>& rows, const std::function<void()>& poll) {
   std::ostringstream os;
   for (size_t i = 0; i < header.size(); ++i) os << (i ? "," : "") << csv_field(header[i]);
   os << "\n";
+  size_t n = 0;
   for (const auto& r : rows) {
+    if (poll && ++n % 4096 == 0) poll();
     for (size_t i = 0; i < r.size(); ++i) os << (i ? "," : "") << csv_number(r[i]);
     os << "\n";
   }
@@ -44,6 +48,8 @@ void write_csv(const std::string& path, const std::vector<std::string>& header,
 }
 
 namespace {
+
+std::string xml_attribute(const std::string& text);
 
 // One data array of a VTU piece: `components` values per point or cell.
 struct VtuArray {
@@ -101,10 +107,10 @@ struct VtuPiece {
   static void data(std::ostringstream& os, const char* tag, const std::vector<VtuArray>& arrays) {
     if (arrays.empty()) return;
     const VtuArray& a0 = arrays.front();
-    os << "<" << tag << " " << (a0.components == 3 ? "Vectors" : "Scalars") << "=\"" << a0.name
-       << "\">\n";
+    os << "<" << tag << " " << (a0.components == 3 ? "Vectors" : "Scalars") << "=\""
+       << xml_attribute(a0.name) << "\">\n";
     for (const auto& a : arrays) {
-      os << "<DataArray type=\"Float64\" Name=\"" << a.name << "\"";
+      os << "<DataArray type=\"Float64\" Name=\"" << xml_attribute(a.name) << "\"";
       if (a.components > 1) os << " NumberOfComponents=\"" << a.components << "\"";
       os << " format=\"ascii\">\n";
       for (size_t i = 0; i < a.values.size(); ++i)
@@ -123,7 +129,10 @@ VtuArray vectors(const std::string& name, const std::vector<Vec2>& v) {
   return a;
 }
 
-std::string xml_attribute(const std::string& s) {
+// An XML attribute value: UTF-8 without control characters (XML 1.0 allows none of them, not even
+// as character references), and the markup characters escaped.
+std::string xml_attribute(const std::string& text) {
+  const std::string s = displayable_text(text, std::string::npos);
   std::string r;
   for (char c : s) {
     if (c == '&')
@@ -266,8 +275,9 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
                               const std::vector<const StressMeasure*>& stress) {
   ModelVtkFiles f;
   std::vector<std::pair<std::string, std::string>> blocks;  // relative to the .vtm
+  const auto stems = body_file_stems(m);
   auto add = [&](const std::string& name) {
-    const std::string file = name + suffix + ".vtu";
+    const std::string file = stems.at(name) + suffix + ".vtu";
     blocks.emplace_back(name, file);
     f.bodies.emplace_back(name, folder + file);
     return out_dir + "/" + folder + file;
@@ -288,6 +298,21 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
   f.multiblock = folder + kModelVtk + suffix + ".vtm";
   write_vtm(out_dir + "/" + f.multiblock, blocks);
   return f;
+}
+
+std::map<std::string, std::string> body_file_stems(const Model& m) {
+  std::map<std::string, std::string> stems;
+  std::set<std::string> taken = {kModelVtk};
+  auto add = [&](const std::string& name) {
+    const std::string base = file_stem(name);
+    std::string stem = base;
+    for (int k = 2; taken.count(stem); ++k) stem = base + "_" + std::to_string(k);
+    taken.insert(stem);
+    stems[name] = stem;
+  };
+  for (const auto& b : m.flexible_bodies()) add(b->name);
+  for (const auto& b : m.rigid_bodies()) add(b.name);
+  return stems;
 }
 
 void write_pvd(const std::string& path,

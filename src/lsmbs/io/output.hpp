@@ -11,6 +11,8 @@
 //    displacement arrays; one multiblock .vtm per instant that lists every body;
 //  * write_design_vtu: a design on its mesh (level set φ and μ_e);
 //  * write_pvd: a time series of VTU or VTM files.
+#include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -23,8 +25,10 @@
 
 namespace lsmbs {
 
+/// `poll`, when given, is called every few thousand rows (a long history: it may throw to stop).
 void write_csv(const std::string& path, const std::vector<std::string>& header,
-               const std::vector<std::vector<double>>& rows);
+               const std::vector<std::vector<double>>& rows,
+               const std::function<void()>& poll = {});
 /// A flexible body at positions q: points x, the quads, point data total_displacement x − X (X:
 /// the placed mesh at t = 0) and elastic_displacement (x minus the rigid motion that fits the nodes
 /// best in least squares), cell data mu and von_mises.
@@ -67,6 +71,12 @@ struct ModelVtkFiles {
 ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
                               const std::string& suffix, const Model& model, const Vec& q,
                               const std::vector<const StressMeasure*>& stress = {});
+
+/// The file-name stem of each body's files (<stem>.pvd, vtu/<stem>_<step>.vtu, <stem>.png):
+/// core/text.hpp's file_stem of its name, made unique over the model's bodies (flexible ones first,
+/// in order, then rigid ones) and distinct from kModelVtk by a suffix _2, _3, … Names are data: a
+/// body called "../x" or "a\nb" writes _.._x.pvd and a_b.pvd inside the output folder.
+std::map<std::string, std::string> body_file_stems(const Model& model);
 
 /// summary.json["design"]: {variable: value} at the design point p (empty: the case's initial
 /// design); null when the study has no design variables.

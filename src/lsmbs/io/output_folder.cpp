@@ -6,23 +6,39 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <set>
 #include <utility>
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/text.hpp"
+#include "lsmbs/io/output.hpp"
 
 namespace lsmbs {
+
+namespace fs = std::filesystem;
 
 // The output folder (-o) must be a folder that exists or can be created, and be writable: checked
 // before anything runs, without creating it (nothing is written for invalid input).
 void check_output_folder(const std::string& out, const OutputFolderNames& names) {
   const std::string& o = names.folder;
-  namespace fs = std::filesystem;
   if (out.empty()) throw Error(o + " \"\": expected an output folder name");
+  if (!valid_utf8(out))
+    throw Error(o + " " + displayable_text(out) +
+                ": expected a folder name in UTF-8 (summary.json records it; the bytes shown as "
+                "\xEF\xBF\xBD are not UTF-8)");
+  if (out.find('\0') != std::string::npos)
+    throw Error(o + ": expected a folder name without a NUL character");
   std::error_code ec;
   fs::path p = fs::absolute(out, ec);
   if (ec) throw Error(o + " " + out + ": not a usable path (" + ec.message() + ")");
+  for (const auto& part : p)  // Linux: NAME_MAX 255 bytes a name, PATH_MAX 4096 bytes a path
+    if (part.string().size() > 255)
+      throw Error(o + " " + displayable_text(out, 80) +
+                  ": a folder name is longer than 255 bytes, the file system's limit");
+  if (p.string().size() > 3800)
+    throw Error(o + " " + displayable_text(out, 80) +
+                ": the path is longer than the file system allows once lsmbs adds its own "
+                "file names (4096 bytes)");
   if (fs::exists(p, ec) && !fs::is_directory(p, ec))
     throw Error(o + " " + out + ": exists and is not a folder");
   // the nearest existing ancestor must be a writable folder
@@ -34,62 +50,85 @@ void check_output_folder(const std::string& out, const OutputFolderNames& names)
     throw Error(o + " " + out + ": cannot create or write in " + q.string());
 }
 
+std::set<std::string> planned_outputs(const Model& model) {
+  std::set<std::string> p = {
+      "summary.json", "history.csv",     "history.png", "gradients.csv",    "checkpoint.json",
+      "report.md",    "bench.json",      "methods.csv", "methods.png",      "convergence.png",
+      "dp_study.csv", "dp_study.png",    "h_study.csv", "h_study_plot.csv", "h_study.png",
+      "starts.csv",   "multistart.json", "vtu",         "final_design"};
+  p.insert(std::string(kModelVtk) + ".pvd");
+  p.insert(std::string(kModelVtk) + ".vtm");
+  for (const auto& [name, stem] : body_file_stems(model))
+    for (const char* ext : {".pvd", ".vtu", ".png"}) p.insert(stem + ext);
+  return p;
+}
+
 namespace {
 
-// The entries of `out` that an lsmbs run writes: the known names, and the first component of each
-// path the folder's summary.json lists (a static run's <body>.vtu and model.vtm, a multi-start's
-// start_k/ folders).
-std::vector<std::filesystem::path> run_entries(const std::string& out) {
-  namespace fs = std::filesystem;
-  static const std::set<std::string> kFiles = {"summary.json",    "history.csv", "gradients.csv",
-                                               "checkpoint.json", "report.md",   "bench.json",
-                                               "convergence.png"};
-  static const std::set<std::string> kFolders = {"vtu", "final_design"};
-  static const std::set<std::string> kExtensions = {".pvd", ".png", ".csv", ".gp", ".vtu", ".vtm"};
-  std::set<std::string> listed;
+// A listed path is one of the run's own only when it stays inside its folder.
+bool inside(const fs::path& rel) {
+  return !rel.empty() && rel.is_relative() && *rel.begin() != ".." && *rel.begin() != ".";
+}
+
+void collect(const fs::path& root, const fs::path& sub, std::vector<std::string>& files,
+             int depth) {
+  nlohmann::json S;
   try {
-    const auto S = nlohmann::json::parse(std::ifstream(fs::path(out) / "summary.json"));
-    if (S.is_object() && S.contains("files") && S["files"].is_array())
-      for (const auto& f : S["files"])
-        if (f.is_string()) {
-          const fs::path rel = fs::path(f.get<std::string>()).lexically_normal();
-          if (!rel.empty() && rel.is_relative() && *rel.begin() != "..")
-            listed.insert(rel.begin()->string());
-        }
-  } catch (const std::exception&) {  // no summary, or not ours: the names above decide
+    std::ifstream in(root / sub / "summary.json");
+    if (!in) return;
+    S = nlohmann::json::parse(in);
+  } catch (const std::exception&) {  // not JSON: not a summary of ours
+    return;
   }
-  listed.erase(ReplacedRun::stash_name());
-  std::vector<fs::path> ours;
+  if (!S.is_object() || S.value("program", "") != "lsmbs") return;
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(out, ec)) {
-    const std::string name = e.path().filename().string();
-    if (kFiles.count(name) || (e.is_directory() && kFolders.count(name)) ||
-        (e.is_regular_file() && kExtensions.count(e.path().extension().string())) ||
-        listed.count(name))
-      ours.push_back(e.path());
-  }
-  // summary.json first: a run stopped while the rest moves never leaves the earlier run's summary
-  // next to a half-moved folder
-  std::stable_partition(ours.begin(), ours.end(),
-                        [](const fs::path& p) { return p.filename() == "summary.json"; });
-  return ours;
+  if (S.contains("files") && S["files"].is_array())
+    for (const auto& f : S["files"]) {
+      if (!f.is_string()) continue;
+      const std::string s = f.get<std::string>();
+      const fs::path rel = fs::path(s).lexically_normal();
+      if (!inside(rel) || rel.filename() == ReplacedRun::stash_name()) continue;
+      if (!s.empty() && s.back() == '/') {  // a folder of runs (multi-start): its own summary
+        if (depth < 4) collect(root, sub / rel, files, depth + 1);
+        continue;
+      }
+      if (rel == "summary.json") continue;
+      if (fs::is_regular_file(root / sub / rel, ec)) files.push_back((sub / rel).string());
+    }
+  files.push_back((sub / "summary.json").string());  // last: see claim_output_folder
+}
+
+// Removes the folders (below `out`) that the files leave empty.
+void remove_empty_parents(const fs::path& out, const std::vector<std::string>& files) {
+  std::error_code ec;
+  for (const auto& f : files)
+    for (fs::path d = fs::path(f).parent_path(); !d.empty(); d = d.parent_path()) {
+      if (!fs::is_directory(out / d, ec) || !fs::is_empty(out / d, ec)) break;
+      fs::remove(out / d, ec);
+    }
 }
 
 }  // namespace
 
+std::vector<std::string> listed_run_files(const std::string& out) {
+  std::vector<std::string> files;
+  collect(out, "", files, 0);
+  return files;
+}
+
 const char* ReplacedRun::stash_name() { return ".lsmbs-replaced-run"; }
 
-ReplacedRun::ReplacedRun(std::string out, std::vector<std::string> names)
-    : out_(std::move(out)), names_(std::move(names)) {}
+ReplacedRun::ReplacedRun(std::string out, std::vector<std::string> files)
+    : out_(std::move(out)), files_(std::move(files)) {}
 
 ReplacedRun::ReplacedRun(ReplacedRun&& o) noexcept
-    : out_(std::exchange(o.out_, {})), names_(std::move(o.names_)) {}
+    : out_(std::exchange(o.out_, {})), files_(std::move(o.files_)) {}
 
 ReplacedRun& ReplacedRun::operator=(ReplacedRun&& o) noexcept {
   if (this != &o) {
     this->~ReplacedRun();
     out_ = std::exchange(o.out_, {});
-    names_ = std::move(o.names_);
+    files_ = std::move(o.files_);
   }
   return *this;
 }
@@ -97,56 +136,93 @@ ReplacedRun& ReplacedRun::operator=(ReplacedRun&& o) noexcept {
 ReplacedRun::~ReplacedRun() {
   if (out_.empty()) return;
   std::error_code ec;
-  std::filesystem::remove_all(std::filesystem::path(out_) / stash_name(), ec);
+  fs::remove_all(fs::path(out_) / stash_name(), ec);
 }
 
 void ReplacedRun::restore() {
   if (out_.empty()) return;
-  namespace fs = std::filesystem;
-  const fs::path stash = fs::path(out_) / stash_name();
+  const fs::path out(out_), stash = out / stash_name();
   std::error_code ec;
-  // this run's own files: a summary.json it wrote lists them, the known names cover the rest
-  for (const auto& p : run_entries(out_)) fs::remove_all(p, ec);
-  // the summary last, so that an interrupted restore never shows the earlier summary beside a
-  // half-restored folder
-  std::vector<std::string> names = names_;
-  std::stable_partition(names.begin(), names.end(),
-                        [](const std::string& n) { return n != "summary.json"; });
-  for (const auto& n : names) fs::rename(stash / n, fs::path(out_) / n, ec);
+  // what this run wrote, if it got as far as a summary.json
+  const std::vector<std::string> own = listed_run_files(out_);
+  for (const auto& f : own) fs::remove(out / f, ec);
+  remove_empty_parents(out, own);
+  // the earlier run's files back, its summary last, so that an interrupted restore never shows
+  // the earlier summary beside a half-restored folder
+  for (const auto& f : files_) {
+    fs::create_directories((out / f).parent_path(), ec);
+    fs::rename(stash / f, out / f, ec);
+  }
   fs::remove_all(stash, ec);
   out_.clear();
 }
 
-// An output folder that holds an earlier lsmbs run is refused (its files would be mixed with this
-// run's) unless --overwrite, which sets the earlier run's files (and only those) aside: restored
-// if this run stops on bad input, deleted otherwise. optimize --resume continues the run the
-// folder holds.
 ReplacedRun claim_output_folder(const std::string& out, bool overwrite, bool resume,
+                                const std::set<std::string>& planned,
                                 const OutputFolderNames& names) {
-  namespace fs = std::filesystem;
   std::error_code ec;
   if (resume || !fs::is_directory(out, ec)) return {};
-  const fs::path stash = fs::path(out) / ReplacedRun::stash_name();
+  const fs::path root(out), stash = root / ReplacedRun::stash_name();
   fs::remove_all(stash, ec);  // a run killed before it could delete or restore its stash
-  const std::vector<fs::path> ours = run_entries(out);
-  if (ours.empty()) return {};
+  const std::vector<std::string> earlier = listed_run_files(out);
+  std::set<std::string> earlier_top;  // the top-level entries the earlier run's files are in
+  for (const auto& f : earlier) earlier_top.insert(fs::path(f).begin()->string());
+  // entries this run would write that no summary lists as an earlier run's
+  std::vector<std::string> conflicts;
+  for (const auto& e : fs::directory_iterator(out, ec)) {
+    const std::string name = e.path().filename().string();
+    const bool planned_name =
+        planned.count(name) || (name.rfind("start_", 0) == 0 && e.is_directory(ec));
+    if (!planned_name || earlier_top.count(name) == 0) {
+      if (planned_name) conflicts.push_back(name);
+      continue;
+    }
+    // a folder the earlier run wrote into (vtu/): files in it that it does not list
+    if (e.is_directory(ec))
+      for (const auto& g : fs::recursive_directory_iterator(e.path(), ec)) {
+        if (!g.is_regular_file(ec)) continue;
+        const std::string rel = fs::relative(g.path(), root, ec).string();
+        if (std::find(earlier.begin(), earlier.end(), rel) == earlier.end())
+          conflicts.push_back(rel);
+      }
+  }
+  if (!conflicts.empty()) {
+    std::sort(conflicts.begin(), conflicts.end());
+    std::string list = conflicts.front();
+    for (size_t k = 1; k < conflicts.size() && k < 4; ++k) list += ", " + conflicts[k];
+    if (conflicts.size() > 4) list += ", … (" + std::to_string(conflicts.size()) + " in all)";
+    throw Error(names.folder + " " + out + ": holds " + list +
+                ", which this run would write but no earlier run's summary.json lists as its "
+                "own; lsmbs does not replace files it did not write: move them, or give another "
+                "folder");
+  }
+  if (earlier.empty()) return {};
   if (!overwrite)
-    throw Error(
-        names.folder + " " + out + ": the folder holds an earlier run (" +
-        ours.front().filename().string() +
-        (ours.size() > 1 ? ", … " + std::to_string(ours.size()) + " entries" : std::string()) +
-        "); give another folder, or " + names.overwrite + " to replace that run");
-  fs::create_directory(stash);
+    throw Error(names.folder + " " + out + ": the folder holds an earlier run (summary.json, " +
+                std::to_string(earlier.size() - 1) + " more files it lists); give another " +
+                "folder, or " + names.overwrite +
+                " to replace that run (only the files its summary.json lists)");
+  // summary.json first: a run stopped while the rest moves never leaves the earlier run's summary
+  // next to a half-moved folder
+  std::vector<std::string> order = earlier;
+  std::stable_partition(order.begin(), order.end(), [](const std::string& f) {
+    return fs::path(f).filename() == "summary.json";
+  });
   std::vector<std::string> moved;
   try {
-    for (const auto& p : ours) {
-      fs::rename(p, stash / p.filename());
-      moved.push_back(p.filename().string());
+    for (const auto& f : order) {
+      fs::create_directories((stash / f).parent_path());
+      fs::rename(root / f, stash / f);
+      moved.push_back(f);
     }
   } catch (...) {  // the folder as it was
     ReplacedRun(out, moved).restore();
     throw;
   }
+  remove_empty_parents(root, earlier);
+  std::stable_partition(moved.begin(), moved.end(), [](const std::string& f) {
+    return fs::path(f).filename() != "summary.json";
+  });
   return ReplacedRun(out, std::move(moved));
 }
 

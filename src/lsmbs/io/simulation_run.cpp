@@ -265,12 +265,20 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     // the last recorded state is always written, whatever the stride
     if (!res.history.empty() && (res.history.size() - 1) % stride != 0)
       add_row(res.history.size() - 1);
-    write_csv(ro.out_dir + "/history.csv", header, rows);
+    // Ctrl-C while a finished run's outputs are written (a history of hundreds of MB takes
+    // seconds) ends the writing: what was written is listed, the run flagged interrupted. After
+    // an interrupted run the flag is already set: its outputs are written whole.
+    const bool after_stop = interrupted() != 0;
+    signal_point("write-outputs");
+    auto poll = [&] {
+      if (!after_stop) throw_if_interrupted("while the outputs were written");
+    };
+    write_csv(ro.out_dir + "/history.csv", header, rows, poll);
+    poll();
     std::vector<std::string> files = {"history.csv", "summary.json"};
     // history.png: one panel per measure, its columns in it (layout: io/plot.hpp)
     PanelPlotSpec ps;
     ps.png = ro.out_dir + "/history.png";
-    ps.csv = ro.out_dir + "/history.csv";
     ps.title = cs.name + ": measured histories";
     ps.xlabel = "t [s]";
     int col = 2;
@@ -286,15 +294,18 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
       ps.panels.push_back(std::move(p));
     }
     if (!ps.panels.empty() && rows.size() >= 2) {
+      poll();
       const bool drawn = plot_panels(ps, rows);
       if (drawn) files.push_back("history.png");
       S["history_plot"] =
-          drawn ? "history.png"
-                : "not drawn: gnuplot is missing or failed (history.csv has the data)";
+          drawn ? "history.png" : "not drawn: no time range to draw (history.csv has the data)";
     }
+    poll();
+    const auto stems = body_file_stems(*cs.model);
     for (const auto& [body, entries] : rec.pvd_) {
-      write_pvd(ro.out_dir + "/" + body + ".pvd", entries);
-      files.push_back(body + ".pvd");
+      const std::string pvd = stems.at(body) + ".pvd";
+      write_pvd(ro.out_dir + "/" + pvd, entries);
+      files.push_back(pvd);
       for (const auto& e : entries) files.push_back(e.second);
     }
     if (!rec.model_pvd_.empty()) {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
@@ -80,7 +81,6 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   const json base = cs.raw;
   if (!cs.design) throw Error(file, "/design", "verification needs design variables");
   if (cs.responses.empty()) throw Error(file, "/output/responses", "verification needs responses");
-  fs::create_directories(o.out_dir);
   const Design& d = *cs.design;
   Vec p = d.initial();
   for (const auto& [name, value] : o.design_overrides) {
@@ -88,6 +88,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     if (k < 0) throw Error("--set " + name + ": unknown design variable '" + name + "'");
     p[k] = value;
   }
+  if (o.on_loaded) o.on_loaded(cs);
+  fs::create_directories(o.out_dir);
   d.apply(p, cs.model->params());  // the primal timing runs at p too
   VerifyResult vr;
   std::ostringstream md;
@@ -109,9 +111,11 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
 
   // ---- primal and all methods
   auto t_primal = std::chrono::steady_clock::now();
-  if (const auto pr = run_simulation(cs); !pr.integrator.ok)
+  const auto primal_run = run_simulation(cs);
+  throw_if_interrupted("during verify's primal run");
+  if (!primal_run.integrator.ok)
     throw NumericalFailure("verify: the simulation at the design point failed: " +
-                           pr.integrator.message);
+                           primal_run.integrator.message);
   const double primal =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_primal).count();
   struct Run {
@@ -120,7 +124,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   };
   std::vector<Run> runs;
   // a failed run has no numbers to compare: the verification stops, saying which run and why
+  // an interrupt ends the verification wherever it is (exit 130, the run flagged interrupted)
   auto checked = [&](SensitivityResult r, const std::string& what) {
+    throw_if_interrupted("during verify: " + what);
     if (!r.ok)
       throw NumericalFailure("verify: " + what + " at the design point failed: " + r.message);
     return r;
@@ -145,9 +151,11 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   const int n_stages = 2 + (o.idas ? 2 : 0) + (rect ? 1 : 0);
   int stage_no = 0;
   auto stage = [&](const std::string& what) {
+    throw_if_interrupted("during verify, before: " + what);
     ++stage_no;
     if (o.on_stage)
       o.on_stage(std::to_string(stage_no) + "/" + std::to_string(n_stages) + " " + what);
+    signal_point(("verify:" + std::to_string(stage_no)).c_str());
   };
   // The IDAS reference (the directional derivatives of section 1 and the time-step study): one
   // IDAS run with outputs on the finest grid of the study (h/2) gives every grid's responses
@@ -203,7 +211,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
           ", " + std::to_string(dir_names.size()) + (W.size() ? " directions" : " variables") +
           ", outputs every h/2)");
     idas_tight = idas_runs(rtol_tight);
+    throw_if_interrupted("during verify's IDAS reference");
     idas_loose = idas_runs(rtol_loose);
+    throw_if_interrupted("during verify's IDAS reference");
     for (const auto* r : {&idas_tight[0], &idas_loose[0]})
       if (!r->ok)
         throw NumericalFailure("verify: the IDAS reference failed: " + r->message +
@@ -375,6 +385,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       } catch (const NumericalFailure& e) {
         why = e.what();
       }
+      throw_if_interrupted("during verify's Δp study");
       failed_dp.push_back(std::string(SensitivityOptions::name(m)) + " at Δp = " + fmt("%.0e", x) +
                           " (" + why + ")");
       return std::numeric_limits<double>::quiet_NaN();
@@ -430,20 +441,23 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     ps.xlabel = "relative delta p";
     ps.ylabel = "error vs direct-analytic";
     ps.logx = ps.logy = true;
-    ps.series = {{o.out_dir + "/dp_study.csv", 1, 2, "forward"},
-                 {o.out_dir + "/dp_study.csv", 1, 3, "central"}};
+    ps.series = {{dl, ef, "forward"}, {dl, ec, "central"}};
     ps.ymin = 0.1 * std::min(finite_min(ef), finite_min(ec));
     ps.ymax = 10 * std::max(finite_max(ef), finite_max(ec));
-    if (std::isfinite(ef[4]))
-      ps.functions.push_back(fmt("%.6e", ef[4] / 1e-6) + "*x with lines dt 2 title 'slope 1'");
-    if (std::isfinite(ec[3]))
-      ps.functions.push_back(fmt("%.6e", ec[3] / 1e-10) + "*x**2 with lines dt 3 title 'slope 2'");
+    // reference slopes through the errors at Δp = 1e-6 (forward) and 1e-5 (central)
+    auto power_line = [&](double x_ref, double y_ref, int order, const char* title) {
+      PlotSeries l{dl, {}, title, true, false, order, true};
+      for (double x : dl) l.y.push_back(y_ref * std::pow(x / x_ref, order));
+      ps.series.push_back(std::move(l));
+    };
+    if (std::isfinite(ef[4])) power_line(dl[4], ef[4], 1, "slope 1");
+    if (std::isfinite(ec[3])) power_line(dl[3], ec[3], 2, "slope 2");
     const bool plotted = plot(ps);
     if (plotted) files.push_back("dp_study.png");
     md << "\n"
        << (plotted ? "![dp study](dp_study.png)\n\n"
-                   : "(no picture: gnuplot is not installed, or no error is positive to draw on "
-                     "log axes; the numbers are in dp_study.csv)\n\n");
+                   : "(no picture: no error is positive to draw on log axes; the numbers are in "
+                     "dp_study.csv)\n\n");
     auto decade = [&](size_t k) {
       return " (" + fmt("%.0e", dl[k]) + " → " + fmt("%.0e", dl[k + 1]) + ")";
     };
@@ -511,6 +525,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       sa.method = Method::kDirectAnalytic;
       sa.matrix = M::kRefined;
       auto ra = compute_sensitivities(a, p, sa);
+      throw_if_interrupted("during verify's time-step study");
       if (!ra.ok)
         throw NumericalFailure("verify: generalized-α at h = " + fmt("%.3e", h) +
                                " failed: " + ra.message);
@@ -526,7 +541,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     };
     std::ostringstream c;  // h_study.csv: long form
     c << "response,quantity,h,difference,idas_self_difference\n";
-    std::ostringstream cw;  // h_study_plot.csv: one column per response and quantity (gnuplot)
+    std::ostringstream cw;  // h_study_plot.csv: one column per response and quantity
     struct Series {
       std::string name;
       std::vector<double> diff, self;
@@ -637,18 +652,16 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     ps.xlabel = "h [s]";
     ps.ylabel = "relative difference";
     ps.logx = ps.logy = true;
-    for (size_t i = 0; i < series.size(); ++i)
-      ps.series.push_back(
-          {o.out_dir + "/h_study_plot.csv", 1, static_cast<int>(i) + 2, series[i].name});
+    for (const auto& sr : series) ps.series.push_back({steps, sr.diff, sr.name});
     // zero differences (a response IDAS and generalized-α get exactly, like a mass) have no
-    // place on a log axis: gnuplot skips them
+    // place on a log axis: they are not drawn
     const bool plotted = !series.empty() && plot(ps);
     files.push_back("h_study_plot.csv");
     if (plotted) files.push_back("h_study.png");
     if (!series.empty())
       md << (plotted ? "![h study](h_study.png)\n\n"
-                     : "(no picture: gnuplot is not installed, or no difference is positive to "
-                       "draw on log axes; the numbers are in h_study.csv)\n\n");
+                     : "(no picture: no difference is positive to draw on log axes; the numbers "
+                       "are in h_study.csv)\n\n");
   } else {
     md << "## 4. Time-step study against IDAS\n\nSkipped (`--no-idas`).\n\n";
   }

@@ -31,6 +31,9 @@ struct VerifyOptions {
   std::vector<CaseOverride> case_overrides;  ///< values of the case document (--set /pointer=v)
   /// Called as each part of the report starts ("gradients by every method", …; empty: none).
   std::function<void(const std::string&)> on_stage;
+  /// Called once the case has loaded and passed its checks, before anything is written (the
+  /// command line claims the output folder there).
+  std::function<void(const Case&)> on_loaded;
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
 };

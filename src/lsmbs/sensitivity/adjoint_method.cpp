@@ -25,6 +25,7 @@
 #include <optional>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/sensitivity/method.hpp"
 #include "lsmbs/sensitivity/response_tracker.hpp"
 
@@ -391,15 +392,26 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
 
   double peak = static_cast<double>(rec.entries.size()) * per_entry +
                 static_cast<double>(rec.checkpoints.size()) * per_entry;
+  // An interrupt (SIGINT/SIGTERM) ends the backward pass at the next step: the result is
+  // reported as interrupted (SensitivityMethod::compute), its gradients NaN
+  auto stop_backward = [&](double t) {
+    res.ok = false;
+    res.message = "stopped during the adjoint's backward pass at t = " + std::to_string(t) + " s";
+    for (auto& r : res.responses) r.gradient.setConstant(1, nv, NAN);
+    return res;
+  };
   auto sweep = [&](std::vector<Entry>& entries) {  // entries[0]: the segment's first state
     for (size_t e = entries.size() - 1; e >= 1; --e) {
+      if (interrupted()) return false;
       back.add_sources(entries[e]);
       back.step_back(entries[e]);
     }
+    return true;
   };
   State s0;
+  signal_point("adjoint-backward");
   if (stride == 0) {
-    sweep(rec.entries);
+    if (!sweep(rec.entries)) return stop_backward(rec.entries.back().s.t);
     s0 = rec.entries.front().s;
     back.add_sources(rec.entries.front());
   } else {
@@ -410,14 +422,16 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
       const long end = std::min(ck.grid + stride, rec.grid_reached());
       if (end <= ck.grid) continue;
       TrajectoryRecorder seg(nullptr, params, true, 0, ck.grid);
+      signal_point("adjoint-recompute");
       const auto sum = ga.resume(*cs.model, params, ck, end, {&seg, &stop});
       res.counts.adjoint_recomputed_steps += sum.steps;
+      if (sum.aborted && interrupted()) return stop_backward(ck.state.t);
       if (!sum.ok || sum.aborted)
         throw NumericalFailure("adjoint: recomputing the steps from t = " +
                                std::to_string(ck.state.t) + " s failed: " + sum.message);
       peak = std::max(peak,
                       static_cast<double>(seg.entries.size() + rec.checkpoints.size()) * per_entry);
-      sweep(seg.entries);
+      if (!sweep(seg.entries)) return stop_backward(seg.entries.back().s.t);
     }
     s0 = rec.checkpoints.front().state;
     Entry first{s0, {}, true, 0};

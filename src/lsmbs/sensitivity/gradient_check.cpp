@@ -4,6 +4,7 @@
 #include <random>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 
 namespace lsmbs {
 
@@ -16,6 +17,7 @@ std::string GradientCheckOptions::validate() const {
 }
 
 std::string GradientCheckResult::verdict(const GradientCheckOptions& o) const {
+  if (interrupted) return "interrupted";
   if (!ok || worst > o.fail) return "fail";
   return worst > o.warn ? "warn" : "pass";
 }
@@ -84,11 +86,13 @@ GradientCheckResult check_gradients(Study& cs, const Vec& p,
 
   SensitivityCounts counts;
   std::vector<ResponseSensitivity> plus, minus;
+  signal_point("gradient-check");
   try {
     plus = simulate_responses(cs, p + res.step, counts);
     minus = simulate_responses(cs, p - res.step, counts);
   } catch (const NumericalFailure& e) {
     res.ok = false;
+    res.interrupted = interrupted() != 0;  // not a failure of the check: it did not finish
     res.message = e.what();
   }
   d.apply(p, cs.model->params());
@@ -152,6 +156,7 @@ GradientCheckResult check_gradients(Study& cs, const Vec& p,
 }
 
 RunStatus GradientCheckResult::status() const {
+  if (interrupted) return RunStatus::kInterrupted;
   return ok ? RunStatus::kComplete : RunStatus::kFailed;
 }
 

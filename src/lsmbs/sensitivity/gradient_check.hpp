@@ -36,9 +36,11 @@ struct GradientCheckResult {
   double worst = 0;
   std::string worst_response;
   long simulations = 0;
-  bool ok = true;  ///< both simulations succeeded
+  bool ok = true;            ///< both simulations succeeded
+  bool interrupted = false;  ///< stopped by SIGINT/SIGTERM (core/interrupt.hpp): no verdict
   std::string message;
-  std::string verdict(const GradientCheckOptions& o) const;  ///< "pass", "warn" or "fail"
+  /// "pass", "warn" or "fail"; "interrupted" when the check did not finish
+  std::string verdict(const GradientCheckOptions& o) const;
   RunStatus status() const;
   std::string report() const;  ///< outcome, and per response the two directional derivatives
 };

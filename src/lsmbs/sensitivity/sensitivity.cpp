@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/sensitivity/method.hpp"
 #include "lsmbs/sensitivity/response_tracker.hpp"
 
@@ -116,6 +117,8 @@ std::vector<ResponseSensitivity> simulate_responses_at_current_design(
                      .run(*cs.model, cs.model->params(), cs.initial, {&obs, &prog, &stop});
   counts.add_run(s);
   if (primal) *primal = s;
+  if (s.aborted && interrupted())
+    throw Interrupted("at t = " + std::to_string(s.t_reached) + " s of a perturbed simulation");
   if (!s.ok) throw NumericalFailure("simulation failed during finite differences: " + s.message);
   if (s.aborted)
     throw NumericalFailure("simulation stopped at t = " + std::to_string(s.t_reached) + " s");
