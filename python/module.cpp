@@ -74,17 +74,7 @@ std::string exact(double v) {
   return b;
 }
 
-// The case's options are checked before a run, as the loader checks the case file: an invalid
-// value raises lsmbs.Error at its JSON path (/simulation/<field>).
-void check_options(const Case& cs) {
-  if (auto msg = cs.simulation.validate(); !msg.empty()) {
-    const auto colon = msg.find(": ");
-    throw Error(cs.file, "/simulation/" + msg.substr(0, colon), msg.substr(colon + 2));
-  }
-}
-
 Vec design_point(const Case& cs, const py::object& design) {
-  check_options(cs);
   if (!cs.design) {
     if (!design.is_none()) throw Error(cs.file, "/design", "the case has no design variables");
     return Vec();
@@ -132,6 +122,16 @@ Vec design_point(const Case& cs, const py::object& design) {
                             " is outside its bounds [" + exact(var.lower) + ", " +
                             exact(var.upper) + "]");
   }
+  return p;
+}
+
+// The design point of a run, with the case as Python left it checked as the command line's loader
+// checks a case file (prepare_case): simulation options and model parameters set from Python meet
+// the messages that the same values in the case file meet (an invalid option, for instance,
+// lsmbs.Error at /simulation/<field>), before anything runs or is written.
+Vec prepared(Case& cs, const py::object& design) {
+  const Vec p = design_point(cs, design);
+  prepare_case(cs, cs.design ? &p : nullptr);
   return p;
 }
 
@@ -381,9 +381,11 @@ PYBIND11_MODULE(_lsmbs, m) {
                        "model parameter '" + name + "' is set by design variable '" +
                        p.cs->design->variables[static_cast<size_t>(b.variable)].name +
                        "': change the design instead (design=…)");
+             // at the parameter's place in the case file, in the loader's words (lsmbs.Error)
              if (auto msg = ModelBuilder::check_parameter_value(name, value); !msg.empty())
-               throw py::value_error("model parameter '" + name + "' = " + exact(value) + ": " +
-                                     msg);
+               throw Error(p.cs->file, parameter_json_path(*p.cs, i),
+                           msg + " (model parameter '" + name + "' = " + exact(value) +
+                               ", set from Python)");
              p.cs->model->params().scalars[static_cast<size_t>(i)] = value;
            })
       .def("__contains__",
@@ -505,9 +507,8 @@ PYBIND11_MODULE(_lsmbs, m) {
       "simulate",
       [](const CasePtr& cs, const py::object& design, const std::string& out_dir, bool overwrite,
          const py::object& progress) {
-        const Vec p = design_point(*cs, design);
+        const Vec p = prepared(*cs, design);  // the design is in the model's parameters now
         return claimed(cs->model.get(), out_dir, overwrite, false, [&](OutputClaim&) {
-          if (cs->design) cs->design->apply(p, cs->model->params());
           RunOptions ro;
           ro.out_dir = out_dir;
           ro.design_point = p;
@@ -544,8 +545,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       "static",
       [](const CasePtr& cs, const py::object& design, double t, int max_iter,
          const std::string& out_dir, bool overwrite) {
-        const Vec p = design_point(*cs, design);
-        if (cs->design) cs->design->apply(p, cs->model->params());
+        const Vec p = prepared(*cs, design);  // the design is in the model's parameters now
         return claimed(cs->model.get(), out_dir, overwrite, false, [&](OutputClaim&) {
           StaticRunOptions o;
           o.out_dir = out_dir;
@@ -622,11 +622,15 @@ PYBIND11_MODULE(_lsmbs, m) {
         o.relative = relative;
         o.threads = threads;
         o.adjoint_memory_mb = adjoint_memory;
+        // the command line's check of --rtol and --atol
+        if (const auto msg = idas_tolerance_error(rtol, atol); !msg.empty())
+          throw py::value_error(msg.substr(0, 4) + " " + exact(msg[0] == 'r' ? rtol : atol) +
+                                msg.substr(4));
         o.idas.rtol = rtol;
         o.idas.atol = atol > 0 ? atol : rtol;
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
-        const Vec p = design_point(*cs, design);
+        const Vec p = prepared(*cs, design);
         PythonRun run(progress);
         o.progress = run.progress();
         SensitivityRun out;
@@ -679,7 +683,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def(
           "evaluate",
           [](Problem& pr, const py::object& design, const py::object& progress) {
-            const Vec p = design_point(*pr.cs, design);
+            const Vec p = prepared(*pr.cs, design);
             PythonRun run(progress);
             *pr.current = &run;
             struct Unset {
@@ -697,14 +701,15 @@ PYBIND11_MODULE(_lsmbs, m) {
       [](const CasePtr& cs, const std::string& out_dir, bool resume, bool overwrite,
          const std::string& optimizer, bool check, double check_delta, unsigned check_seed,
          double check_warn, double check_fail, const py::object& progress) {
-        check_options(*cs);
+        prepared(*cs, py::none());  // the run starts from the initial design
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
+        // the problem, as `lsmbs optimize` reads it, before the output folder is touched
+        OptimizationSpec spec = located(*cs, [&] { return parse_optimization(*cs); });
+        set_optimizer(spec, *cs, optimizer, "optimizer='" + optimizer + "'");
         PythonRun run(progress);
         return claimed(cs->model.get(), out_dir, overwrite, resume, [&](OutputClaim&) {
           return located(*cs, [&] {
-            OptimizationSpec spec = parse_optimization(*cs);
-            if (!optimizer.empty()) spec.optimizer = optimizer;
             spec.sensitivity.progress = run.progress();
             DesignProblem prob(*cs, spec);
             // the check at the initial design of a new run, as `lsmbs optimize` runs it
@@ -794,7 +799,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       "geometry",
       [](const CasePtr& cs, const py::object& design) {
         if (!cs->design) throw Error(cs->file, "/design", "the case has no design section");
-        const Vec p = design_point(*cs, design);
+        const Vec p = prepared(*cs, design);  // as `lsmbs geometry` loads the case
         ModelParams params = cs->model->params();
         std::vector<SpMat> dmu;
         cs->design->apply(p, params, &dmu);

@@ -435,3 +435,45 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   EXPECT_EQ(r[2][8], a[2][8]) << "the stored start, not a new draw";
   EXPECT_EQ(r[2][3], a[2][3]) << "the same optimum (a deterministic run)";
 }
+
+TEST(MethodsCoverage, MultiStartRanksAnUnconstrainedProblemByItsObjective) {
+  // The coasting bodies with the objective alone (no constraint) and the lower bounds at 0.25:
+  // E = m1 + 2 m2 + ½ (1/m1 + 1/m2) has its minimum inside the bounds where dE/dm1 = 1 − ½/m1² and
+  // dE/dm2 = 2 − ½/m2² vanish, m = (1/√2, ½), E* = 2 + √2. Every start is feasible (there is
+  // nothing to violate), every child reaches E*, and the ranking is by objective.
+  namespace fs = std::filesystem;
+  const std::string dir = testing::TempDir() + "lsmbs_multistart_unconstrained";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  json j = coasting_bodies("mma");
+  j["optimization"].erase("constraints");
+  for (auto& v : j["design"]["variables"]) v["lower"] = 0.25;
+  const std::string file = dir + "/case.json";
+  std::ofstream(file) << j.dump(1);
+  const std::string cmd =
+      std::string(LSMBS_CLI) + " optimize " + file + " -q -o " + dir + "/out --starts 2 --seed 7";
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 0) << "both starts completed: the multi-start is complete";
+  const double e_star = 2 + std::sqrt(2.0);
+  for (int k = 1; k <= 2; ++k) {
+    const json C =
+        json::parse(std::ifstream(dir + "/out/start_" + std::to_string(k) + "/summary.json"));
+    EXPECT_EQ(C["status"], "complete") << k;
+    // no constraint: no violation (a number, not null)
+    ASSERT_TRUE(C["final"]["max_violation"].is_number()) << C["final"].dump();
+    EXPECT_EQ(C["final"]["max_violation"].get<double>(), 0.0);
+    EXPECT_NEAR(C["final"]["design"]["m1"].get<double>() * std::sqrt(2.0), 1, 1e-3) << k;
+    EXPECT_NEAR(C["final"]["design"]["m2"].get<double>() * 2, 1, 1e-3) << k;
+  }
+  const json S = json::parse(std::ifstream(dir + "/out/summary.json"));
+  EXPECT_EQ(S["status"], "complete");
+  ASSERT_TRUE(S.contains("ranking")) << S.dump(1);
+  EXPECT_EQ(S["ranking"]["feasible_results"], 2);
+  EXPECT_NEAR(S["ranking"]["best"].get<double>() / e_star, 1, 1e-6);
+  EXPECT_NEAR(S["ranking"]["worst"].get<double>() / e_star, 1, 1e-6);
+  for (const auto& s : S["starts"]) {
+    EXPECT_EQ(s["feasible"], true) << s.dump();
+    EXPECT_EQ(s["max_violation"], 0.0) << s.dump();
+  }
+}

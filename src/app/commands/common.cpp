@@ -15,6 +15,7 @@
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/sha256.hpp"
+#include "lsmbs/io/simulation_run.hpp"
 
 namespace lsmbs::app {
 
@@ -67,12 +68,11 @@ void claim_output(const CommonArgs& c, const lsmbs::Model& model) {
 
 // IDAS tolerances from the command line: checked before anything runs
 void check_idas_tolerances(double rtol, double atol) {
-  if (!(rtol > 0) || !std::isfinite(rtol) || rtol >= 1)
-    throw lsmbs::Error("--rtol " + std::to_string(rtol) +
-                       ": expected a relative tolerance in (0, 1)");
-  if (!(atol >= 0) || !std::isfinite(atol))
-    throw lsmbs::Error("--atol " + std::to_string(atol) +
-                       ": expected a non-negative absolute tolerance (0: rtol)");
+  if (const auto msg = lsmbs::idas_tolerance_error(rtol, atol); !msg.empty()) {
+    const bool r = msg.rfind("rtol", 0) == 0;
+    throw lsmbs::Error("--" + msg.substr(0, 4) + " " + std::to_string(r ? rtol : atol) +
+                       msg.substr(4));
+  }
 }
 
 // --set /pointer=value: a value of the case document by JSON path; the value is JSON (a number,

@@ -365,12 +365,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
           ": expected a positive integer (a testing hook: stop after that many evaluations)");
     stop_after = n;
   }
-  if (!optimizer.empty()) {
-    if (optimizer != "mma-svanberg" && cs.optimization.contains("move_limit"))
-      throw lsmbs::Error("--optimizer " + optimizer +
-                         ": the case sets a move_limit, which only mma-svanberg has");
-    spec.optimizer = optimizer;
-  }
+  lsmbs::set_optimizer(spec, cs, optimizer, "--optimizer " + optimizer);
   const bool interactive = !quiet && ::isatty(STDOUT_FILENO) && ::isatty(STDERR_FILENO);
   const bool table = interactive || (verbose && !quiet);
   ProgressLine line(interactive);

@@ -55,6 +55,8 @@ std::string GeneralizedAlphaOptions::validate() const {
   if (!(tol_q > 0)) return "tol_q: expected a positive tolerance";
   if (!(force_floor >= 0)) return "force_floor: expected a non-negative force";
   if (max_iter < 1) return "max_iter: expected at least 1";
+  // the case file's bound of every integer (io/json_reader.cpp), for options set in code
+  if (max_iter > 100000000) return "max_iter: expected at most 100000000";
   if (min_iter < 0 || min_iter > max_iter) return "min_iter: expected 0 <= min_iter <= max_iter";
   if (max_halvings < 0 || max_halvings > 30) return "max_halvings: expected 0..30";
   if (!(k >= 0) || !std::isfinite(k)) return "k: expected a non-negative value (0 = automatic)";

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 #include "lsmbs/mbs/time_law.hpp"
 #include "lsmbs/sensitivity/study.hpp"
 
@@ -18,6 +19,18 @@ namespace lsmbs {
 struct OutputSpec {
   int csv_stride = 1;  ///< every n-th grid step in history.csv
   int vtu_stride = 0;  ///< every n-th grid step as VTU (0: none)
+};
+
+/// What the start checks (prepare_case) need from the building of a case, kept so that they can
+/// run again on a case changed after loading (from Python): the state as the case places the
+/// bodies, the velocities it gives, and which entry of the document made each entity.
+struct CaseStart {
+  State placed;  ///< t = 0, positions and given velocities as placed (before the projection)
+  std::vector<char> held_velocities;            ///< per unknown: its initial velocity was given
+  std::vector<GivenVelocity> given_velocities;  ///< per body that gives velocities
+  std::map<std::string, std::string> paths;     ///< JSON path of each body, joint and force
+  std::vector<std::string> force_owners;        ///< per force element: its body or force entry
+  std::map<std::string, std::vector<int>> entity_parameters;  ///< the parameters of each entry
 };
 
 /// A case file: the Study it defines (model, initial state, options, measures, responses, design)
@@ -38,6 +51,7 @@ struct Case : Study {
   /// Values changed before loading (--set /pointer=value): JSON pointer -> value; an empty object
   /// when none. `sha256` stays the file's; summaries record both.
   nlohmann::json overrides = nlohmann::json::object();
+  CaseStart start;
 };
 
 /// A change of one value of the case document before it is loaded: `lsmbs … --set
@@ -53,6 +67,21 @@ struct CaseOverride {
 /// The error of the library (by subject) located in the case file: "design" → /design,
 /// "responses" → /output/responses, "optimization.objective" → /optimization/objective, … .
 Error locate(const std::string& case_file, const SetupError& e);
+
+/// The start checks of a case, the ones a case file meets after its model is built: the simulation
+/// options, independent constraints at t = 0, a time step of the run in every response window,
+/// finite element forces and iteration matrix at the start (with the design `design`, or the
+/// initial design when null, written into the model's parameters), given velocities that the
+/// joints allow, bodies placed where the joints and drivers put them, and finite measures at t = 0.
+/// Sets `cs.initial` (the placed state, projected onto the constraints when velocities are given).
+/// The loader runs them on every case; a case changed after loading (simulation options or model
+/// parameters set from Python) runs them again before each run, and so meets the same messages.
+/// Throws Error (file, JSON path of the entry at fault, what is wrong).
+void prepare_case(Case& cs, const Vec* design = nullptr);
+
+/// The JSON path in the case document of model parameter `i` ("crank.mass" → /bodies/0/mass,
+/// "rod.E" → /bodies/1/material/E); "" when the case does not say where its entity is.
+std::string parameter_json_path(const Case& cs, int i);
 
 /// Loads and validates a case file (paths inside are relative to its folder).
 Case load_case(const std::string& path);

@@ -114,4 +114,18 @@ OptimizationSpec parse_optimization(const Case& cs) {
   return s;
 }
 
+void set_optimizer(OptimizationSpec& spec, const Case& cs, const std::string& optimizer,
+                   const std::string& origin) {
+  if (optimizer.empty()) return;
+  // the words of optimize()'s own check, before anything runs (the gradient check)
+  if (optimizer != "mma" && optimizer != "ccsaq" && optimizer != "slsqp" &&
+      optimizer != "mma-svanberg")
+    throw Error(
+        cs.file, "/optimization/optimizer",
+        "unknown optimizer '" + optimizer + "': expected mma, ccsaq, slsqp or mma-svanberg");
+  if (optimizer != "mma-svanberg" && cs.optimization.contains("move_limit"))
+    throw Error(origin + ": the case sets a move_limit, which only mma-svanberg has");
+  spec.optimizer = optimizer;
+}
+
 }  // namespace lsmbs

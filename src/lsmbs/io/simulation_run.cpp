@@ -98,6 +98,14 @@ class Recorder : public StepObserver {
 
 }  // namespace
 
+std::string idas_tolerance_error(double rtol, double atol) {
+  if (!(rtol > 0) || !std::isfinite(rtol) || rtol >= 1)
+    return "rtol: expected a relative tolerance in (0, 1)";
+  if (!(atol >= 0) || !std::isfinite(atol))
+    return "atol: expected a non-negative absolute tolerance (0: rtol)";
+  return {};
+}
+
 std::string RunOptions::validate() const {
   if (idas)
     if (auto msg = idas_options.validate(); !msg.empty()) return "idas_options." + msg;

@@ -50,6 +50,10 @@ struct RunOptions {
   std::string validate() const;
 };
 
+/// The IDAS tolerances a user gives (the command line's --rtol/--atol, Python's rtol/atol; atol 0
+/// stands for rtol): "" when valid, else "rtol: what is expected" or "atol: what is expected".
+std::string idas_tolerance_error(double rtol, double atol);
+
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro = {});
 
 }  // namespace lsmbs

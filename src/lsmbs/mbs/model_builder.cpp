@@ -584,15 +584,16 @@ const std::vector<int>& ModelBuilder::joint_rows(const std::string& joint) const
 }
 
 std::string ModelBuilder::check_parameter_value(const std::string& name, double v) {
+  // the case loader's words for the same value in a case file (io/json_reader.cpp)
   if (!std::isfinite(v)) return "expected a finite number";
   const std::string prop = name.substr(name.rfind('.') + 1);
-  if (prop == "E" && !(v > 0)) return "expected a positive Young's modulus";
+  if ((prop == "E" || prop == "rho" || prop == "thickness" || prop == "area") && !(v > 0))
+    return "expected a positive number";
   if (prop == "nu" && !(v >= 0 && v < 0.5)) return "expected Poisson's ratio in [0, 0.5)";
-  if ((prop == "rho" || prop == "thickness") && !(v > 0)) return "expected a positive value";
   if ((prop == "mass" || prop == "inertia" || prop == "stiffness" || prop == "damping" ||
        prop == "free_length") &&
       !(v >= 0))
-    return "expected a non-negative value";
+    return "expected a non-negative number";
   return {};
 }
 

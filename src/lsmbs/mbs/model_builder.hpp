@@ -207,9 +207,11 @@ class ModelBuilder {
                 Table1D table, const PressureArgument& argument = {});
 
   /// The admissible range of a model parameter by its property ("<entity>.<property>": E > 0,
-  /// 0 ≤ nu < 0.5, rho and thickness > 0, mass, inertia, stiffness, damping and free_length ≥ 0,
-  /// every value finite): "" when `value` is admissible, else what is expected. The case loader
-  /// checks parameters bound to design variables with it over the variables' bounds.
+  /// 0 ≤ nu < 0.5, rho, thickness and area > 0, mass, inertia, stiffness, damping and
+  /// free_length ≥ 0, every value finite): "" when `value` is admissible, else what is expected,
+  /// in the case loader's words for the same value in a case file. The loader checks parameters
+  /// bound to design variables with it over the variables' bounds; Python checks a parameter it
+  /// sets.
   static std::string check_parameter_value(const std::string& name, double value);
 
   // ------------------------------------------------------------ queries by name

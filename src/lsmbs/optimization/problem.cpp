@@ -109,7 +109,9 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
       obj.gradient.rows() ? Vec(obj.gradient.row(0).transpose()) : Vec::Zero(p.size());
   e.constraint_gradient.resize(num_constraints_, p.size());
   int row = 0;
-  e.max_violation = -INFINITY;
+  // the maximum over the constraints; a problem without any has nothing to violate: 0 (not the
+  // empty maximum −∞, which JSON cannot hold: summary.json wrote null, read back as not feasible)
+  e.max_violation = num_constraints_ == 0 ? 0.0 : -INFINITY;
   for (size_t j = 0; j < constraint_index_.size(); ++j) {
     const auto& r = res.responses[constraint_index_[j]];
     const auto& spec = spec_.constraints[j];

@@ -54,7 +54,7 @@ struct Evaluation {
   std::vector<double> scale;  ///< normalizer of g_j − upper_j (|bound| or the given reference)
   Vec objective_gradient;     ///< ∂f/∂p
   Mat constraint_gradient;    ///< m × n_v
-  double max_violation = 0;   ///< max_j (g_j − ū_j)/scale_j  (≤ 0: feasible)
+  double max_violation = 0;  ///< max_j (g_j − ū_j)/scale_j  (≤ 0: feasible; 0 without constraints)
   double wall_seconds = 0;
   bool ok = true;
   /// Stopped by an interrupt before the simulation ended: not a result of p (never cached).
