@@ -20,6 +20,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/json_file.hpp"
+#include "lsmbs/core/text.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
@@ -232,7 +233,11 @@ GradientCheckOptions check_options_from(double delta, unsigned seed, double warn
   c.seed = seed;
   c.warn = warn;
   c.fail = fail;
-  if (auto msg = c.validate(); !msg.empty()) throw py::value_error("check_" + msg);
+  if (auto msg = c.validate(); !msg.empty())  // named by the keywords: check_fail, check_warn
+    throw py::value_error(rename_fields(msg, {{"delta", "check_delta"},
+                                              {"seed", "check_seed"},
+                                              {"warn", "check_warn"},
+                                              {"fail", "check_fail"}}));
   return c;
 }
 
@@ -628,6 +633,8 @@ PYBIND11_MODULE(_lsmbs, m) {
                                 msg.substr(4));
         o.idas.rtol = rtol;
         o.idas.atol = atol > 0 ? atol : rtol;
+        if (auto msg = o.validate(); !msg.empty())  // before any run; fields named as keywords
+          throw py::value_error(msg);
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
         const Vec p = prepared(*cs, design);

@@ -14,9 +14,11 @@
 //
 // This file only parses the command line; each command is in commands/ (one file each).
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
@@ -30,6 +32,37 @@
 #include "lsmbs/io/output_folder.hpp"
 
 namespace {
+
+// CLI11 converts an integer option with strtoull/strtoll in base 0: in an unsigned option "-1"
+// wraps to 18446744073709551615, "010" is octal 8, "0x10" hexadecimal 16, and a number beyond
+// the type's range becomes its largest value. Every integer option is checked here first:
+// decimal digits only (leading zeros dropped, so that "010" is ten), a sign only where negative
+// values exist, within [lo, hi].
+CLI::Validator decimal_integer(long long lo, unsigned long long hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        const std::string kind = lo >= 0 ? "a non-negative integer" : "an integer";
+        const bool negative = !s.empty() && s[0] == '-';
+        const size_t d = negative || (!s.empty() && s[0] == '+') ? 1 : 0;
+        if (s.size() == d || s.find_first_not_of("0123456789", d) != std::string::npos)
+          return "expected " + kind + " (decimal digits), got " + lsmbs::shown(s);
+        std::string digits = s.substr(d);
+        digits.erase(0, std::min(digits.find_first_not_of('0'), digits.size() - 1));
+        if (negative && lo >= 0 && s.find_first_not_of('0', 1) != std::string::npos)
+          return "expected " + kind + ", got " + lsmbs::shown(s);
+        unsigned long long v = 0;
+        const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+        const bool beyond =
+            ec != std::errc() ||
+            (negative ? lo >= 0 || v > static_cast<unsigned long long>(-(lo + 1)) + 1 : v > hi);
+        if (beyond)
+          return "expected " + kind + " in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                 "], got " + lsmbs::shown(s);
+        s = (negative && v != 0 ? "-" : "") + digits;
+        return {};
+      },
+      "");
+}
 
 std::string joined_args(int argc, char** argv) {
   std::string s;
@@ -47,20 +80,12 @@ int main(int argc, char** argv) {
   // SIGINT and SIGTERM from the start: every phase polls the flag and ends with exit 130 and its
   // results flagged (core/interrupt.hpp); a second signal ends the process at once
   lsmbs::install_interrupt_handlers();
-  // every argument is recorded in summary.json: text that is not UTF-8 is refused up front
-  for (int i = 1; i < argc; ++i)
-    if (!lsmbs::valid_utf8(argv[i])) {
-      std::fprintf(
-          stderr,
-          "lsmbs: error: argument %d (%s) is not valid UTF-8 (bytes shown as \xEF\xBF\xBD); "
-          "lsmbs records its command line in summary.json as UTF-8 text\n",
-          i, lsmbs::displayable_text(argv[i]).c_str());
-      return 2;
-    }
   static const char* kSetHelp =
       "override a value of the case by JSON path, /simulation/h=1e-3 or "
       "/bodies/1/material/E=70e9, or a design variable, name=value (repeatable; recorded in "
       "summary.json)";
+  const CLI::Validator kInt =
+      decimal_integer(std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
   CLI::App app{"lsmbs — level-set structural optimization of flexible multibody system components"};
   app.require_subcommand(0, 1);
   bool version = false;
@@ -100,6 +125,7 @@ int main(int argc, char** argv) {
   sim->add_option("--max-order", sim_args.max_order,
                   "IDAS maximum BDF order 1-5; 0 = auto (2, A-stable, for models with a "
                   "flexible body; 5 otherwise)")
+      ->transform(kInt)
       ->check(CLI::Range(0, 5))
       ->capture_default_str();
   sim->add_option("--error-test", sim_args.error_test,
@@ -120,6 +146,7 @@ int main(int argc, char** argv) {
   sta->add_option("--t", static_args.t, "time at which drivers and loads are evaluated [s]")
       ->capture_default_str();
   sta->add_option("--max-iter", static_args.max_iter, "Newton iterations")
+      ->transform(kInt)
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
   sta->add_flag("-q,--quiet", quiet, "print nothing but errors");
@@ -134,6 +161,7 @@ int main(int argc, char** argv) {
       "reuse an output folder that holds an earlier run (its lsmbs files are removed first)");
   geo->add_option("--set", sets, kSetHelp);
   geo->add_option("--width", geo_args.width, "PNG width in pixels")
+      ->transform(kInt)
       ->capture_default_str()
       ->check(CLI::Range(lsmbs::DesignPictureLayout::kMinWidth, 20000));
   geo->add_flag("-q,--quiet", quiet, "print nothing but errors");
@@ -190,6 +218,7 @@ int main(int argc, char** argv) {
                   "step is computed; "
                   "1: one thread (same results to round-off)")
       ->capture_default_str()
+      ->transform(kInt)
       ->check(CLI::Range(1, 2));
   sen->add_flag("-q,--quiet", quiet, "print nothing but errors");
   lsmbs::GradientCheckOptions& check_opt = sen_args.check_options;
@@ -200,7 +229,8 @@ int main(int argc, char** argv) {
   sen->add_option("--check-delta", check_opt.delta, "--check: relative step along the direction")
       ->capture_default_str();
   sen->add_option("--check-seed", check_opt.seed, "--check: seed of the random direction")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->transform(decimal_integer(0, std::numeric_limits<unsigned>::max()));
   sen->add_option("--check-warn", check_opt.warn, "--check: warn above this relative disagreement")
       ->capture_default_str();
   sen->add_option("--check-fail", check_opt.fail, "--check: fail above this relative disagreement")
@@ -224,9 +254,11 @@ int main(int argc, char** argv) {
                   "multi-start: N optimizations from N feasible random initial designs (uniform "
                   "within the bounds, seeded), in OUT/start_1 … OUT/start_N, 2 at a time; "
                   "OUT/starts.csv and summary.json rank them")
+      ->transform(kInt)
       ->check(CLI::Range(1, 1000));
   opt->add_option("--seed", opt_args.seed, "multi-start: seed of the random initial designs")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->transform(decimal_integer(0, std::numeric_limits<unsigned long>::max()));
   opt->add_option("--optimizer", opt_args.optimizer, "override the case's optimizer")
       ->check(CLI::IsMember({"mma", "ccsaq", "slsqp", "mma-svanberg"}));
   opt->add_flag("-q,--quiet", quiet, "print nothing but errors");
@@ -296,10 +328,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   ben->add_option("--repetitions", bo.repetitions, "repetitions of the floor measurements")
       ->capture_default_str()
+      ->transform(kInt)
       ->check(CLI::Range(1, 100000));
   ben->add_option("--threads", bo.threads,
                   "threads of the sensitivity runs (see sensitivity --threads)")
       ->capture_default_str()
+      ->transform(kInt)
       ->check(CLI::Range(1, 2));
 
   try {
@@ -317,6 +351,27 @@ int main(int argc, char** argv) {
   try {
     if (*opt && opt->count("--seed") && !opt->count("--starts"))
       throw lsmbs::Error("--seed: the seed of --starts' random initial designs; give --starts N");
+    // an option of a part that does not run would be ignored without a word
+    for (const char* o : {"--check-delta", "--check-seed", "--check-warn", "--check-fail"})
+      if (*sen && sen->count(o) && !sen_args.check)
+        throw lsmbs::Error(std::string(o) + ": an option of the gradient check; give --check");
+    for (const char* o : {"--check-warn", "--check-fail"})
+      if (*opt && opt->count(o) && no_check)
+        throw lsmbs::Error(std::string(o) +
+                           ": an option of the gradient check, which --no-check skips");
+    // summary.json records the case file's name, and JSON text is UTF-8: a name that is not
+    // would fail only when the summary is written, after the run
+    if (lsmbs::invalid_utf8_at(case_file) != std::string::npos)
+      throw lsmbs::Error(lsmbs::shown(case_file) +
+                         ": the case file's name is not valid UTF-8 (summary.json records it); "
+                         "rename the file");
+    // every argument is recorded in summary.json as UTF-8 text: the case file's name and --set
+    // are checked above and when parsed (naming the byte), -o with the folder; anything else
+    for (int i = 1; i < argc; ++i)
+      if (!lsmbs::valid_utf8(argv[i]) && argv[i] != case_file && argv[i] != out &&
+          std::string(argv[i - 1]) != "--set")
+        throw lsmbs::Error(std::string(argv[i - 1]) + " " + lsmbs::shown(argv[i]) +
+                           ": not valid UTF-8 text (summary.json records the command line)");
     if (*sim || *sta || *geo || *opt || *ben || *ver || *sen) {
       // checked now, claimed by the command once its case has loaded (commands/common.hpp)
       lsmbs::check_output_folder(out);

@@ -44,6 +44,69 @@ printf '{"name": 1e999}' > "$tmp/overflow.json"
 "$exe" simulate "$tmp/overflow.json" -o "$tmp/ov_out" 2> "$tmp/err_ov.txt"; rc=$?
 [ $rc -eq 2 ] || fail "number overflow returned $rc, expected 2"
 grep -q "overflow.json: invalid JSON" "$tmp/err_ov.txt" || fail "message: $(cat "$tmp/err_ov.txt")"
+# Readers and values that were misread or replaced without a word: exit 2, the file and line or
+# the options named, nothing written. A table field with a unit (read as 1.2 before), a Gmsh
+# element line with a node tag too many (the extra tag was ignored), a --set given twice (the last
+# won), a --seed of -1 (it wrapped to 18446744073709551615).
+python3 - "$tmp" <<'PY' || fail "writing the reader cases"
+import json, sys
+tmp = sys.argv[1]
+pend = {"name": "law", "bodies": [{"name": "bob", "type": "rigid", "position": [1, 0], "mass": 1, "inertia": 0.1}],
+        "joints": [{"name": "pin", "type": "revolute", "a": {"body": "bob", "at": [-1, 0]}, "b": "ground"},
+                   {"name": "motor", "type": "rotation_driver", "body": "bob", "law": {"type": "table", "file": "law.csv"}}],
+        "simulation": {"t_end": 0.02, "h": 0.01},
+        "output": {"measures": [{"name": "bob", "type": "position", "point": {"body": "bob"}}]}}
+json.dump(pend, open(tmp + "/law.json", "w"))
+open(tmp + "/law.csv", "w").write("t,angle\n0,0\n1,1.2x\n")
+msh = ("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 6 1 6\n2 1 0 6\n1\n2\n3\n4\n5\n6\n"
+       "0 0 0\n1 0 0\n2 0 0\n0 1 0\n1 1 0\n2 1 0\n$EndNodes\n$Elements\n1 2 1 2\n2 1 3 2\n"
+       "1 1 2 5 4 6\n2 2 3 6 5\n$EndElements\n")
+open(tmp + "/plate.msh", "w").write(msh)
+plate = {"name": "plate", "bodies": [{"name": "p", "type": "flexible", "mesh": {"type": "gmsh", "file": "plate.msh"},
+         "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "thickness": 0.01}],
+         "simulation": {"t_end": 0.002, "h": 0.001}, "output": {"measures": []}}
+json.dump(plate, open(tmp + "/msh.json", "w"))
+PY
+refused() {  # refused EXPECTED-MESSAGE ARGS...: exit 2, the message, no output folder
+  local want="$1"; shift
+  rm -rf "$tmp/refused"
+  "$exe" "$@" -o "$tmp/refused" 2> "$tmp/err_r.txt"; local rc=$?
+  [ $rc -eq 2 ] || fail "$* returned $rc, expected 2: $(cat "$tmp/err_r.txt")"
+  grep -qF -- "$want" "$tmp/err_r.txt" || fail "$*: expected '$want' in: $(cat "$tmp/err_r.txt")"
+  [ ! -e "$tmp/refused/summary.json" ] || fail "$*: summary.json written on bad input"
+}
+refused "law.json: /joints/1/law/file: $tmp/law.csv: line 3: y: expected a finite number, got '1.2x'" \
+  simulate "$tmp/law.json"
+refused "plate.msh: line 23: expected an element: its tag and 4 node tags (5 fields), got 6 fields: '1 1 2 5 4 6'" \
+  simulate "$tmp/msh.json"
+refused "--set /simulation/h=1e-3 and --set /simulation/h=2e-3 set the same value (/simulation/h)" \
+  simulate "$case_file" --set /simulation/h=1e-3 --set /simulation/h=2e-3
+refused "--seed: expected a non-negative integer, got '-1'" \
+  optimize "$src/data/robot_arm/robot_arm_holes.json" --starts 2 --seed -1
+# A level-set hole that starts off its plate (a design variable may move it in): simulate runs and
+# warns, in summary.json; a non-design ring off the plate (nothing moves it) is refused.
+python3 - "$tmp" <<'PY' || fail "writing the feature cases"
+import copy, json, sys
+tmp = sys.argv[1]
+c = {"name": "plate", "bodies": [{"name": "p", "type": "flexible",
+     "mesh": {"type": "rectangle", "origin": [0, 0], "size": [1, 0.2], "elements": [10, 2]},
+     "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "thickness": 0.01}],
+     "joints": [{"name": "c", "type": "clamp", "flexible": "p", "node_set": "left"}],
+     "simulation": {"t_end": 0.002, "h": 0.001},
+     "output": {"measures": [{"name": "m", "type": "mass", "body": "p"}]},
+     "design": {"variables": [{"name": "cx", "initial": 2.5, "lower": 0.2, "upper": 3}],
+                "geometry": [{"body": "p", "features": [{"name": "hole", "type": "circle", "cx": "cx", "cy": 0.1, "r": 0.05}]}]}}
+json.dump(c, open(tmp + "/hole_off.json", "w"))
+c["design"]["variables"][0]["initial"] = 0.5
+c["design"]["geometry"][0]["features"].append({"name": "ring", "type": "circle", "cx": 5, "cy": 5, "r": 0.1, "non_design": True})
+json.dump(c, open(tmp + "/ring_off.json", "w"))
+PY
+"$exe" simulate "$tmp/hole_off.json" -o "$tmp/hole_off" > "$tmp/hole_off.txt" 2>&1 || fail "simulate with a hole off the plate"
+grep -qF "warning: body 'p': level-set feature 'hole' lies wholly outside the body" "$tmp/hole_off.txt" || fail "no warning: $(cat "$tmp/hole_off.txt")"
+python3 -c "import json,sys; w=json.load(open(sys.argv[1]))['warnings']; assert any(\"feature 'hole' lies wholly outside\" in x for x in w), w" \
+  "$tmp/hole_off/summary.json" || fail "summary.json warnings"
+refused "ring_off.json: /design/geometry/0/features/1: non-design feature 'ring' lies wholly outside body 'p'" \
+  simulate "$tmp/ring_off.json"
 
 # Numerical failure: exit 1, partial results flagged.
 python3 -c "

@@ -298,3 +298,80 @@ TEST(Stress, InputErrorsNameTheJsonPathAndWhatWasExpected) {
     }
   }
 }
+
+// The KS aggregate's documented bounds, max_e s_e ≤ f ≤ max_e s_e + σ_ref ln(N)/ρ, for any
+// positive reference. With σ_ref = 1e-300 the normalized stresses s_e/σ_ref of elements above
+// 1.8e8 Pa overflowed: inf − inf gave NaN (a response's max over the steps skipped those steps,
+// and reported 1.67e8 Pa against an element maximum of 2.93e8). The bounds are checked against
+// the element stresses themselves, and ∂f/∂q against central differences, from 1e-320 (a
+// subnormal reference) to 1e300.
+TEST(Stress, KsBoundsAndDerivativesHoldForEveryPositiveReference) {
+  Case cs = test::make_case(robot_arm_json());
+  const StressMeasure& base = stress_measure(cs, "plate_ks");
+  const FlexibleBody& b = base.body();
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  ModelParams p = cs.model->params();
+  for (auto& mu : p.fields[b.field]) mu = 0.55 + 0.45 * u(gen);
+  State s = stretched(cs, b, 1.005, 0.3);  // σ of order 3e8 Pa: above 1.8e8 in many elements
+  for (int n = 0; n < b.mesh.num_nodes(); ++n)
+    s.q.segment<2>(b.node_dof(n)) += 1e-3 * 0.005 * Vec2(u(gen), u(gen));
+  std::vector<double> se;
+  base.element_stresses(s, p, se);
+  const double smax = *std::max_element(se.begin(), se.end());
+  const double N = static_cast<double>(se.size());
+  ASSERT_GT(smax, 1.8e8);
+  for (double rho : {20.0, 1e4})
+    for (double ref : {1e-320, 1e-305, 1e-300, 1e-200, 1.0, 1e8, 1e200, 1e300}) {
+      StressMeasure::Options o = base.options();
+      o.reference = ref;
+      o.parameter = rho;
+      const StressMeasure m("ks", &b, o);
+      double f = 0;
+      m.evaluate(*cs.model, s, p, &f);
+      const double upper = smax + ref * std::log(N) / rho;
+      ASSERT_TRUE(std::isfinite(f)) << "reference " << ref << ", ρ " << rho;
+      EXPECT_GE(f, smax * (1 - 4e-16)) << "reference " << ref << ", ρ " << rho;
+      EXPECT_LE(f, upper * (1 + 4e-16)) << "reference " << ref << ", ρ " << rho;
+      // ∂f/∂q: the largest entries and a spread, against central differences
+      MeasureGradient g;
+      m.gradient(*cs.model, s, p, 0, g);
+      Vec dq = Vec::Zero(s.q.size());
+      for (const auto& [j, w] : g.dq) dq[j] += w;
+      ASSERT_TRUE(dq.allFinite()) << "reference " << ref;
+      const double scale = dq.lpNorm<Eigen::Infinity>();
+      ASSERT_GT(scale, 0);
+      std::vector<int> idx(static_cast<size_t>(dq.size()));
+      for (size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
+      std::partial_sort(idx.begin(), idx.begin() + 10, idx.end(),
+                        [&](int a, int c) { return std::abs(dq[a]) > std::abs(dq[c]); });
+      idx.resize(10);
+      for (int k = 0; k < 10; ++k) idx.push_back(b.dof0 + (k * 97) % (2 * b.mesh.num_nodes()));
+      double worst = 0;
+      if (upper < 1e6 * smax) {  // f's round-off leaves its central differences meaningful
+        for (int j : idx) {
+          const double h = 1e-10;
+          State sp = s, sm = s;
+          sp.q[j] += h;
+          sm.q[j] -= h;
+          double fp = 0, fm = 0;
+          m.evaluate(*cs.model, sp, p, &fp);
+          m.evaluate(*cs.model, sm, p, &fm);
+          worst = std::max(worst, std::abs((fp - fm) / (2 * h) - dq[j]) / scale);
+        }
+      } else {  // σ_ref far above the stresses: every weight is 1/N to ρ (max − min)/σ_ref, and
+                // ∂f/∂q is the mean of the elements' ∂s_e/∂q: the p-norm with P = 1 (Σ s_e) / N
+        StressMeasure::Options sum_options = base.options();
+        sum_options.aggregation = StressMeasure::Aggregation::kPNorm;
+        sum_options.parameter = 1;
+        MeasureGradient gs;
+        StressMeasure("sum", &b, sum_options).gradient(*cs.model, s, p, 0, gs);
+        Vec mean = Vec::Zero(s.q.size());
+        for (const auto& [j, w] : gs.dq) mean[j] += w / N;
+        worst = (dq - mean).lpNorm<Eigen::Infinity>() / scale;
+      }
+      std::printf("ρ %g, σ_ref %g: f − max = %.3e (bound %.3e), ∂f/∂q vs its reference %.2e\n", rho,
+                  ref, f - smax, upper - smax, worst);
+      EXPECT_LT(worst, 1e-5) << "reference " << ref << ", ρ " << rho;
+    }
+}

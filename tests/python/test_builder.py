@@ -164,6 +164,11 @@ def test_gradient_check_from_python():
     assert lsmbs.sensitivity(case).gradient_check is None
     with pytest.raises(ValueError, match="check_delta"):
         lsmbs.sensitivity(case, check=True, check_delta=2.0)
+    # the options are named by the keywords, also inside the message (not the library's "warn")
+    with pytest.raises(ValueError, match=r"^check_fail: .* >= check_warn \(0\.01\), got 0\.001$"):
+        lsmbs.sensitivity(case, check=True, check_warn=1e-2, check_fail=1e-3)
+    with pytest.raises(ValueError, match=r"^adjoint_memory: expected a non-negative number"):
+        lsmbs.sensitivity(case, method="adjoint", adjoint_memory=float("inf"))
 
 
 def test_optimize_checks_the_initial_gradient_and_refuses_above_check_fail(tmp_path):

@@ -13,6 +13,7 @@
 #include "app/commands/commands.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
+#include "lsmbs/core/text.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/sha256.hpp"
 #include "lsmbs/io/simulation_run.hpp"
@@ -23,14 +24,75 @@ namespace lsmbs::app {
 std::pair<std::string, double> parse_set(const std::string& s) {
   const auto eq = s.find('=');
   if (eq == std::string::npos) throw lsmbs::Error("--set " + s + ": expected name=value");
-  try {
-    size_t used = 0;
-    const double v = std::stod(s.substr(eq + 1), &used);
-    if (used != s.size() - eq - 1) throw std::invalid_argument("trailing characters");
-    return {s.substr(0, eq), v};
-  } catch (const std::exception&) {
-    throw lsmbs::Error("--set " + s + ": expected a number after '='");
+  const auto v = lsmbs::parse_finite_double(std::string_view(s).substr(eq + 1));
+  if (!v) throw lsmbs::Error("--set " + s + ": expected a finite number after '='");
+  return {s.substr(0, eq), *v};
+}
+
+std::string set_target(const std::string& s, const nlohmann::json& doc) {
+  const auto eq = s.find('=');
+  if (eq == std::string::npos) return {};
+  const std::string left = s.substr(0, eq);
+  if (!left.empty() && left[0] == '/') {
+    try {  // the pointer as the loader reads it (escapes ~0 ~1 spelled one way)
+      return nlohmann::json::json_pointer(left).to_string();
+    } catch (const nlohmann::json::exception&) {
+      return {};  // not a pointer: the loader says so
+    }
   }
+  if (!doc.is_object() || !doc.contains("design") || !doc["design"].is_object() ||
+      !doc["design"].contains("variables") || !doc["design"]["variables"].is_array())
+    return {};
+  const auto& vars = doc["design"]["variables"];
+  for (size_t i = 0; i < vars.size(); ++i)
+    if (vars[i].is_object() && vars[i].contains("name") && vars[i]["name"] == left)
+      return "/design/variables/" + std::to_string(i) + "/initial";
+  return {};
+}
+
+bool pointers_overlap(const std::string& a, const std::string& b) {
+  if (a.empty() || b.empty()) return false;
+  auto holds = [](const std::string& outer, const std::string& inner) {
+    return inner.size() > outer.size() && inner.compare(0, outer.size(), outer) == 0 &&
+           inner[outer.size()] == '/';
+  };
+  return a == b || holds(a, b) || holds(b, a);
+}
+
+void check_sets(const std::string& case_file, const std::vector<std::string>& sets) {
+  // Every --set reaches summary.json (JSON text is UTF-8) and the case document: bytes that are
+  // not UTF-8 are refused here, before the run, not when the summary is written after it.
+  for (const auto& s : sets)
+    if (const size_t at = lsmbs::invalid_utf8_at(s); at != std::string::npos)
+      throw lsmbs::Error("--set " + lsmbs::shown(s) + ": not valid UTF-8 text (byte " +
+                         std::to_string(at + 1) + "); case values and names are UTF-8 (JSON text)");
+  // Two --set of one value: the later replaced the earlier and summary.json kept only it. Each
+  // value may be given once; a value inside another one's object counts as the same value.
+  if (sets.size() < 2) return;
+  nlohmann::json doc;  // for the design variables of name=value (their initial values' paths)
+  if (std::any_of(sets.begin(), sets.end(),
+                  [](const std::string& s) { return s.empty() || s[0] != '/'; })) {
+    try {
+      std::ifstream f(case_file, std::ios::binary);
+      const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+      doc = lsmbs::parse_json_document(text, case_file);
+    } catch (const std::exception&) {  // the loader reports an unreadable case
+    }
+  }
+  std::vector<std::string> target;
+  for (const auto& s : sets) target.push_back(set_target(s, doc));
+  for (size_t j = 1; j < sets.size(); ++j)
+    for (size_t i = 0; i < j; ++i)
+      if (pointers_overlap(target[i], target[j])) {
+        const bool same = target[i] == target[j];
+        const std::string& outer = target[i].size() <= target[j].size() ? target[i] : target[j];
+        const std::string& inner = target[i].size() <= target[j].size() ? target[j] : target[i];
+        throw lsmbs::Error("--set " + sets[i] + " and --set " + sets[j] +
+                           (same ? " set the same value (" + outer + ")"
+                                 : " overlap (" + inner + " is part of " + outer + ")") +
+                           ": the later one would replace the earlier without a word; give each "
+                           "value once");
+      }
 }
 
 // A run that ends with an exception once it has started (a numerical failure raised deep inside,
@@ -66,6 +128,14 @@ void claim_output(const CommonArgs& c, const lsmbs::Model& model) {
       lsmbs::claim_output_folder(c.out, c.overwrite, c.resume, lsmbs::planned_outputs(model));
 }
 
+void check_gradient_check_options(const lsmbs::GradientCheckOptions& o) {
+  if (auto msg = o.validate(); !msg.empty())
+    throw lsmbs::Error(lsmbs::rename_fields(msg, {{"delta", "--check-delta"},
+                                                  {"seed", "--check-seed"},
+                                                  {"warn", "--check-warn"},
+                                                  {"fail", "--check-fail"}}));
+}
+
 // IDAS tolerances from the command line: checked before anything runs
 void check_idas_tolerances(double rtol, double atol) {
   if (const auto msg = lsmbs::idas_tolerance_error(rtol, atol); !msg.empty()) {
@@ -95,6 +165,7 @@ lsmbs::CaseOverride parse_override(const std::string& s) {
 
 lsmbs::Case load_case_with_sets(const std::string& file, const std::vector<std::string>& sets,
                                 bool design_as_initial) {
+  check_sets(file, sets);
   std::vector<lsmbs::CaseOverride> overrides;
   nlohmann::json doc;  // read only to find design variables by name (design_as_initial)
   for (const auto& s : sets) {

@@ -22,6 +22,8 @@ int geometry_command(const CommonArgs& c, const GeometryArgs& a) {
   o.image_width = a.width;
   o.command_line = c.command_line;
   const auto S = lsmbs::run_geometry(cs, p, o);
+  for (const auto& w : S["warnings"])
+    std::fprintf(stderr, "lsmbs geometry: warning: %s\n", w.get<std::string>().c_str());
   if (!c.quiet) {
     for (const auto& b : S["bodies"])
       std::printf(

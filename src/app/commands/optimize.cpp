@@ -135,19 +135,24 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       std::snprintf(buf, sizeof buf, "%.17g", starts[k][i]);
       v.insert(v.end(), {"--set", d.variables[i].name + "=" + buf});
     }
-    // one sensitivity thread per child when two run at once
-    if (a.jobs > 1) {
-      if (cs.optimization.contains("sensitivity"))
-        v.insert(v.end(), {"--set", "/optimization/sensitivity/threads=1"});
-      else
-        v.insert(v.end(), {"--set", "/optimization/sensitivity={\"threads\": 1}"});
-    }
+    // one sensitivity thread per child when two run at once, unless the user's own --set
+    // chose the sensitivity options (a value may be set once)
+    const std::string threads = cs.optimization.contains("sensitivity")
+                                    ? "/optimization/sensitivity/threads=1"
+                                    : "/optimization/sensitivity={\"threads\": 1}";
+    if (a.jobs > 1 && std::none_of(c.sets.begin(), c.sets.end(), [&](const std::string& s) {
+          return pointers_overlap(set_target(s, cs.raw), set_target(threads, cs.raw));
+        }))
+      v.insert(v.end(), {"--set", threads});
     if (!a.optimizer.empty()) v.insert(v.end(), {"--optimizer", a.optimizer});
-    if (!a.check) v.push_back("--no-check");
-    std::snprintf(buf, sizeof buf, "%.17g", a.check_options.warn);
-    v.insert(v.end(), {"--check-warn", buf});
-    std::snprintf(buf, sizeof buf, "%.17g", a.check_options.fail);
-    v.insert(v.end(), {"--check-fail", buf});
+    if (!a.check) {
+      v.push_back("--no-check");  // and no thresholds: they would have no check to judge
+    } else {
+      std::snprintf(buf, sizeof buf, "%.17g", a.check_options.warn);
+      v.insert(v.end(), {"--check-warn", buf});
+      std::snprintf(buf, sizeof buf, "%.17g", a.check_options.fail);
+      v.insert(v.end(), {"--check-fail", buf});
+    }
     std::error_code ec;
     if (a.resume &&
         std::filesystem::exists(c.out + "/start_" + std::to_string(k + 1) + "/checkpoint.json", ec))
@@ -348,9 +353,24 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const bool resume = a.resume && !interrupted_before_first_evaluation(out);
   const std::string& optimizer = a.optimizer;
   const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
+  if (check) check_gradient_check_options(*check);
   lsmbs::Case cs = load_case_with_sets(case_file, c.sets, /*design_as_initial=*/true);
   lsmbs::OptimizationSpec spec =
       lsmbs::parse_optimization(cs);  // validated before anything is written
+  if (a.starts >= 1) {
+    // every start's initial design is drawn at random: an initial value given with --set would
+    // be replaced in every start
+    for (const auto& set : c.sets)
+      for (int i = 0; i < cs.design->size(); ++i)
+        if (pointers_overlap(set_target(set, cs.raw),
+                             "/design/variables/" + std::to_string(i) + "/initial"))
+          throw lsmbs::Error("--set " + set +
+                             ": --starts draws the initial value of design variable '" +
+                             cs.design->variables[static_cast<size_t>(i)].name +
+                             "' at random in every start; drop this --set, or set the variable's "
+                             "bounds (/design/variables/" +
+                             std::to_string(i) + "/lower, /upper)");
+  }
   // Testing hook (docs/verification.md): LSMBS_STOP_AFTER_EVALUATIONS=N ends the run after N
   // evaluations simulated in this run exactly as an interruption (SIGINT) would: checkpoint and
   // history written, status "interrupted", exit code 130, resumable with --resume.
@@ -505,6 +525,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   }
   // coincident features: the gradients at such a design are one-sided (Design::coincident_features)
   if (auto w = d.coincident_features(init); !w.empty()) warnings.push_back("initial design: " + w);
+  if (auto w = d.features_outside(init); !w.empty()) warnings.push_back("initial design: " + w);
   if (auto w = d.coincident_features(res.p); !w.empty()) warnings.push_back("final design: " + w);
   S["warnings"] = warnings;
   // the KKT report of a failed evaluation would read gradients that were never computed

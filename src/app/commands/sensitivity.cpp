@@ -16,6 +16,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/json_file.hpp"
+#include "lsmbs/core/text.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
@@ -139,6 +140,11 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   so.idas.rtol = a.rtol;
   so.idas.atol = a.atol > 0 ? a.atol : a.rtol;
   so.full_residual = a.full_residual;
+  if (auto msg = so.validate(); !msg.empty())  // named as the command line spells the option
+    throw lsmbs::Error(lsmbs::rename_fields(
+        msg,
+        {{"delta", "--delta"}, {"threads", "--threads"}, {"adjoint_memory", "--adjoint-memory"}}));
+  if (check) check_gradient_check_options(*check);
   lsmbs::Case cs = load_case_with_sets(case_file, c.sets);
   if (!cs.design)
     throw lsmbs::Error(case_file, "/design",

@@ -3,12 +3,20 @@
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/core/text.hpp"
+#include "lsmbs/integrators/static_solver.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/static_run.hpp"
 
 namespace lsmbs::app {
 
 int static_command(const CommonArgs& c, const StaticArgs& a) {
+  lsmbs::StaticOptions so;  // the command line's values, checked before the case is loaded
+  so.t = a.t;
+  so.max_iter = a.max_iter;
+  if (auto msg = so.validate(); !msg.empty())
+    throw lsmbs::Error(lsmbs::rename_fields(msg, {{"t", "--t"}, {"max_iter", "--max-iter"}}));
   lsmbs::Case cs = load_case_with_sets(c.case_file, c.sets);
   lsmbs::StaticRunOptions o;
   o.out_dir = c.out;

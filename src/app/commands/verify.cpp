@@ -23,6 +23,7 @@ int verify_command(const CommonArgs& c, VerifyArgs a) {
   check_verify_options(vo);
   vo.out_dir = c.out;
   vo.command_line = c.command_line;
+  check_sets(c.case_file, c.sets);
   for (const auto& st : c.sets) {
     if (!st.empty() && st[0] == '/')
       vo.case_overrides.push_back(parse_override(st));

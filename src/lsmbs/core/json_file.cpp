@@ -6,14 +6,17 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/text.hpp"
 
 namespace lsmbs {
 
@@ -110,8 +113,82 @@ void check_json_depth(const std::string& text, const std::string& file, int max_
   }
 }
 
+namespace {
+
+// A JSON pointer's reference token for an object key.
+std::string pointer_token(const std::string& k) {
+  std::string r;
+  for (char c : k)
+    r += c == '~' ? std::string("~0") : c == '/' ? std::string("~1") : std::string(1, c);
+  return r;
+}
+
+// The JSON path of the string (a value, or a key of the object at the path) that holds `marker`,
+// or nullopt.
+std::optional<std::string> path_of(const nlohmann::json& j, const std::string& marker,
+                                   const std::string& path, bool& key) {
+  if (j.is_string()) {
+    if (j.get_ref<const std::string&>().find(marker) == std::string::npos) return std::nullopt;
+    key = false;
+    return path;
+  }
+  if (j.is_object()) {
+    for (const auto& [k, v] : j.items()) {
+      if (k.find(marker) != std::string::npos) {
+        key = true;
+        return path;
+      }
+      if (auto p = path_of(v, marker, path + "/" + pointer_token(k), key)) return p;
+    }
+  }
+  if (j.is_array())
+    for (size_t i = 0; i < j.size(); ++i)
+      if (auto p = path_of(j[i], marker, path + "/" + std::to_string(i), key)) return p;
+  return std::nullopt;
+}
+
+// Text that is not UTF-8, named by the JSON path of the string that holds it. The parser's own
+// message gives a byte, line and column, and echoes the broken bytes; the path says which name
+// or value to fix. The first broken byte is replaced by a marker (U+10FFFE, a noncharacter no
+// case uses), every later one by '?', the copy parsed, and the marker searched for.
+void check_utf8(const std::string& text, const std::string& file) {
+  const size_t bad = invalid_utf8_at(text);
+  if (bad == std::string::npos) return;
+  const std::string marker = "\xF4\x8F\xBF\xBE";
+  std::string copy = text.substr(0, bad) + marker;
+  for (size_t i = bad + 1; i < text.size();) {
+    const size_t next = invalid_utf8_at(std::string_view(text).substr(i));
+    if (next == std::string::npos) {
+      copy.append(text, i, std::string::npos);
+      break;
+    }
+    copy.append(text, i, next);
+    copy += '?';
+    i += next + 1;
+  }
+  char byte[8];
+  std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned char>(text[bad]));
+  const std::string what = std::string("not valid UTF-8 (byte ") + std::to_string(bad + 1) + ", " +
+                           byte + "): JSON text is UTF-8; save the case file as UTF-8";
+  std::optional<std::string> path;
+  bool key = false;
+  try {
+    path = path_of(nlohmann::json::parse(copy), marker, "", key);
+  } catch (const nlohmann::json::exception&) {  // not in a string: the parser's message says where
+  }
+  if (!path)
+    throw Error(
+        file, "byte " + std::to_string(bad + 1),
+        std::string("invalid JSON: a byte that is not UTF-8 (") + byte + "), outside any string");
+  throw Error(file, path->empty() ? "/" : *path,
+              (key ? "a key of this object is " : "the string is ") + what);
+}
+
+}  // namespace
+
 nlohmann::json parse_json_document(const std::string& text, const std::string& file) {
   check_json_depth(text, file);
+  check_utf8(text, file);
   struct Frame {
     bool object;
     std::set<std::string> keys;

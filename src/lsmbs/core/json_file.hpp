@@ -22,8 +22,8 @@ void check_json_depth(const std::string& text, const std::string& file, int max_
 
 /// Parses a case document: the depth check above, then nlohmann::json with every object's keys
 /// checked for duplicates, which JSON parsers otherwise resolve silently (the last one wins).
-/// Throws lsmbs::Error (file, JSON path of the repeated key) on a duplicate; nlohmann's own
-/// exceptions on invalid JSON.
+/// Throws lsmbs::Error (file, JSON path of the repeated key) on a duplicate, and (file, JSON path
+/// of the string) on text that is not UTF-8; nlohmann's own exceptions on other invalid JSON.
 nlohmann::json parse_json_document(const std::string& text, const std::string& file);
 
 }  // namespace lsmbs

@@ -116,6 +116,24 @@ std::string Design::coincident_features(const Vec& p) const {
   return {};
 }
 
+std::string Design::features_outside(const Vec& p) const {
+  std::string w;
+  for (const BodyDesign& b : bodies) {
+    const auto outside = b.map->features_outside_mesh(p);
+    if (outside.empty()) continue;
+    std::string names;
+    for (int f : outside)
+      names += (names.empty() ? "'" : ", '") + b.map->level_set().features()[f].name() + "'";
+    w += (w.empty() ? "" : "; ") + std::string("body '") + b.body->name + "': level-set " +
+         (outside.size() == 1 ? "feature " : "features ") + names +
+         (outside.size() == 1 ? " lies" : " lie") +
+         " wholly outside the body at this design (overlapping no element), with no effect on "
+         "it until a design variable moves it in (check the centre and size against the mesh, "
+         "in the body's frame)";
+  }
+  return w;
+}
+
 double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
                              Vec& grad) {
   const double rt = params.scalars[b.body->rho_param] * params.scalars[b.body->thickness_param];

@@ -69,6 +69,10 @@ class Design final : public Parameterization {
   /// gradient is one-sided (checked at the mesh nodes within 12 bands of the boundary, where the
   /// two features' distances agree also one band away in x and in y).
   std::string coincident_features(const Vec& p) const;
+  /// Empty, or a warning that level-set features lie wholly outside their body at p
+  /// (DesignMap::features_outside_mesh): they have no effect there until a design variable
+  /// moves them in.
+  std::string features_outside(const Vec& p) const;
   /// Mass of a designed body and its gradient m(p), ∂m/∂p = ρ t Σ_e A_e ∂μ_e/∂p.
   static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
                               Vec& grad);

@@ -44,6 +44,23 @@ DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
   ls_.set_refine_within(kRefineBands * eps_);
 }
 
+std::vector<int> DesignMap::features_outside_mesh(const Vec& p) const {
+  const auto vals = ls_.values(p);
+  const auto& features = ls_.features();
+  std::vector<int> outside;
+  for (size_t f = 0; f < features.size(); ++f) {
+    const Feature& F = features[f];
+    bool reaches = false;
+    for (int e = 0; e < num_elements() && !reaches; ++e) {
+      const double d = F.distance<double>(mesh_->centroid(e), vals.theta[f].data());
+      // the distance from the shape: positive outside it, for holes and solid features alike
+      reaches = (F.hole() ? d : -d) <= radius_[e];
+    }
+    if (!reaches) outside.push_back(static_cast<int>(f));
+  }
+  return outside;
+}
+
 void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
   const int ne = num_elements(), nv = ls_.num_variables();
   const auto vals = ls_.values(p);

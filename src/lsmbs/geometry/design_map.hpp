@@ -39,6 +39,13 @@ class DesignMap {
 
   /// μ (size n_e) and, if requested, ∂μ/∂p (n_e × n_v, sparse).
   void map(const Vec& p, Vec& mu, SpMat* dmu_dp = nullptr) const;
+  /// Features (indices into level_set().features()) that lie wholly outside the mesh at p:
+  /// every element's centre is farther from the feature's shape than the element's circumradius,
+  /// so the feature overlaps no element (a hole drawn off the part, or in another frame or unit;
+  /// only the logistic's tail, within a few bands of the mesh's edge, can still reach μ_e). The
+  /// features' own distances are used: exact for ellipses and circles, below the true distance
+  /// for super-ellipses (convex), so a feature that overlaps an element is never reported.
+  std::vector<int> features_outside_mesh(const Vec& p) const;
   /// Elements evaluated on the sub-grid at the last map() call (diagnostics).
   int last_cut_count() const { return last_cut_.load(); }
 

@@ -41,6 +41,11 @@ std::string format_g(double v) {
   return b;
 }
 
+// Elements of a rectangle mesh at most: a cap that keeps a typo (a zero or two too many) from
+// exhausting the memory; 5e6 elements are 10^7 unknowns, beyond what a run of this testbed
+// finishes.
+constexpr double kMaxRectangleElements = 5e6;
+
 // A builder error at the JSON entry `r`: the builder names the argument at fault as the case format
 // does ("a/body", "node_set", or nothing for the entry as a whole), a path below the entry.
 [[noreturn]] void fail_at(const JsonReader& r, const ModelError& e) {
@@ -211,8 +216,16 @@ struct Loader {
       const JsonReader el = m.child("elements");
       if (!el.is_array() || el.size() != 2) el.fail("expected [nx, ny]");
       const double nx = el.at(0).as_number(), ny = el.at(1).as_number();
-      if (nx < 1 || ny < 1 || nx != std::floor(nx) || ny != std::floor(ny) || nx * ny > 5e6)
+      if (nx < 1 || ny < 1 || nx != std::floor(nx) || ny != std::floor(ny))
         el.fail("expected two positive integers [nx, ny]");
+      if (nx * ny > kMaxRectangleElements) {
+        char msg[160];
+        std::snprintf(msg, sizeof msg,
+                      "[%.15g, %.15g] is %.15g elements; a rectangle mesh has at most %.0f "
+                      "(nx × ny)",
+                      nx, ny, nx * ny, kMaxRectangleElements);
+        el.fail(msg);
+      }
       mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx),
                                static_cast<int>(ny));
     } else {
@@ -608,6 +621,7 @@ struct Loader {
                      : SparseLU::Ordering::kNestedDissection;
     o.k = r.non_negative("k", 0.0);
     o.zeta = r.non_negative("zeta", 0.0);
+    o.force_floor = r.non_negative("force_floor", o.force_floor);
     if (auto msg = o.validate(); !msg.empty()) {
       const auto colon = msg.find(':');
       r.fail(msg.substr(0, colon), msg.substr(colon + 2));
@@ -777,6 +791,20 @@ struct Loader {
       bd.body = &fb;
       bd.map = std::make_unique<DesignMap>(
           fb.mesh, LevelSet(std::move(feats), std::move(root), d->size()), mo);
+      // A feature wholly outside its body changes nothing. One that no design variable moves
+      // never will (a ring or hole drawn in another frame or unit): refused. One that a variable
+      // moves may come in during an optimization: the runs warn (Design::features_outside).
+      for (int k : bd.map->features_outside_mesh(d->initial())) {
+        const auto& ls = bd.map->level_set();
+        if (!ls.feature_variables(k).empty()) continue;
+        const Feature& feat = ls.features()[static_cast<size_t>(k)];
+        g.child("features")
+            .at(static_cast<size_t>(k))
+            .fail(std::string(fixed.count(feat.name()) ? "non-design feature '" : "feature '") +
+                  feat.name() + "' lies wholly outside body '" + fb.name +
+                  "' (it overlaps no element), and no design variable moves it: it has no "
+                  "effect; check its centre and size against the mesh, in the body's frame");
+      }
       d->bodies.push_back(std::move(bd));
     }
     for (const auto& b : r.items("parameters")) {
@@ -931,7 +959,9 @@ Case load_case(const std::string& path, const std::vector<CaseOverride>& overrid
     const nlohmann::json& holder = j.at(parent);
     if (holder.is_array()) {
       const std::string& key = ptr.back();
-      const bool index = !key.empty() && key.find_first_not_of("0123456789") == std::string::npos;
+      // an index as JSON pointers spell it: digits, no leading zero ("01" is not 1)
+      const bool index = !key.empty() && key.find_first_not_of("0123456789") == std::string::npos &&
+                         (key == "0" || key[0] != '0');
       if (!index || key.size() > 9 || std::stoul(key) >= holder.size())
         throw Error(path, o.pointer,
                     o.origin + ": " + parent.to_string() + " is an array of " +

@@ -81,6 +81,8 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
   S["status"] = "complete";
   S["design"] = design_json(cs, p);
   S["bodies"] = bodies;
+  S["warnings"] = nlohmann::json::array();
+  if (auto w = d.features_outside(p); !w.empty()) S["warnings"].push_back(w);
   S["responses"] = nlohmann::json::object();
   for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
   S["units"] = {{"responses", nlohmann::json::object()}};

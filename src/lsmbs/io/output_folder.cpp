@@ -23,9 +23,8 @@ void check_output_folder(const std::string& out, const OutputFolderNames& names)
   const std::string& o = names.folder;
   if (out.empty()) throw Error(o + " \"\": expected an output folder name");
   if (!valid_utf8(out))
-    throw Error(o + " " + displayable_text(out) +
-                ": expected a folder name in UTF-8 (summary.json records it; the bytes shown as "
-                "\xEF\xBF\xBD are not UTF-8)");
+    throw Error(o + " " + shown(out) +
+                ": the folder name is not valid UTF-8 text (summary.json records it)");
   if (out.find('\0') != std::string::npos)
     throw Error(o + ": expected a folder name without a NUL character");
   std::error_code ec;

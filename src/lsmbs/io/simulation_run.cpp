@@ -225,7 +225,13 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
                 {"rigid_bodies", m.rigid_bodies().size()},
                 {"flexible_bodies", bodies}};
   S["counts"] = ro.idas ? nlohmann::json(res.idas) : nlohmann::json(res.integrator);
-  if (const auto w = res.integrator.warnings(); !w.empty()) S["warnings"] = w;
+  std::vector<std::string> warnings = res.integrator.warnings();
+  if (cs.design)  // a level-set feature off its body has no effect on this run
+    if (auto w = cs.design->features_outside(ro.design_point.size() ? ro.design_point
+                                                                    : cs.design->initial());
+        !w.empty())
+      warnings.push_back(w);
+  if (!warnings.empty()) S["warnings"] = warnings;
   if (!res.quadratures.empty()) S["quadratures"] = quadratures_json(res.quadratures, {});
   S["wall_seconds"] = res.integrator.wall_seconds;
   S["responses"] = responses;

@@ -4,10 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
+#include <optional>
+#include <string_view>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/file_check.hpp"
+#include "lsmbs/core/text.hpp"
 
 namespace lsmbs {
 
@@ -137,26 +139,79 @@ Table1D Table1D::read_csv(const std::string& path, Interp interp, double period,
                           double ys) {
   if (const auto why = unreadable_file_reason(path); !why.empty())
     throw Error(path, "", "table file: " + why);
-  std::ifstream f(path);
+  std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path, "", "cannot open table file");
   std::vector<double> x, y;
+  std::vector<int> lines;  // of each point, for messages
   std::string line;
   int ln = 0;
   while (std::getline(f, line)) {
     ++ln;
-    if (auto h = line.find('#'); h != std::string::npos) line.resize(h);
-    for (char& ch : line)
-      if (ch == ',' || ch == ';' || ch == '\t') ch = ' ';
-    std::istringstream is(line);
-    double a, b;
-    if (!(is >> a)) {
-      if (line.find_first_not_of(" \r") == std::string::npos || (x.empty() && ln == 1))
-        continue;  // blank/header
-      throw Error(path, "line " + std::to_string(ln), "expected two numbers");
+    const std::string at = "line " + std::to_string(ln);
+    std::string_view text(line);
+    if (ln == 1 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // a UTF-8 BOM
+    if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+    if (const auto h = text.find('#'); h != std::string_view::npos) text = text.substr(0, h);
+    // Fields are separated by commas or semicolons when the line has one (blanks around them
+    // are not part of the field), else by tabs (each tab: a TSV cell may be empty), else by
+    // runs of spaces. Each field must be a number as a whole: "0, 1 2" is (0, '1 2'), refused,
+    // not (0, 1).
+    std::vector<std::string_view> fields;
+    const bool csv = text.find_first_of(",;") != std::string_view::npos;
+    if (csv || text.find('\t') != std::string_view::npos) {
+      const char* seps = csv ? ",;" : "\t";
+      const char* blanks = csv ? " \t" : " ";
+      for (size_t b = 0;;) {
+        const size_t e = std::min(text.find_first_of(seps, b), text.size());
+        std::string_view fld = text.substr(b, e - b);
+        const size_t first = fld.find_first_not_of(blanks);
+        fld = first == std::string_view::npos
+                  ? std::string_view()
+                  : fld.substr(first, fld.find_last_not_of(blanks) - first + 1);
+        fields.push_back(fld);
+        if (e == text.size()) break;
+        b = e + 1;
+      }
+      // empty trailing fields ("0,1,") are empty spreadsheet columns, not data; a line of
+      // separators only is an empty row
+      while (!fields.empty() && fields.back().empty()) fields.pop_back();
+    } else {
+      fields = whitespace_fields(text);
     }
-    if (!(is >> b)) throw Error(path, "line " + std::to_string(ln), "expected two numbers");
-    x.push_back(a * xs);
-    y.push_back(b * ys);
+    if (fields.empty()) continue;  // blank or comment line
+    std::vector<std::optional<double>> v;
+    for (const auto fld : fields) v.push_back(parse_finite_double(fld));
+    // a header: the first line, with no number in it and not starting like one
+    const char c0 = fields[0].empty() ? ' ' : fields[0][0];
+    if (ln == 1 && std::none_of(v.begin(), v.end(), [](const auto& o) { return o.has_value(); }) &&
+        !(std::isdigit(static_cast<unsigned char>(c0)) || c0 == '-' || c0 == '+' || c0 == '.'))
+      continue;
+    if (fields.size() != 2) {
+      std::string got;
+      for (const auto fld : fields) got += (got.empty() ? "" : ", ") + shown(fld);
+      throw Error(path, at,
+                  "expected two numbers x, y (separated by a comma, semicolon, tab or spaces), "
+                  "got " +
+                      std::to_string(fields.size()) +
+                      (fields.size() == 1 ? " field: " : " fields: ") + got);
+    }
+    for (size_t k = 0; k < 2; ++k)
+      if (!v[k])
+        throw Error(path, at,
+                    std::string(k == 0 ? "x" : "y") + ": expected a finite number, got " +
+                        shown(fields[k]) + " (the whole field must be a number: no units)");
+    const double a = *v[0] * xs, b = *v[1] * ys;
+    if (!std::isfinite(a) || !std::isfinite(b))
+      throw Error(path, at,
+                  std::string(std::isfinite(a) ? "y" : "x") +
+                      " times its scale is beyond double range (x_scale, y_scale)");
+    if (!x.empty() && !(a > x.back()))
+      throw Error(path, at,
+                  "x values must be strictly increasing: " + shown(fields[0]) +
+                      " does not exceed the x of line " + std::to_string(lines.back()));
+    x.push_back(a);
+    y.push_back(b);
+    lines.push_back(ln);
   }
   try {
     return Table1D(std::move(x), std::move(y), interp, period);

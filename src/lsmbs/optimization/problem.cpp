@@ -1,9 +1,11 @@
 #include "lsmbs/optimization/problem.hpp"
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/records/json.hpp"
@@ -157,7 +159,11 @@ std::string hex(double v) {
   return s;
 }
 double unhex(const std::string& s) {
-  const uint64_t b = std::stoull(s, nullptr, 16);
+  // exactly the 16 hexadecimal digits hex() writes: a prefix parser read "3ff0zz" as 0x3ff0
+  uint64_t b = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), b, 16);
+  if (s.size() != 16 || ec != std::errc() || end != s.data() + s.size())
+    throw std::invalid_argument("'" + s.substr(0, 40) + "' is not 16 hexadecimal digits");
   double v;
   std::memcpy(&v, &b, 8);
   return v;

@@ -251,10 +251,22 @@ double StressMeasure::aggregate(const std::vector<double>& s, std::vector<double
   if (o_.aggregation == Aggregation::kKs) {
     const double rho = o_.parameter, ref = o_.reference, m = smax / ref;
     double sum = 0;
-    for (double v : s) sum += std::exp(rho * (v / ref - m));
+    if (std::isfinite(m) && (m == 0 || std::isnormal(m))) {  // the normalized stresses are doubles
+      for (double v : s) sum += std::exp(rho * (v / ref - m));
+      if (w)
+        for (size_t e = 0; e < n; ++e) (*w)[e] = std::exp(rho * (s[e] / ref - m)) / sum;
+      return ref * (m + std::log(sum) / rho);
+    }
+    // A reference so far below the stresses that s/σ_ref overflows (σ_ref = 1e-300: every
+    // element above 1.8e8 Pa became inf, inf − inf = NaN, and a response's max over the steps
+    // skipped those steps), or so far above that it underflows: the same sum in stress units,
+    // shifted by the maximum, f = s_max + σ_ref ln Σ_e exp(−ρ (s_max − s_e)/σ_ref) / ρ. Every
+    // term is in [0, 1] and the maximum's is 1 (no NaN, ln Σ ≥ 0), so max ≤ f ≤ max + σ_ref ln N/ρ.
+    for (double v : s) sum += std::exp(-rho * ((smax - v) / ref));
     if (w)
-      for (size_t e = 0; e < n; ++e) (*w)[e] = std::exp(rho * (s[e] / ref - m)) / sum;
-    return ref * (m + std::log(sum) / rho);
+      for (size_t e = 0; e < n; ++e) (*w)[e] = std::exp(-rho * ((smax - s[e]) / ref)) / sum;
+    const double lse = std::log(sum);
+    return lse > 0 ? smax + ref * (lse / rho) : smax;
   }
   if (smax <= 0) return 0;  // every element unstressed: f = 0, subgradient 0
   const double P = o_.parameter;

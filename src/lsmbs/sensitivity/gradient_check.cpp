@@ -1,6 +1,7 @@
 #include "lsmbs/sensitivity/gradient_check.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "lsmbs/core/error.hpp"
@@ -9,10 +10,18 @@
 namespace lsmbs {
 
 std::string GradientCheckOptions::validate() const {
-  if (!(delta > 0 && delta < 1)) return "delta: expected a relative step in (0, 1)";
-  if (!(warn > 0) || !std::isfinite(warn)) return "warn: expected a positive relative disagreement";
+  auto g = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return std::string(b);
+  };
+  if (!(delta > 0 && delta < 1))
+    return "delta: expected a relative step in (0, 1), got " + g(delta);
+  if (!(warn > 0) || !std::isfinite(warn))
+    return "warn: expected a positive finite relative disagreement, got " + g(warn);
   if (!(fail >= warn) || !std::isfinite(fail))
-    return "fail: expected a finite relative disagreement >= warn";
+    return "fail: expected a finite relative disagreement >= warn (" + g(warn) + "), got " +
+           g(fail);
   return {};
 }
 

@@ -104,3 +104,142 @@ TEST(Mesh2D, GmshTrianglesAreRejectedWithTheFileName) {
     EXPECT_NE(std::string(e.what()).find("triangles are not supported"), std::string::npos);
   }
 }
+
+namespace {
+
+// The two-quad mesh of ReadsGmshV4QuadsAndPhysicalLines (lines numbered from 1).
+const std::string kTwoQuads = R"($MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+2
+1 1 "left"
+2 2 "plate"
+$EndPhysicalNames
+$Entities
+1 1 1 0
+7 5 5 0 0
+1 0 0 0 0 1 0 1 1 2 1 -4
+1 0 0 0 2 1 0 1 2 0
+$EndEntities
+$Nodes
+3 7 1 7
+0 7 0 1
+7
+5 5 0
+1 1 0 2
+1
+4
+0 0 0
+0 1 0
+2 1 0 4
+2
+3
+5
+6
+1 0 0
+2 0 0
+1 1 0
+2 1 0
+$EndNodes
+$Elements
+2 3 1 3
+1 1 1 1
+1 1 4
+2 1 3 2
+2 1 2 5 4
+3 2 3 6 5
+$EndElements
+)";
+
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return s.replace(at, from.size(), to);
+}
+
+// The message of Mesh2D::read_gmsh on `text` (empty when it reads).
+std::string gmsh_error(const std::string& text) {
+  const std::string p = write_temp("bad.msh", text);
+  try {
+    Mesh2D::read_gmsh(p);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+// Each of these was read without a word, and the mesh (and the results) changed: a quad with a
+// repeated node, two coincident nodes (a crack), a node tag defined twice, a missing $EndNodes or
+// $EndElements, an extra node tag on an element line, a number with a suffix. Each is refused
+// with the file, the line and what was expected.
+TEST(Mesh2D, GmshReaderRefusesWhatItWouldMisread) {
+  ASSERT_EQ(gmsh_error(kTwoQuads), "");
+  // a third quad's node 8 at (1, 0), where node 2 is: quad 3 no longer shares node 2 with quad 2
+  const std::string crack = replaced(
+      replaced(
+          replaced(replaced(kTwoQuads, "3 7 1 7\n", "4 8 1 8\n"), "3 2 3 6 5\n", "3 8 3 6 5\n"),
+          "$EndNodes\n", "2 8 0 1\n8\n1 0 0\n$EndNodes\n"),
+      "1 1 1 0\n", "1 1 2 0\n");
+  const std::string crack_entities =
+      replaced(crack, "1 0 0 0 2 1 0 1 2 0\n", "1 0 0 0 2 1 0 1 2 0\n8 0 0 0 2 1 0 0 0\n");
+  struct Bad {
+    std::string text, message;
+  };
+  const Bad bad[] = {
+      {replaced(kTwoQuads, "3 2 3 6 5\n", "3 2 3 6 6\n"),
+       "bad.msh: line 41: quadrilateral 3 repeats node 6 (a quadrilateral has four distinct "
+       "corners)"},
+      {crack_entities,
+       "bad.msh: line 37: nodes 2 (line 31) and 8 coincide at (1, 0): the quadrilaterals on "
+       "either side are not connected there"},
+      {replaced(kTwoQuads, "2\n3\n5\n6\n", "2\n2\n5\n6\n"),
+       "bad.msh: line 31: node tag 2 is defined twice (first on line 30)"},
+      {replaced(kTwoQuads, "$EndNodes\n", ""),
+       "bad.msh: line 34: expected $EndNodes (the end of $Nodes, whose counts say its data ends "
+       "here), got '$Elements'"},
+      {replaced(kTwoQuads, "$EndElements\n", ""),
+       "bad.msh: line 41: unexpected end of file: expected $EndElements (the end of $Elements)"},
+      {replaced(kTwoQuads, "2 1 2 5 4\n", "2 1 2 5 4 7\n"),
+       "bad.msh: line 40: expected an element: its tag and 4 node tags (5 fields), got 6 fields: "
+       "'2 1 2 5 4 7'"},
+      {replaced(kTwoQuads, "1 1 0\n2 1 0\n$EndNodes", "1x 1 0\n2 1 0\n$EndNodes"),
+       "bad.msh: line 32: expected x (a finite number), got '1x'"},
+      {replaced(kTwoQuads, "2 1 0 4\n", "2 1 0 5\n"),
+       "bad.msh: line 25: more nodes than the 7 announced on line 16"},
+      {replaced(kTwoQuads, "3 7 1 7\n", "3 8 1 7\n"),
+       "bad.msh: line 33: the blocks hold 7 nodes, line 16 announces 8"},
+      {replaced(kTwoQuads, "2 1 0\n", "2 1 0.5\n"),
+       "bad.msh: line 33: node 6 has z = 0.5: lsmbs meshes are planar and lie in the plane z = 0"},
+      {replaced(kTwoQuads, "2 1 3 2\n", "2 9 3 2\n"),
+       "bad.msh: line 39: the element block's entity 9 of dimension 2 is not declared in "
+       "$Entities"},
+      {replaced(kTwoQuads, "2 1 3 2\n", "1 1 3 2\n"),
+       "bad.msh: line 39: element type 3 has dimension 2, but the block's entity has dimension 1"},
+      {replaced(kTwoQuads, "2 1 2 5 4\n", "2 1 2 5 9\n"),
+       "bad.msh: line 40: element 2 refers to unknown node 9"},
+      {replaced(kTwoQuads, "3 2 3 6 5\n", "2 2 3 6 5\n"),
+       "bad.msh: line 41: element tag 2 is defined twice (first on line 40)"},
+      {replaced(kTwoQuads, "4.1 0 8\n", "4.0 0 8\n"),
+       "bad.msh: line 2: expected Gmsh format 4.1 (MSH 4.1 ASCII, Gmsh's default since version "
+       "4.1), got 4.0"},
+      {replaced(kTwoQuads, "$EndEntities\n", "$EndEntities\n$EndEntities\n"),
+       "bad.msh: line 15: $EndEntities without its section"},
+      {replaced(kTwoQuads, "7 5 5 0 0\n", "7 5 5 0 0 3\n"),
+       "bad.msh: line 11: expected 5 fields on this entity line, got 6: '7 5 5 0 0 3'"},
+      {replaced(kTwoQuads, "$EndPhysicalNames\n", "$EndPhysicalNames\n$Periodic\n0\n"),
+       "bad.msh: line 9: the section '$Periodic' has no '$EndPeriodic' before the end of the file"},
+  };
+  for (const auto& b : bad) {
+    const std::string msg = gmsh_error(b.text);
+    EXPECT_NE(msg.find(testing::TempDir() + b.message), std::string::npos)
+        << "message: " << msg << "\nexpected: " << b.message;
+  }
+  // an unknown section with its end marker is skipped: the same mesh
+  const std::string periodic =
+      replaced(kTwoQuads, "$EndPhysicalNames\n", "$EndPhysicalNames\n$Periodic\n0\n$EndPeriodic\n");
+  EXPECT_EQ(gmsh_error(periodic), "");
+  EXPECT_EQ(Mesh2D::read_gmsh(write_temp("periodic.msh", periodic)).num_elements(), 2);
+}

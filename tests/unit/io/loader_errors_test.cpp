@@ -5,14 +5,17 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <tuple>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/text.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/optimization/problem.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "support/test_models.hpp"
 
@@ -309,4 +312,241 @@ TEST(LoaderErrors, BodiesPlacedAgainstTheirDriversAreRefused) {
   ok["bodies"][0]["position"] = {1.001, 0.0};
   Case cs = test::make_case(ok);
   EXPECT_EQ(cs.initial.q[0], 1.001);  // the case's placement; the run projects it
+}
+
+// simulation.force_floor is documented and the integrator has it (GeneralizedAlphaOptions), but
+// the loader refused it as an unknown key.
+TEST(LoaderErrors, ForceFloorIsReadAndChecked) {
+  json j = base();
+  j["simulation"]["force_floor"] = 0.25;
+  EXPECT_EQ(test::make_case(j).simulation.force_floor, 0.25);
+  j["simulation"]["force_floor"] = -1;
+  expect_error(j, "/simulation/force_floor", "expected a non-negative number, got -1");
+}
+
+// The cap on a rectangle mesh was refused as "expected two positive integers".
+TEST(LoaderErrors, RectangleMeshCapIsStated) {
+  json j = base();
+  j["bodies"].push_back(
+      {{"name", "plate"},
+       {"type", "flexible"},
+       {"mesh", {{"type", "rectangle"}, {"size", {1, 0.1}}, {"elements", {3000, 2000}}}},
+       {"material", {{"E", 1e9}, {"nu", 0.3}, {"rho", 1000}}},
+       {"thickness", 0.01}});
+  expect_error(j, "/bodies/1/mesh/elements",
+               "[3000, 2000] is 6000000 elements; a rectangle mesh has at most 5000000 (nx × ny)");
+  j["bodies"][1]["mesh"]["elements"] = {2.5, 2};
+  expect_error(j, "/bodies/1/mesh/elements", "expected two positive integers [nx, ny]");
+}
+
+namespace {
+
+// A clamped 1 m × 0.2 m plate with a hole at (cx, 0.1) of radius r, both design variables.
+json plate_with_hole() {
+  return R"({
+    "name": "plate",
+    "bodies": [{"name": "p", "type": "flexible",
+                "mesh": {"type": "rectangle", "origin": [0, 0], "size": [1, 0.2], "elements": [10, 2]},
+                "material": {"E": 1e9, "nu": 0.3, "rho": 1000}, "thickness": 0.01}],
+    "joints": [{"name": "c", "type": "clamp", "flexible": "p", "node_set": "left"}],
+    "simulation": {"t_end": 0.002, "h": 0.001},
+    "output": {"measures": [{"name": "m", "type": "mass", "body": "p"}],
+               "responses": [{"name": "mass", "measure": "m", "aggregate": "final"}]},
+    "design": {"variables": [{"name": "r", "initial": 0.05, "lower": 0.01, "upper": 0.08},
+                             {"name": "cx", "initial": 0.5, "lower": 0.2, "upper": 3}],
+               "geometry": [{"body": "p", "features": [
+                 {"name": "hole", "type": "circle", "cx": "cx", "cy": 0.1, "r": "r"}]}]}
+  })"_json;
+}
+
+}  // namespace
+
+// A feature that overlaps no element of its body has no effect, and nothing said so. One that no
+// variable moves is refused at its JSON path; one that a variable moves is a warning
+// (Design::features_outside), since an optimizer may move it in.
+TEST(LoaderErrors, FeaturesOutsideTheirBodyAreRefusedOrWarned) {
+  json ring = plate_with_hole();
+  ring["design"]["geometry"][0]["features"].push_back({{"name", "ring"},
+                                                       {"type", "circle"},
+                                                       {"cx", 5},
+                                                       {"cy", 5},
+                                                       {"r", 0.1},
+                                                       {"non_design", true}});
+  expect_error(ring, "/design/geometry/0/features/1",
+               "non-design feature 'ring' lies wholly outside body 'p' (it overlaps no element), "
+               "and no design variable moves it: it has no effect");
+  json fixed = plate_with_hole();  // a hole in another unit: millimetres on a plate in metres
+  fixed["design"]["geometry"][0]["features"].push_back({{"name", "mm"},
+                                                        {"type", "ellipse"},
+                                                        {"cx", 500},
+                                                        {"cy", 100},
+                                                        {"a", 1},
+                                                        {"b", 1},
+                                                        {"d", 50}});
+  expect_error(fixed, "/design/geometry/0/features/1",
+               "feature 'mm' lies wholly outside body 'p' (it overlaps no element)");
+  // a ring that overlaps the plate's edge by 1 cm has an effect: it loads
+  json edge = plate_with_hole();
+  edge["design"]["geometry"][0]["features"].push_back({{"name", "ring"},
+                                                       {"type", "circle"},
+                                                       {"cx", 1.04},
+                                                       {"cy", 0.1},
+                                                       {"r", 0.05},
+                                                       {"non_design", true}});
+  EXPECT_NO_THROW(test::make_case(edge));
+  // a design hole that starts off the plate (cx = 2.5) but may move in: loads, and warns there
+  json moving = plate_with_hole();
+  moving["design"]["variables"][1]["initial"] = 2.5;
+  Case cs = test::make_case(moving);
+  Vec p = cs.design->initial();
+  EXPECT_EQ(cs.design->features_outside(p),
+            "body 'p': level-set feature 'hole' lies wholly outside the body at this design "
+            "(overlapping no element), with no effect on it until a design variable moves it in "
+            "(check the centre and size against the mesh, in the body's frame)");
+  // the plate's last element spans x in [0.9, 1]: a hole of r = 0.05 at x = 1.04 overlaps it,
+  // at x = 1.06 it does not (the circle's distance is exact)
+  p[0] = 0.05;
+  p[1] = 1.04;
+  EXPECT_EQ(cs.design->features_outside(p), "");
+  p[1] = 1.06;
+  EXPECT_NE(cs.design->features_outside(p), "");
+  p[1] = 0.5;
+  EXPECT_EQ(cs.design->features_outside(p), "");
+}
+
+// Text that is not UTF-8 in a case file: the parser's message gave a byte, line and column, and
+// echoed the broken bytes to the terminal; the message names the JSON path of the string.
+TEST(LoaderErrors, CaseStringsThatAreNotUtf8AreNamedByTheirPath) {
+  const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "utf8";
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "case.json").string();
+  std::string text = base().dump(1);
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return t.replace(at, from.size(), to);
+  };
+  const std::pair<std::string, std::string> bad[] = {
+      {with("\"errors\"", "\"err\xC3ors\""),
+       file + ": /name: the string is not valid UTF-8 (byte "},
+      {with("\"name\": \"pin\"", "\"name\": \"p\xFFn\""),
+       file + ": /joints/0/name: the string is not valid UTF-8"},
+      {with("\"stiffness\"", "\"stiff\xED\xA0\x80ness\""),  // an encoded surrogate
+       file + ": /forces/0: a key of this object is not valid UTF-8"},
+      {with("\"errors\"", "\"errors\" \xFF"), file + ": byte "},
+  };
+  for (const auto& [doc, message] : bad) {
+    std::ofstream(file, std::ios::binary) << doc;
+    try {
+      (void)load_case(file);
+      ADD_FAILURE() << "accepted: " << message;
+    } catch (const Error& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.find(message), 0u) << msg;
+      EXPECT_EQ(invalid_utf8_at(msg), std::string::npos) << "the message echoes the bytes: " << msg;
+    }
+  }
+}
+
+// The command line: every value given once, seeds that do not wrap, options named by their flags,
+// UTF-8 in --set. Exit 2, nothing written, before any simulation.
+TEST(LoaderErrors, CommandLineRefusesReplacedWrappedAndMisnamedValues) {
+  namespace fs = std::filesystem;
+  const std::string dir = testing::TempDir() + "lsmbs_cli_values";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string file = dir + "/case.json";
+  std::ofstream(file) << base().dump(1);
+  auto run = [&](const std::string& args, const std::string& phrase) {
+    const std::string out = dir + "/out";
+    fs::remove_all(out);
+    const std::string cmd =
+        std::string(LSMBS_CLI) + " " + args + " -o " + out + " 2> " + dir + "/err.txt";
+    const int rc = std::system(cmd.c_str());
+    std::ifstream f(dir + "/err.txt");
+    const std::string err((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << cmd << " → " << rc << ": " << err;
+    EXPECT_NE(err.find(phrase), std::string::npos) << cmd << ": " << err;
+    EXPECT_FALSE(fs::exists(out + "/summary.json")) << cmd;
+    std::printf("  %s\n", err.substr(0, err.find('\n')).c_str());
+  };
+  // one value set twice, in every spelling (the last won, and summary.json kept only it)
+  run("simulate " + file + " --set /simulation/h=1e-3 --set /simulation/h=2e-3",
+      "--set /simulation/h=1e-3 and --set /simulation/h=2e-3 set the same value (/simulation/h): "
+      "the later one would replace the earlier without a word; give each value once");
+  run("sensitivity " + file + " --set k=200 --set k=300",
+      "--set k=200 and --set k=300 set the same value (/design/variables/0/initial)");
+  run("optimize " + file + " --set k=200 --set /design/variables/0/initial=300",
+      "--set k=200 and --set /design/variables/0/initial=300 set the same value "
+      "(/design/variables/0/initial)");
+  run("verify " + file + " --set k=200 --set k=300",
+      "--set k=200 and --set k=300 set the same value");
+  run("simulate " + file +
+          " --set '/simulation={\"t_end\": 1.5, \"h\": 0.01}' --set /simulation/h=0.005",
+      "overlap (/simulation/h is part of /simulation)");
+  run("optimize " + file + " --starts 2 --set k=200",
+      "--set k=200: --starts draws the initial value of design variable 'k' at random in every "
+      "start");
+  // seeds and integers: no wrap, no octal
+  run("optimize " + file + " --starts 2 --seed -1",
+      "--seed: expected a non-negative integer, got '-1'");
+  run("optimize " + file + " --starts 2 --seed 1.5",
+      "--seed: expected a non-negative integer (decimal digits), got '1.5'");
+  run("optimize " + file + " --starts 2 --seed 18446744073709551616",
+      "--seed: expected a non-negative integer in [0, 18446744073709551615]");
+  run("sensitivity " + file + " --check --check-seed -1",
+      "--check-seed: expected a non-negative integer, got '-1'");
+  run("sensitivity " + file + " --check --check-seed 4294967296",
+      "--check-seed: expected a non-negative integer in [0, 4294967295]");
+  run("sensitivity " + file + " --threads 0x2", "--threads: expected an integer (decimal digits)");
+  // the library's field names, now the flags, checked before any simulation
+  run("optimize " + file + " --check-fail 1e-9",
+      "--check-fail: expected a finite relative disagreement >= --check-warn (0.001), got 1e-09");
+  run("sensitivity " + file + " --check --check-delta 2",
+      "--check-delta: expected a relative step in (0, 1), got 2");
+  run("sensitivity " + file + " --check-delta 0.1",
+      "--check-delta: an option of the gradient "
+      "check; give --check");
+  run("optimize " + file + " --no-check --check-warn 0.1",
+      "--check-warn: an option of the gradient check, which --no-check skips");
+  run("static " + file + " --t inf", "--t: expected a finite time");
+  run("sensitivity " + file + " --adjoint-memory inf", "--adjoint-memory");
+  // bytes that are not UTF-8: an internal error after the whole run, before
+  run("simulate " + file + " --set \"$(printf '/name=ab\\377c')\"",
+      "--set '/name=ab\\xffc': not valid UTF-8 text (byte 9)");
+  run("simulate " + file + " --set \"$(printf 'k=\\351')\"", "not valid UTF-8 text");
+  const std::string latin1 = dir + "/caf\xe9.json";  // a file name summary.json cannot record
+  std::ofstream(latin1) << base().dump(1);
+  run("simulate \"$(printf '" + dir + "/caf\\351.json')\"",
+      "caf\\xe9.json': the case file's name is not valid UTF-8 (summary.json records it)");
+  // whole numbers and indices: " 150" was read by stod, "00" was an internal error
+  run("simulate " + file + " --set 'k= 150'", "--set k= 150: expected a finite number after '='");
+  run("simulate " + file + " --set '/output/measures/00={}'",
+      "/output/measures is an array of 1 entries; expected an index below 1");
+}
+
+// A checkpoint (optimize --resume) holds every double as its 16 hexadecimal digits. The reader
+// took a prefix: "3ff8000000000000zz" read as 1.5, "3ff8" as a tiny subnormal. Exactly 16 digits
+// now, or the evaluation is damaged (the command line refuses the checkpoint, exit 2).
+TEST(LoaderErrors, CheckpointDoublesAreExactlySixteenHexDigits) {
+  Evaluation e;
+  e.p = Vec::Constant(2, 1.5);
+  e.objective = -0.1;
+  e.objective_gradient = Vec::Constant(2, 3.0);
+  e.constraint_gradient = Mat::Zero(0, 2);
+  e.max_violation = NAN;
+  const json j = evaluation_to_json(e);
+  const Evaluation back = evaluation_from_json(j);  // exact round trip
+  EXPECT_EQ(back.p, e.p);
+  EXPECT_EQ(back.objective, e.objective);
+  EXPECT_TRUE(std::isnan(back.max_violation));
+  const std::string objective = j["objective"];
+  ASSERT_EQ(objective.size(), 16u);
+  for (const std::string bad : {objective + "zz", objective.substr(0, 4), " " + objective,
+                                "0x" + objective.substr(2), std::string("")}) {
+    json d = j;
+    d["objective"] = bad;
+    EXPECT_THROW((void)evaluation_from_json(d), std::exception) << "'" << bad << "'";
+  }
 }

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
@@ -206,4 +207,91 @@ TEST(Table1D, PeriodicTableInputErrors) {
       std::string::npos);
   EXPECT_NE(error_of({0, 1, 3}, {0, 5, 0}, 2).find("more than the period"), std::string::npos);
   EXPECT_EQ(error_of({0, 1, 2}, {0, 5, 0}, 2), "");
+}
+
+namespace {
+
+// The message of Table1D::read_csv on a file with `text` (empty when it reads).
+std::string table_error(const std::string& name, const std::string& text) {
+  const std::string p = testing::TempDir() + name;
+  {
+    std::FILE* f = std::fopen(p.c_str(), "wb");
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  try {
+    Table1D::read_csv(p, Table1D::Interp::kLinear);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+// A field is a number only if all of it is: the reader took "1.2x", "1.2rad" and "1 2" as 1.2,
+// 1.2 and 1, stopped a number at a NUL byte, and ignored a third column, without a word. Each is
+// refused with the file, the line and what was expected.
+TEST(Table1D, ReadCsvRefusesFieldsThatAreNotWholeNumbers) {
+  const std::string dir = testing::TempDir();
+  struct Bad {
+    std::string text, message;
+  };
+  const Bad bad[] = {
+      {"0,0\n1,1.2x\n",
+       "t.csv: line 2: y: expected a finite number, got '1.2x' (the whole field must be a number: "
+       "no units)"},
+      {"0,0\n1,1.2rad\n", "t.csv: line 2: y: expected a finite number, got '1.2rad'"},
+      {"0,0\n1,1 2\n", "t.csv: line 2: y: expected a finite number, got '1 2'"},
+      {"0,0\n1 2 3\n",
+       "t.csv: line 2: expected two numbers x, y (separated by a comma, semicolon, tab or spaces), "
+       "got 3 fields: '1', '2', '3'"},
+      {std::string("0,0\n1,1\0"
+                   "5\n",
+                   10),
+       "t.csv: line 2: y: expected a finite number, got '1\\x005'"},
+      {"0,0,5\n1,1,7\n",
+       "t.csv: line 1: expected two numbers x, y (separated by a comma, semicolon, "
+       "tab or spaces), got 3 fields: '0', '0', '5'"},
+      {"0;1,5\n1;2\n",
+       "t.csv: line 1: expected two numbers x, y (separated by a comma, semicolon, "
+       "tab or spaces), got 3 fields: '0', '1', '5'"},
+      {"0\t\t1\n1\t2\n",  // an empty TSV cell is a field
+       "t.csv: line 1: expected two numbers x, y (separated by a comma, semicolon, tab or spaces), "
+       "got 3 fields: '0', '', '1'"},
+      {"0,0\n1\n",
+       "t.csv: line 2: expected two numbers x, y (separated by a comma, semicolon, tab "
+       "or spaces), got 1 field: '1'"},
+      {"0,0\nt,s\n1,1\n", "t.csv: line 2: x: expected a finite number, got 't'"},  // header: line 1
+      {"1x,0\n2,1\n", "t.csv: line 1: x: expected a finite number, got '1x'"},     // not a header
+      {"0,0\n1,1e999\n", "t.csv: line 2: y: expected a finite number, got '1e999'"},
+      {"0,0\n1,nan\n", "t.csv: line 2: y: expected a finite number, got 'nan'"},
+      {"0,0\n0x1,1\n", "t.csv: line 2: x: expected a finite number, got '0x1'"},
+      {"0,0\n2,1\n1,2\n",
+       "t.csv: line 3: x values must be strictly increasing: '1' does not exceed the x of line 2"},
+  };
+  for (const auto& b : bad) {
+    const std::string msg = table_error("t.csv", b.text);
+    EXPECT_NE(msg.find(dir + b.message), std::string::npos)
+        << "file " << ::testing::PrintToString(b.text) << "\n  message: " << msg
+        << "\n  expected: " << b.message;
+  }
+}
+
+// What stays allowed reads exactly: a header on line 1 (also after a UTF-8 BOM), comments, blank
+// lines, commas, semicolons, tabs or spaces, blanks around a separator, empty trailing fields.
+TEST(Table1D, ReadCsvAcceptsEveryDocumentedLayout) {
+  const std::string p = testing::TempDir() + "layouts.csv";
+  {
+    std::FILE* f = std::fopen(p.c_str(), "wb");
+    std::fputs(
+        "\xEF\xBB\xBFt [s];angle\r\n# a comment\n\n0;0\r\n1 , 2.5\n2\t-3e-1\n3  4 # note\n+4,5,\n",
+        f);
+    std::fclose(f);
+  }
+  const Table1D t = Table1D::read_csv(p, Table1D::Interp::kLinear);
+  const double x[] = {0, 1, 2, 3, 4}, y[] = {0, 2.5, -0.3, 4, 5};
+  EXPECT_EQ(t.x_min(), 0.0);
+  EXPECT_EQ(t.x_max(), 4.0);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(t.value(x[i]), y[i]) << "x = " << x[i];
 }
