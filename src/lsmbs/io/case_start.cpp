@@ -191,7 +191,8 @@ void hold_given_velocities(Case& cs) {
   for (const auto& g : given)
     for (int j : rep.conflicting_held)
       if (j >= g.first && j < g.end && path == "/bodies")
-        if (const auto at = paths.find(g.body); at != paths.end()) path = at->second + "/" + g.field;
+        if (const auto at = paths.find(g.body); at != paths.end())
+          path = at->second + "/" + g.field;
   throw Error(
       cs.file, path,
       st.message +
@@ -250,7 +251,6 @@ void check_initial_placement(const Case& cs, const State& placed) {
                   "projection corrects placements only within 10 % of the model's length scale (" +
                   std::to_string(L) + " m) and 0.1 rad");
 }
-
 
 // Every response window must contain a time step of the run [0, t_end].
 void check_response_windows(const Case& cs) {
@@ -313,8 +313,8 @@ std::string parameter_json_path(const Case& cs, int i) {
   const auto at = cs.start.paths.find(entity);
   if (at == cs.start.paths.end()) return {};
   // a flexible body's material constants sit in its "material" object (docs/case-format.md)
-  const bool material = cs.model->find_flexible(entity) &&
-                        (property == "E" || property == "nu" || property == "rho");
+  const bool material =
+      cs.model->find_flexible(entity) && (property == "E" || property == "nu" || property == "rho");
   return at->second + (material ? "/material/" : "/") + property;
 }
 
