@@ -118,6 +118,7 @@ Vec design_point(const Case& cs, const py::object& design) {
   }
   for (int i = 0; i < d.size(); ++i) {
     const auto& var = d.variables[static_cast<size_t>(i)];
+    p[i] = d.snap_to_bounds(i, p[i]);  // a value within round-off of a bound is that bound
     if (!(p[i] >= var.lower && p[i] <= var.upper))
       throw py::value_error("design variable '" + var.name + "' = " + exact(p[i]) +
                             " is outside its bounds [" + exact(var.lower) + ", " +

@@ -12,8 +12,35 @@ t_end, step, newton_iterations) and stop cleanly on Ctrl-C (KeyboardInterrupt on
 Errors: ``lsmbs.Error`` (a ValueError with ``file`` and ``json_path``) for invalid input,
 ``lsmbs.NumericalFailure`` when a run fails. Plots: ``lsmbs.plot`` (matplotlib).
 """
-from ._lsmbs import static  # noqa: F401  (lsmbs.static(case): static equilibrium)
-from ._lsmbs import (  # noqa: F401
+import sys as _sys
+
+
+def _interpreter_error(missing):
+    """An ImportError that names the interpreter this build is for: the compiled module needs
+    NumPy and the Python version it was built with, and the `python3` first on PATH is not
+    always that one (a pyenv or conda interpreter before Debian's)."""
+    try:
+        from ._build_info import PYTHON, VERSION
+    except ImportError:  # a source tree without a build
+        PYTHON, VERSION = "the Python lsmbs was built with", "?"
+    here = f"{_sys.version_info.major}.{_sys.version_info.minor}"
+    return ImportError(
+        f"lsmbs was built for {PYTHON} (Python {VERSION}, with NumPy); this interpreter is "
+        f"{_sys.executable} (Python {here}) and {missing}. Run {PYTHON}, or build lsmbs for this "
+        f"interpreter (cmake -DPython_EXECUTABLE={_sys.executable}; it needs NumPy and pybind11).")
+
+
+try:
+    import numpy as _numpy  # noqa: F401  (the compiled module's arrays are NumPy arrays)
+except ImportError:
+    raise _interpreter_error("it has no NumPy") from None
+try:
+    from . import _lsmbs  # noqa: F401
+except ImportError as _e:
+    raise _interpreter_error(f"the compiled module does not load here ({_e})") from None
+
+from ._lsmbs import static  # noqa: F401,E402  (lsmbs.static(case): static equilibrium)
+from ._lsmbs import (  # noqa: F401,E402
     Case,
     DesignProblem,
     Error,

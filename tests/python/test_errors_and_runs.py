@@ -192,3 +192,18 @@ def test_ctrl_c_stops_a_run_cleanly(tmp_path):
     out, _ = p.communicate(timeout=60)
     assert p.returncode == 0
     assert out.split() == ["interrupted", "complete"]
+
+
+def test_import_on_an_interpreter_without_numpy_names_the_interpreter_to_use():
+    """`python3 -S` has no site packages, so no NumPy: the import says which interpreter lsmbs was
+    built for instead of a bare ModuleNotFoundError (the python3 first on PATH may be a pyenv or
+    conda one without Debian's NumPy)."""
+    import subprocess
+    import sys
+    from lsmbs import _build_info
+    p = subprocess.run([sys.executable, "-S", "-c", "import lsmbs"], capture_output=True,
+                       text=True, env=dict(os.environ))
+    assert p.returncode != 0
+    last = p.stderr.strip().splitlines()[-1]
+    assert last.startswith("ImportError: lsmbs was built for " + _build_info.PYTHON), last
+    assert "has no NumPy" in last and sys.executable in last, last

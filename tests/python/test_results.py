@@ -163,3 +163,29 @@ def test_verify_from_python_equals_the_command_line(tmp_path):
     assert (tmp_path / "py" / "h_study.csv").read_text() == (tmp_path / "cli" / "h_study.csv").read_text()
     with pytest.raises(lsmbs.Error, match="idas_rtol"):
         lsmbs.verify(str(SPRING), str(tmp_path / "bad"), idas_rtol=0.5)
+
+
+def test_a_value_within_round_off_of_a_bound_is_that_bound(tmp_path):
+    """lower + 1.0·(upper − lower) is not upper in floating point (here 0.028000000000000004 for
+    [0.002, 0.028]; an optimizer stepping onto a bound, SciPy's SLSQP, lands the same way): such a
+    value is the bound, by the command line, Python, and a case file's initial value; a value
+    further outside is still refused."""
+    import json
+    lo, up = 0.002, 0.028
+    x = lo + 1.0 * (up - lo)
+    assert x > up  # the round-off this is about
+    doc = json.loads(SPRING.read_text())
+    var = doc["design"]["variables"][0]
+    var.update(lower=lo, upper=up, initial=x)  # 'k' now spans [0.002, 0.028] (a spring constant)
+    doc["design"]["variables"][1]["initial"] = 20
+    case_file = tmp_path / "c.json"
+    case_file.write_text(json.dumps(doc))
+    case = lsmbs.load_case(str(case_file))
+    assert case.initial_design[0] == up
+    r = lsmbs.simulate(case, design={"k": x})
+    s = run_cli("simulate", case_file, "--set", f"k={x!r}", "-o", tmp_path / "cli")
+    assert s["design"]["k"] == up and r.summary["design"]["k"] == up
+    below = lo - 1.0 * (up - lo) * 1e-12  # below the lower bound by 1e-12 of the range
+    assert lsmbs.simulate(case, design={"k": below}).summary["design"]["k"] == lo
+    with pytest.raises(ValueError, match="outside its bounds"):
+        lsmbs.simulate(case, design={"k": up + 1e-6 * (up - lo)})

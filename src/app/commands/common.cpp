@@ -194,13 +194,14 @@ lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& s
   lsmbs::Vec p = cs.design->initial();
   for (const auto& s : sets) {
     if (!s.empty() && s[0] == '/') continue;  // a JSON-path override (load_case_with_sets)
-    const auto [name, value] = parse_set(s);
+    const auto [name, parsed] = parse_set(s);
     const int k = cs.design->variable_index(name);
     if (k < 0)
       throw lsmbs::Error(
           "--set " + s + ": unknown design variable '" + name + "'" +
           (name.find('/') != std::string::npos ? " (a JSON path starts with /)" : ""));
     const auto& v = cs.design->variables[k];
+    const double value = cs.design->snap_to_bounds(k, parsed);
     if (!(value >= v.lower && value <= v.upper))
       throw lsmbs::Error("--set " + s + ": outside the bounds [" + std::to_string(v.lower) + ", " +
                          std::to_string(v.upper) + "] of design variable '" + name +

@@ -11,6 +11,14 @@ Vec Design::initial() const {
   for (int i = 0; i < size(); ++i) v[i] = variables[i].initial;
   return v;
 }
+double Design::snap_to_bounds(int i, double v) const {
+  const auto& x = variables[static_cast<size_t>(i)];
+  const double tol = kBoundTolerance * (x.upper - x.lower);
+  if (std::abs(v - x.lower) <= tol) return x.lower;
+  if (std::abs(v - x.upper) <= tol) return x.upper;
+  return v;
+}
+
 Vec Design::lower() const {
   Vec v(size());
   for (int i = 0; i < size(); ++i) v[i] = variables[i].lower;
@@ -25,6 +33,11 @@ Vec Design::upper() const {
 int Design::add_variable(const std::string& name, double initial, double lower, double upper) {
   if (variable_index(name) >= 0)
     throw SetupError("design.variables", "duplicate design variable '" + name + "'");
+  if (upper > lower) {  // within round-off of a bound: that bound (kBoundTolerance)
+    const double tol = kBoundTolerance * (upper - lower);
+    if (std::abs(initial - lower) <= tol) initial = lower;
+    if (std::abs(initial - upper) <= tol) initial = upper;
+  }
   if (!(upper > lower) || !(initial >= lower && initial <= upper))
     throw SetupError(
         "design.variables",

@@ -55,6 +55,13 @@ class Design final : public Parameterization {
   Vec lower() const override;
   Vec upper() const override;
   int variable_index(const std::string& name) const;  ///< −1 if unknown
+  /// How far outside a bound a value may lie and still be that bound, relative to the range
+  /// upper − lower: a value computed as lower + 1.0·(upper − lower), or an optimizer's step onto a
+  /// bound (SciPy's SLSQP), lands there by round-off.
+  static constexpr double kBoundTolerance = 1e-10;
+  /// `v` for variable i, snapped onto a bound it lies within kBoundTolerance·(upper − lower) of
+  /// (inside or outside); any other value is returned as given (the callers refuse those outside).
+  double snap_to_bounds(int i, double v) const;
 
   /// Writes μ(p) into each designed body's field and bound parameter values into scalars.
   /// If dmu is given it receives ∂μ/∂p per designed body (same order as `bodies`).

@@ -692,10 +692,16 @@ struct Loader {
       dv.upper = v.number("upper");
       dv.initial = v.number("initial");
       if (!(dv.upper > dv.lower)) v.fail("upper", "expected upper > lower");
-      if (dv.initial < dv.lower || dv.initial > dv.upper)
-        v.fail("initial", "initial value " + std::to_string(dv.initial) +
-                              " is outside its bounds [" + std::to_string(dv.lower) + ", " +
-                              std::to_string(dv.upper) + "]");
+      // within round-off of a bound (Design::kBoundTolerance of the range): that bound
+      const double tol = Design::kBoundTolerance * (dv.upper - dv.lower);
+      if (std::abs(dv.initial - dv.lower) <= tol) dv.initial = dv.lower;
+      if (std::abs(dv.initial - dv.upper) <= tol) dv.initial = dv.upper;
+      if (dv.initial < dv.lower || dv.initial > dv.upper) {
+        char b[160];
+        std::snprintf(b, sizeof b, "initial value %.17g is outside its bounds [%.17g, %.17g]",
+                      dv.initial, dv.lower, dv.upper);
+        v.fail("initial", b);
+      }
       v.finish();
       d->variables.push_back(dv);
     }

@@ -330,7 +330,7 @@ TEST(CaseLoader, BadDesignBindingsNameTheJsonPath) {
       {R"([{"op":"replace","path":"/design/geometry/0/features/0/r","value":"rr"}])",
        "/design/geometry/0/features/0/r: unknown design variable 'rr'"},
       {R"([{"op":"replace","path":"/design/variables/0/initial","value":0.01}])",
-       "/design/variables/0/initial: initial value 0.010000 is outside its bounds"},
+       "/design/variables/0/initial: initial value 0.01 is outside its bounds"},
       {R"([{"op":"replace","path":"/design/variables/0/lower","value":-0.001}])",
        "feature 'hole' is degenerate within the design bounds: radius r must be non-negative"},
       {R"([{"op":"replace","path":"/design/geometry/0/body","value":"bob"}])",
