@@ -14,6 +14,7 @@
 #include <csignal>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 #include "lsmbs/core/allocator.hpp"
@@ -131,6 +132,21 @@ Vec design_point(const Case& cs, const py::object& design) {
 // checks a case file (prepare_case): simulation options and model parameters set from Python meet
 // the messages that the same values in the case file meet (an invalid option, for instance,
 // lsmbs.Error at /simulation/<field>), before anything runs or is written.
+// Two Python threads sharing one case take turns (Study::evaluation_mutex): a run reads the model
+// parameters the case holds, and the module releases the GIL while it runs. The turn is waited
+// for without the GIL (the run that holds it calls back into Python for its progress) and held
+// from writing the design into the parameters to the end of the run.
+class CaseTurn {
+ public:
+  explicit CaseTurn(const Case& cs) : lock_(cs.evaluation_mutex(), std::defer_lock) {
+    py::gil_scoped_release nogil;
+    lock_.lock();
+  }
+
+ private:
+  std::unique_lock<std::recursive_mutex> lock_;
+};
+
 Vec prepared(Case& cs, const py::object& design) {
   const Vec p = design_point(cs, design);
   prepare_case(cs, cs.design ? &p : nullptr);
@@ -392,6 +408,7 @@ PYBIND11_MODULE(_lsmbs, m) {
                throw Error(p.cs->file, parameter_json_path(*p.cs, i),
                            msg + " (model parameter '" + name + "' = " + exact(value) +
                                ", set from Python)");
+             const CaseTurn turn(*p.cs);  // not under a run of another thread
              p.cs->model->params().scalars[static_cast<size_t>(i)] = value;
            })
       .def("__contains__",
@@ -417,7 +434,10 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def_readonly("sha256", &Case::sha256)
       .def_property(
           "simulation", [](Case& c) -> GeneralizedAlphaOptions& { return c.simulation; },
-          [](Case& c, const GeneralizedAlphaOptions& o) { c.simulation = o; },
+          [](Case& c, const GeneralizedAlphaOptions& o) {
+            const CaseTurn turn(c);  // not under a run of another thread
+            c.simulation = o;
+          },
           py::return_value_policy::reference_internal)
       .def_property_readonly("parameters", [](const CasePtr& c) { return Parameters{c}; })
       .def_property_readonly("variables",
@@ -513,6 +533,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       "simulate",
       [](const CasePtr& cs, const py::object& design, const std::string& out_dir, bool overwrite,
          const py::object& progress) {
+        const CaseTurn turn(*cs);
         const Vec p = prepared(*cs, design);  // the design is in the model's parameters now
         return claimed(cs->model.get(), out_dir, overwrite, false, [&](OutputClaim&) {
           RunOptions ro;
@@ -551,6 +572,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       "static",
       [](const CasePtr& cs, const py::object& design, double t, int max_iter,
          const std::string& out_dir, bool overwrite) {
+        const CaseTurn turn(*cs);
         const Vec p = prepared(*cs, design);  // the design is in the model's parameters now
         return claimed(cs->model.get(), out_dir, overwrite, false, [&](OutputClaim&) {
           StaticRunOptions o;
@@ -638,6 +660,7 @@ PYBIND11_MODULE(_lsmbs, m) {
           throw py::value_error(msg);
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
+        const CaseTurn turn(*cs);
         const Vec p = prepared(*cs, design);
         PythonRun run(progress);
         o.progress = run.progress();
@@ -657,9 +680,10 @@ PYBIND11_MODULE(_lsmbs, m) {
       py::arg("case").none(false), py::arg("method") = "direct-analytic",
       py::arg("design") = py::none(), py::arg("delta") = 1e-6, py::arg("relative") = true,
       py::arg("matrix") = "converged", py::arg("threads") = 2, py::arg("rtol") = 1e-9,
-      py::arg("atol") = 0.0, py::arg("check") = false, py::arg("check_delta") = 1e-5,
-      py::arg("check_seed") = 20261122u, py::arg("check_warn") = 1e-3, py::arg("check_fail") = 5e-2,
-      py::arg("progress") = py::none(), py::arg("adjoint_memory") = 0.0,
+      py::arg("atol") = 0.0, py::arg("check") = false,
+      py::arg("check_delta") = GradientCheckOptions{}.delta, py::arg("check_seed") = 20261122u,
+      py::arg("check_warn") = 1e-3, py::arg("check_fail") = 5e-2, py::arg("progress") = py::none(),
+      py::arg("adjoint_memory") = 0.0,
       "Responses and their design gradients (§4.3) by one method, as `lsmbs sensitivity` "
       "(method 'adjoint': the discrete adjoint, scalar responses; adjoint_memory: the bound on its "
       "stored trajectory in MB, as --adjoint-memory)");
@@ -691,6 +715,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       .def(
           "evaluate",
           [](Problem& pr, const py::object& design, const py::object& progress) {
+            const CaseTurn turn(*pr.cs);
             const Vec p = prepared(*pr.cs, design);
             PythonRun run(progress);
             *pr.current = &run;
@@ -709,6 +734,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       [](const CasePtr& cs, const std::string& out_dir, bool resume, bool overwrite,
          const std::string& optimizer, bool check, double check_delta, unsigned check_seed,
          double check_warn, double check_fail, const py::object& progress) {
+        const CaseTurn turn(*cs);
         prepared(*cs, py::none());  // the run starts from the initial design
         const GradientCheckOptions co =
             check_options_from(check_delta, check_seed, check_warn, check_fail);
@@ -777,26 +803,33 @@ PYBIND11_MODULE(_lsmbs, m) {
                             {"objective", r.final.objective},
                             {"max_violation", r.final.max_violation}};
               S["nlopt_status"] = r.nlopt_status;
+              S["stop_reason"] = r.stop_reason;
               S["converged"] = r.converged;
+              S["kkt"] = r.kkt ? r.kkt->to_json() : nlohmann::json(nullptr);
+              S["warnings"] = r.warnings;
               S["evaluations"] = r.evaluations;
               S["gradient_check"] = check_record;
               S["files"] = {"summary.json", "checkpoint.json", "history.csv"};
               write_json_atomic(out_dir + "/summary.json", S);
             }
+            for (const auto& w : r.warnings)  // as `lsmbs optimize` prints them on stderr
+              PyErr_WarnEx(PyExc_RuntimeWarning, ("lsmbs.optimize: " + w).c_str(), 1);
             py::list history;
             for (const auto& e : r.history) history.append(evaluation_dict(e));
             return py::dict(
                 py::arg("status") = run_status_name(r.status()), py::arg("report") = r.report(),
                 py::arg("p") = array(r.p), py::arg("final") = evaluation_dict(r.final),
                 py::arg("history") = history, py::arg("converged") = r.converged,
-                py::arg("nlopt_status") = r.nlopt_status, py::arg("evaluations") = r.evaluations,
+                py::arg("nlopt_status") = r.nlopt_status, py::arg("stop_reason") = r.stop_reason,
+                py::arg("kkt") = r.kkt ? json_to_python(r.kkt->to_json()) : py::object(py::none()),
+                py::arg("warnings") = r.warnings, py::arg("evaluations") = r.evaluations,
                 py::arg("gradient_check") = json_to_python(check_record));
           });
         });
       },
       py::arg("case").none(false), py::arg("out_dir") = "", py::arg("resume") = false,
       py::arg("overwrite") = false, py::arg("optimizer") = "", py::arg("check") = true,
-      py::arg("check_delta") = 1e-5, py::arg("check_seed") = 20261122u,
+      py::arg("check_delta") = GradientCheckOptions{}.delta, py::arg("check_seed") = 20261122u,
       py::arg("check_warn") = 1e-3, py::arg("check_fail") = 5e-2, py::arg("progress") = py::none(),
       "The fully coupled optimization of the case's design (as `lsmbs optimize`): a gradient "
       "check at the initial design of a new run first (check=False skips it; a warning above "
@@ -807,6 +840,7 @@ PYBIND11_MODULE(_lsmbs, m) {
       "geometry",
       [](const CasePtr& cs, const py::object& design) {
         if (!cs->design) throw Error(cs->file, "/design", "the case has no design section");
+        const CaseTurn turn(*cs);
         const Vec p = prepared(*cs, design);  // as `lsmbs geometry` loads the case
         ModelParams params = cs->model->params();
         std::vector<SpMat> dmu;
@@ -847,7 +881,7 @@ PYBIND11_MODULE(_lsmbs, m) {
   m.def(
       "verify",
       [](const std::string& path, const std::string& out_dir, bool idas, bool mesh_study,
-         bool overwrite, double idas_rtol) {
+         bool overwrite, double idas_rtol, double tol_mesh) {
         return claimed(nullptr, out_dir, overwrite, false, [&](OutputClaim& claim) {
           VerifyOptions o;
           o.on_loaded = [&](const Case& cs) { claim.claim(*cs.model); };
@@ -855,6 +889,7 @@ PYBIND11_MODULE(_lsmbs, m) {
           o.idas = idas;
           o.mesh_study = mesh_study;
           o.idas_rtol = idas_rtol;
+          o.tol_mesh = tol_mesh;
           o.command_line = "lsmbs.verify (Python)";
           PythonRun run{py::none()};
           const VerifyResult r = run([&] { return run_verify(path, o); });
@@ -863,5 +898,6 @@ PYBIND11_MODULE(_lsmbs, m) {
       },
       py::arg("path"), py::arg("out_dir"), py::arg("idas") = true, py::arg("mesh_study") = true,
       py::arg("overwrite") = false, py::arg("idas_rtol") = VerifyOptions{}.idas_rtol,
+      py::arg("tol_mesh") = VerifyOptions{}.tol_mesh,
       "The verification report of a case file (as `lsmbs verify`); returns its summary");
 }

@@ -303,6 +303,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   ver->add_option("--tol-semi", vo.tol_semi, "threshold semi-analytical-central vs direct-analytic")
       ->capture_default_str();
+  ver->add_option("--tol-mesh", vo.tol_mesh,
+                  "mesh study: largest grid convergence index of a response on the finest mesh")
+      ->capture_default_str();
   ver->add_option("--idas-rtol", vo.idas_rtol,
                   "IDAS reference tolerance (atol 1e-3 of it, in units of the length scale); a "
                   "second run at ten times both estimates the reference's own error")
@@ -362,7 +365,8 @@ int main(int argc, char** argv) {
     // summary.json records the case file's name, and JSON text is UTF-8: a name that is not
     // would fail only when the summary is written, after the run
     if (lsmbs::invalid_utf8_at(case_file) != std::string::npos)
-      throw lsmbs::Error(lsmbs::shown(case_file) +
+      throw lsmbs::Error(lsmbs::shown(case_file, 4096) +  // a path is shown whole (PATH_MAX)
+
                          ": the case file's name is not valid UTF-8 (summary.json records it); "
                          "rename the file");
     // every argument is recorded in summary.json as UTF-8 text: the case file's name and --set

@@ -293,7 +293,11 @@ S = json.load(open('$tmp/opt_infeasible/summary.json'))
 tol = S['options']['optimization']['tol_constraint']
 assert S['final']['max_violation'] > tol and any('final design is infeasible' in w for w in S['warnings']), S['warnings']
 S2 = json.load(open('$tmp/opt_full/summary.json'))
-assert S2['final']['max_violation'] > tol or S2['warnings'] == [], S2['warnings']" \
+assert S2['final']['max_violation'] > tol or not any('infeasible' in w for w in S2['warnings']), S2['warnings']
+# why it stopped, apart from whether the design is optimal: cut off, hence not converged
+assert S['stop_reason'] == 'max_evaluations' and S['converged'] is False, (S['stop_reason'], S['converged'])
+assert S2['converged'] == (S2['stop_reason'] in ('ftol', 'xtol') and S2['kkt']['verdict'] == 'satisfied'
+                           and S2['final']['max_violation'] <= tol), S2" \
   && grep -q "warning: the final design is infeasible" "$tmp/inf.txt" || fail "infeasible final design: $(cat "$tmp/inf.txt")"
 LSMBS_STOP_AFTER_EVALUATIONS=4 "$exe" optimize "$tmp/opt.json" -o "$tmp/opt_killed" -q 2> "$tmp/stop.txt"; rc=$?
 [ $rc -eq 130 ] && grep -q "interrupted after 4 evaluations" "$tmp/stop.txt" || fail "stop hook: rc $rc $(cat "$tmp/stop.txt")"

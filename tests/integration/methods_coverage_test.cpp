@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "lsmbs/io/optimization_spec.hpp"
@@ -372,18 +373,23 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   };
   ASSERT_EQ(run("a", " --starts 3 --seed 7"), 0);
   ASSERT_EQ(run("b", " --starts 3 --seed 7"), 0);
-  auto starts = [&](const std::string& out) {
+  auto starts = [&](const std::string& out) {  // rows of starts.csv by column name
     std::ifstream f(dir + "/" + out + "/starts.csv");
     std::string line;
     std::getline(f, line);
     EXPECT_EQ(line,
               "start,exit_code,status,objective,max_violation,feasible,evaluations,wall_seconds,"
-              "initial.m1,initial.m2");
-    std::vector<std::vector<std::string>> rows;
+              "stop_reason,kkt,converged,rank,initial.m1,initial.m2,final.m1,final.m2");
+    std::vector<std::string> names;
+    std::stringstream hs(line);
+    for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
+    std::vector<std::map<std::string, std::string>> rows;
     while (std::getline(f, line)) {
-      std::vector<std::string> cells;
+      std::map<std::string, std::string> cells;
       std::stringstream ss(line);
-      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+      size_t i = 0;
+      for (std::string c; std::getline(ss, c, ',');) cells[i < names.size() ? names[i++] : "?"] = c;
+      EXPECT_EQ(cells.size(), names.size()) << line;
       rows.push_back(cells);
     }
     return rows;
@@ -393,21 +399,28 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   ASSERT_EQ(b.size(), 3u);
   std::vector<double> objectives;
   for (size_t k = 0; k < 3; ++k) {
-    ASSERT_EQ(a[k].size(), 10u);
-    const double m1 = std::stod(a[k][8]), m2 = std::stod(a[k][9]);
+    auto row = a[k];
+    const double m1 = std::stod(row["initial.m1"]), m2 = std::stod(row["initial.m2"]);
     EXPECT_TRUE(m1 >= 0.5 && m1 <= 10 && m2 >= 0.5 && m2 <= 10) << m1 << ", " << m2;
     EXPECT_LE(spread(m1, m2), 0.5) << "start " << k + 1 << " is not feasible";
-    EXPECT_EQ(a[k][8], b[k][8]) << "same seed, same starts";
-    EXPECT_EQ(a[k][9], b[k][9]);
-    if (k > 0) EXPECT_NE(a[k][8], a[k - 1][8]) << "the starts differ";
-    EXPECT_EQ(a[k][2], "complete");
+    EXPECT_EQ(row["initial.m1"], b[k].at("initial.m1")) << "same seed, same starts";
+    EXPECT_EQ(row["initial.m2"], b[k].at("initial.m2"));
+    if (k > 0) EXPECT_NE(row["initial.m1"], a[k - 1].at("initial.m1")) << "the starts differ";
+    EXPECT_EQ(row["status"], "complete");
     const json S =
         json::parse(std::ifstream(dir + "/a/start_" + std::to_string(k + 1) + "/summary.json"));
     EXPECT_NEAR(S["final"]["design"]["m1"].get<double>() / kM1, 1, 3e-4);
     EXPECT_NEAR(S["final"]["design"]["m2"].get<double>() / kM2, 1, 3e-4);
     EXPECT_NEAR(S["initial"]["design"]["m1"].get<double>(), m1, 1e-15 * m1);
-    EXPECT_EQ(std::stod(a[k][3]), S["final"]["objective"].get<double>());
-    objectives.push_back(std::stod(a[k][3]));
+    EXPECT_EQ(std::stod(row["objective"]), S["final"]["objective"].get<double>());
+    // the final design, the stop reason and the KKT verdict of each start, as its summary says;
+    // at the closed-form optimum the KKT conditions hold
+    EXPECT_EQ(std::stod(row["final.m1"]), S["final"]["design"]["m1"].get<double>());
+    EXPECT_EQ(std::stod(row["final.m2"]), S["final"]["design"]["m2"].get<double>());
+    EXPECT_EQ(row["stop_reason"], S["stop_reason"].get<std::string>());
+    EXPECT_EQ(row["kkt"], "satisfied") << "stationarity " << S["kkt"]["stationarity"];
+    EXPECT_EQ(row["converged"], "1");
+    objectives.push_back(std::stod(row["objective"]));
     EXPECT_NEAR(objectives.back() / kE, 1, 1e-6);
   }
   const json S = json::parse(std::ifstream(dir + "/a/summary.json"));
@@ -419,7 +432,7 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   EXPECT_EQ(S["options"]["multistart"]["seed"], 7);
   // another seed, other starts; --starts 0 and a --seed without --starts are input errors
   ASSERT_EQ(run("c", " --starts 3 --seed 8"), 0);
-  EXPECT_NE(starts("c")[0][8], a[0][8]);
+  EXPECT_NE(starts("c")[0].at("initial.m1"), a[0].at("initial.m1"));
   EXPECT_EQ(run("d", " --starts 0"), 2);
   EXPECT_EQ(run("e", " --seed 7"), 2);
   // --resume: another seed or number of starts is refused; a start that never began (its
@@ -430,10 +443,10 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   ASSERT_EQ(run("a", " --starts 3 --seed 7 --resume"), 0);
   const auto r = starts("a");
   ASSERT_EQ(r.size(), 3u);
-  EXPECT_EQ(r[2][1], "0");
-  EXPECT_EQ(r[2][2], "complete");
-  EXPECT_EQ(r[2][8], a[2][8]) << "the stored start, not a new draw";
-  EXPECT_EQ(r[2][3], a[2][3]) << "the same optimum (a deterministic run)";
+  EXPECT_EQ(r[2].at("exit_code"), "0");
+  EXPECT_EQ(r[2].at("status"), "complete");
+  EXPECT_EQ(r[2].at("initial.m1"), a[2].at("initial.m1")) << "the stored start, not a new draw";
+  EXPECT_EQ(r[2].at("objective"), a[2].at("objective")) << "the same optimum (a deterministic run)";
 }
 
 TEST(MethodsCoverage, MultiStartRanksAnUnconstrainedProblemByItsObjective) {

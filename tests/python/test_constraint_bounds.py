@@ -32,6 +32,9 @@ def pushed_block(objective, constraints, m0=1.0):
 def optimum(case):
     r = lsmbs.optimize(case, check=False)
     assert r["status"] == "complete", r["report"]
+    # the closed-form optimum is a KKT point: the report must say so where the run reached it
+    assert r["kkt"]["verdict"] == "satisfied", r["kkt"]
+    assert not any("KKT" in w for w in r["warnings"]), r["warnings"]
     return r["p"][0], r
 
 

@@ -194,7 +194,9 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
     for (int j = 0; j < std::max(1, a.jobs); ++j) pool.emplace_back(worker);
     for (auto& t : pool) t.join();
   }
-  // the ranking: feasible, completed starts by objective
+  // the ranking: feasible, completed starts; converged ones first, then those that stopped on their
+  // tolerance without meeting the KKT conditions, then those cut off (the evaluation limit); by
+  // objective within each tier: a lower objective of a start that did not finish is not a result
   struct Row {
     int start;
     int rc;
@@ -203,6 +205,14 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
     long evaluations = 0;
     double wall = NAN;
     bool feasible = false;
+    bool converged = false;
+    std::string stop_reason = "", kkt_verdict = "";
+    std::vector<double> final_design;
+    int tier() const {
+      return converged                                                                      ? 0
+             : (stop_reason == "ftol" || stop_reason == "xtol" || stop_reason == "success") ? 1
+                                                                                            : 2;
+    }
   };
   std::vector<Row> rows;
   const double tol = prob.spec().tol_constraint;
@@ -233,21 +243,40 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       }
       r.wall = number(S, "wall_seconds");
       r.feasible = r.status == "complete" && r.violation <= tol;
+      r.converged = S.contains("converged") && S["converged"].is_boolean() && S["converged"];
+      if (S.contains("stop_reason") && S["stop_reason"].is_string())
+        r.stop_reason = S["stop_reason"].get<std::string>();
+      if (S.contains("kkt") && S["kkt"].is_object() && S["kkt"].contains("verdict") &&
+          S["kkt"]["verdict"].is_string())
+        r.kkt_verdict = S["kkt"]["verdict"].get<std::string>();
+      r.final_design.assign(static_cast<size_t>(n), NAN);
+      if (S.contains("final") && S["final"].is_object() && S["final"].contains("design"))
+        for (int i = 0; i < n; ++i)
+          r.final_design[static_cast<size_t>(i)] =
+              number(S["final"]["design"], d.variables[i].name.c_str());
     }
     rows.push_back(r);
   }
   std::vector<double> objs;
-  int best = -1;
+  std::vector<int> order;  // feasible starts, best first
   for (const auto& r : rows)
-    if (r.feasible) {
-      objs.push_back(r.objective);
-      if (best < 0 || r.objective < rows[best - 1].objective) best = r.start;
-    }
+    if (r.feasible) objs.push_back(r.objective), order.push_back(r.start);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    const Row &ra = rows[a - 1], &rb = rows[b - 1];
+    return ra.tier() != rb.tier() ? ra.tier() < rb.tier() : ra.objective < rb.objective;
+  });
+  const int best = order.empty() ? -1 : order.front();
+  // the lowest objective of all feasible starts, when it is not the best one's (a start cut off)
+  int lowest = best;
+  for (int k : order)
+    if (rows[k - 1].objective < rows[lowest - 1].objective) lowest = k;
   std::sort(objs.begin(), objs.end());
   {
     std::vector<std::string> header = {"start",         "exit_code", "status",      "objective",
-                                       "max_violation", "feasible",  "evaluations", "wall_seconds"};
+                                       "max_violation", "feasible",  "evaluations", "wall_seconds",
+                                       "stop_reason",   "kkt",       "converged",   "rank"};
     for (const auto& v : d.variables) header.push_back("initial." + v.name);
+    for (const auto& v : d.variables) header.push_back("final." + v.name);
     std::ofstream f(c.out + "/starts.csv");
     for (size_t i = 0; i < header.size(); ++i) f << (i ? "," : "") << header[i];
     f << "\n";
@@ -262,8 +291,15 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       f << "," << (r.feasible ? 1 : 0) << "," << r.evaluations;
       std::snprintf(buf, sizeof buf, "%.6g", r.wall);
       f << "," << buf;
+      const auto rank = std::find(order.begin(), order.end(), r.start);
+      f << "," << r.stop_reason << "," << r.kkt_verdict << "," << (r.converged ? 1 : 0) << ","
+        << (rank == order.end() ? std::string() : std::to_string(rank - order.begin() + 1));
       for (int i = 0; i < n; ++i) {
         std::snprintf(buf, sizeof buf, "%.17g", starts[k][i]);
+        f << "," << buf;
+      }
+      for (int i = 0; i < n; ++i) {
+        std::snprintf(buf, sizeof buf, "%.17g", r.final_design[static_cast<size_t>(i)]);
         f << "," << buf;
       }
       f << "\n";
@@ -292,13 +328,26 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
                     {"objective", r.objective},
                     {"max_violation", r.violation},
                     {"feasible", r.feasible},
-                    {"evaluations", r.evaluations}});
+                    {"evaluations", r.evaluations},
+                    {"stop_reason", r.stop_reason},
+                    {"kkt", r.kkt_verdict},
+                    {"converged", r.converged}});
   S["starts"] = list;
+  static constexpr const char* kRankingRule =
+      "feasible starts; converged ones first (stopped on their tolerance at a KKT point), then "
+      "those that stopped on their tolerance without meeting the KKT conditions, then those cut "
+      "off (max_evaluations); by objective within each";
   if (!objs.empty())
     S["ranking"] = {
+        {"rule", kRankingRule},
+        {"order", order},
         {"feasible_results", objs.size()},
-        {"best", objs.front()},
+        {"best", rows[best - 1].objective},
         {"best_start", best},
+        {"best_stop_reason", rows[best - 1].stop_reason},
+        {"best_converged", rows[best - 1].converged},
+        {"lowest_objective", objs.front()},
+        {"lowest_objective_start", lowest},
         {"median", objs.size() % 2 ? objs[objs.size() / 2]
                                    : 0.5 * (objs[objs.size() / 2 - 1] + objs[objs.size() / 2])},
         {"worst", objs.back()}};
@@ -311,12 +360,21 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
                  static_cast<int>(std::count_if(rows.begin(), rows.end(),
                                                 [](const Row& r) { return r.rc != 0; })),
                  rows.size());
-  if (!c.quiet && !objs.empty())
+  if (!c.quiet && !objs.empty()) {
+    const Row& b = rows[best - 1];
     std::printf(
-        "multi-start: %zu of %zu starts feasible; best %.9g (start %d), median %.9g, worst "
-        "%.9g\n  results in %s\n",
-        objs.size(), rows.size(), objs.front(), best, S["ranking"]["median"].get<double>(),
-        objs.back(), c.out.c_str());
+        "multi-start: %zu of %zu starts feasible; best %.9g (start %d, %s, stopped on '%s'), "
+        "median %.9g, worst %.9g\n",
+        objs.size(), rows.size(), b.objective, best, b.converged ? "converged" : "not converged",
+        b.stop_reason.c_str(), S["ranking"]["median"].get<double>(), objs.back());
+    if (lowest != best)
+      std::printf(
+          "  start %d reached a lower objective, %.9g, but is ranked after it: it %s (%s)\n",
+          lowest, rows[lowest - 1].objective,
+          rows[lowest - 1].tier() == 2 ? "was cut off" : "is not a KKT point",
+          rows[lowest - 1].stop_reason.c_str());
+    std::printf("  results in %s\n", c.out.c_str());
+  }
   if (lsmbs::interrupted()) return 130;
   return all_ran && best > 0 ? 0 : 1;
 }
@@ -512,25 +570,18 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                                                             res.final.constraints.end())}};
   S["responses"] = {{spec.objective, res.final.objective}};
   S["nlopt"] = {{"code", res.nlopt_code}, {"status", res.nlopt_status}};
+  S["stop_reason"] = res.stop_reason;
   S["converged"] = res.converged;
-  // a final design outside the constraints is said, not only flagged in summary.json
-  nlohmann::json warnings = nlohmann::json::array();
-  if (res.final.ok && res.final.max_violation > spec.tol_constraint) {
-    char w[256];
-    std::snprintf(w, sizeof w,
-                  "the final design is infeasible: max relative constraint violation %.3e > "
-                  "%.3e (relative_constraint_violation) after %ld evaluations",
-                  res.final.max_violation, spec.tol_constraint, res.evaluations);
-    warnings.push_back(w);
-  }
+  // an infeasible final design, one that is not a KKT point, a max aggregate whose step moved:
+  // said, not only flagged in summary.json
+  nlohmann::json warnings = res.warnings;
   // coincident features: the gradients at such a design are one-sided (Design::coincident_features)
   if (auto w = d.coincident_features(init); !w.empty()) warnings.push_back("initial design: " + w);
   if (auto w = d.features_outside(init); !w.empty()) warnings.push_back("initial design: " + w);
   if (auto w = d.coincident_features(res.p); !w.empty()) warnings.push_back("final design: " + w);
   S["warnings"] = warnings;
-  // the KKT report of a failed evaluation would read gradients that were never computed
-  const auto kkt = res.final.ok ? lsmbs::kkt_report(prob, res.final) : lsmbs::KktReport{};
-  S["kkt"] = res.final.ok ? kkt.to_json() : nlohmann::json(nullptr);
+  // no KKT report of a failed evaluation: its gradients were never computed
+  S["kkt"] = res.kkt ? res.kkt->to_json() : nlohmann::json(nullptr);
   S["gradient_check"] =
       checked ? lsmbs::gradient_check_json(*checked, *check) : nlohmann::json(nullptr);
   S["counts"] = {{"evaluations", res.evaluations},
@@ -552,13 +603,15 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                 res.nlopt_status.c_str(), res.evaluations, res.simulations, res.wall_seconds);
     std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first_objective,
                 res.final.objective, res.final.max_violation);
-    if (res.final.ok)
+    if (const auto& kkt = res.kkt)
       std::printf(
           "  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; "
-          "stationarity %.2e, "
-          "bound-sign violation %.2e\n",
-          kkt.active_constraints, kkt.free_variables, kkt.at_lower, kkt.at_upper, kkt.stationarity,
-          kkt.bound_sign_violation);
+          "stationarity %.2e, bound-sign violation %.2e: %s (kkt_tolerance %.2g)\n",
+          kkt->active_constraints, kkt->free_variables, kkt->at_lower, kkt->at_upper,
+          kkt->stationarity, kkt->bound_sign_violation,
+          kkt->satisfied() ? "satisfied" : "not satisfied", kkt->tolerance);
+    std::printf("  stopped on '%s': %s\n", res.stop_reason.c_str(),
+                res.converged ? "converged" : "not converged");
     for (int i = 0; i < d.size(); ++i)
       std::printf("  %-10s %.6g -> %.6g\n", d.variables[i].name.c_str(), init[i], res.p[i]);
     std::printf("  results in %s\n", out.c_str());

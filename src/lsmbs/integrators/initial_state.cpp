@@ -2,10 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace lsmbs {
+
 namespace {
+
+std::string short_number(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
 
 // [ I  Φ_qᵀ ; Φ_q  0 ] on the model pattern.
 Status factor_projection(const Model& model, const ModelParams& p, const State& s, SparseLU& lu,
@@ -148,13 +156,23 @@ Status project_initial_state(const Model& model, const ModelParams& p, State& s,
       if (rep)
         for (int j = 0; j < nq; ++j)
           if (in_conflict[j]) rep->conflicting_held.push_back(j);
+      // what the drivers demand at t0 (Φ = coordinate − s(t): Φ_t = −ṡ): a conflict on a joint
+      // is often a driver's law whose speed at t0 is not the one the given velocities assume
+      std::string drivers;
+      for (int i = 0; i < nc; ++i)
+        if (phi_t[i] != 0 && drivers.size() < 300)
+          drivers += (drivers.empty() ? "" : ", ") + model.describe_unknown(nq + i) +
+                     " at ds/dt = " + short_number(-phi_t[i]);
       s.v = v_given;
       lu.reset_pivoting();
       return Status::Fail(
           Status::Code::kNotConverged,
           "the given initial velocities contradict the constraints (" + msg +
               "; speeds in the metric where an angular rate counts times the length scale " +
-              std::to_string(model.length_scale()) + " m)");
+              std::to_string(model.length_scale()) + " m)" +
+              (drivers.empty()
+                   ? std::string("; no driver moves at t = ") + short_number(s.t)
+                   : "; at t = " + short_number(s.t) + " the laws move their drivers: " + drivers));
     }
   } else if (vc.lpNorm<Eigen::Infinity>() > 0) {
     if (auto st = factor_velocity_projection(model, p, s, lu, vals, w, nullptr, 0.0); !st.ok())

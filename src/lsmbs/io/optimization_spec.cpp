@@ -107,6 +107,7 @@ OptimizationSpec parse_optimization(const Case& cs) {
     st->finish();
   }
   s.inner_max_evaluations = r.integer("inner_max_evaluations", 0, 0);
+  s.kkt_tolerance = r.positive("kkt_tolerance", s.kkt_tolerance);
   if (s.inner_max_evaluations > 0 && s.optimizer == "mma-svanberg")
     r.fail("inner_max_evaluations",
            "the classic MMA has no inner iterations (this option is for mma and ccsaq)");

@@ -23,7 +23,7 @@ void check_output_folder(const std::string& out, const OutputFolderNames& names)
   const std::string& o = names.folder;
   if (out.empty()) throw Error(o + " \"\": expected an output folder name");
   if (!valid_utf8(out))
-    throw Error(o + " " + shown(out) +
+    throw Error(o + " " + shown(out, 4096) +
                 ": the folder name is not valid UTF-8 text (summary.json records it)");
   if (out.find('\0') != std::string::npos)
     throw Error(o + ": expected a folder name without a NUL character");

@@ -21,6 +21,9 @@ struct VerifyOptions {
   bool fd_absolute = false;
   double tol_fd = 1e-5;    ///< direct-analytic vs fd-central
   double tol_semi = 1e-6;  ///< semi-analytical-central vs direct-analytic
+  /// mesh study: the grid convergence index of the finest mesh a response may have
+  /// (responses/mesh_convergence.hpp)
+  double tol_mesh = 1e-2;
   /// IDAS reference: rtol (atol = 1e-3 rtol in units of the model's length scale), and ten times
   /// both for the run that estimates the reference's own error
   double idas_rtol = 1e-10;

@@ -223,8 +223,11 @@ Table1D Table1D::read_csv(const std::string& path, Interp interp, double period,
 void Table1D::eval(double x, double& v, double& d1, double& d2) const {
   if (period_ > 0)
     x = x_.front() + std::fmod(std::fmod(x - x_.front(), period_) + period_, period_);
-  if (x <= x_.front() || x >= x_.back()) {
-    v = x <= x_.front() ? y_.front() : y_.back();
+  // Right-sided at every knot: the derivatives at x_k are those of the interval that starts
+  // there, which is what a motion starting at x_k follows (the first point included: a law that
+  // starts at t = 0 gives its initial velocity and acceleration their values after t = 0).
+  if (x < x_.front() || x >= x_.back()) {
+    v = x < x_.front() ? y_.front() : y_.back();
     d1 = d2 = 0;
     if (period_ <= 0) return;
   }

@@ -28,7 +28,9 @@ class Table1D {
     eval(x, v, d1, d2);
     return v;
   }
-  /// Beyond the ends (without period) the value is held constant and derivatives are zero.
+  /// Beyond the ends (without period) the value is held constant and derivatives are zero. At a
+  /// knot (the first point included) the derivatives are right-sided: those of the interval that
+  /// starts there.
   void eval(double x, double& v, double& d1, double& d2) const;
   bool empty() const { return x_.empty(); }
   double x_min() const { return x_.front(); }

@@ -25,7 +25,7 @@ void TrapezoidLaw::eval(double t, double& s, double& sd, double& sdd) const {
   const double tau = t - t_start_;
   const double d_acc = 0.5 * a_ * ta_ * ta_;
   double u, ud, udd;
-  if (tau <= 0) {
+  if (tau < 0) {  // at tau = 0 the accelerating phase's s̈ (right-sided, as at every switch)
     u = ud = udd = 0;
   } else if (tau < ta_) {
     u = 0.5 * a_ * tau * tau, ud = a_ * tau, udd = a_;
@@ -55,7 +55,7 @@ RampLaw::RampLaw(double s0, double speed, double ramp_time, double t_start)
 
 void RampLaw::eval(double t, double& s, double& sd, double& sdd) const {
   const double tau = t - t_start_;
-  if (tau <= 0) {
+  if (tau < 0) {  // at tau = 0 the ramp's s̈ (right-sided)
     s = s0_, sd = sdd = 0;
   } else if (tau < tr_) {
     s = s0_ + 0.5 * v_ / tr_ * tau * tau, sd = v_ / tr_ * tau, sdd = v_ / tr_;

@@ -19,6 +19,9 @@ struct Phase {
 class TimeLaw {
  public:
   virtual ~TimeLaw() = default;
+  /// s(t), ṡ(t), s̈(t). Where a derivative jumps (a phase switch, a table knot, the start of the
+  /// law) it is the right-sided one, the value after t: the initial velocities and accelerations
+  /// of a run starting there are those of the motion that follows.
   virtual void eval(double t, double& s, double& sd, double& sdd) const = 0;
   virtual std::vector<Phase> phases() const { return {}; }
   /// Appends the times in (t0, t1) where s̈ is discontinuous (phase boundaries, table knots):

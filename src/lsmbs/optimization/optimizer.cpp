@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -124,6 +125,81 @@ void constraints_cb(unsigned m, double* result, unsigned n, const double* x, dou
   if (grad)  // NLopt: row-major m × n
     for (unsigned j = 0; j < m; ++j)
       for (unsigned i = 0; i < n; ++i) grad[j * n + i] = dg(j, i);
+}
+
+const char* stop_word(nlopt_result r) {
+  switch (r) {
+    case NLOPT_SUCCESS:
+      return "success";
+    case NLOPT_STOPVAL_REACHED:
+      return "stopval";
+    case NLOPT_FTOL_REACHED:
+      return "ftol";
+    case NLOPT_XTOL_REACHED:
+      return "xtol";
+    case NLOPT_MAXEVAL_REACHED:
+      return "max_evaluations";
+    case NLOPT_MAXTIME_REACHED:
+      return "max_time";
+    case NLOPT_ROUNDOFF_LIMITED:
+      return "roundoff_limited";
+    case NLOPT_FORCED_STOP:
+      return "stopped";
+    default:
+      return "nlopt_failure";
+  }
+}
+
+std::string number(const char* f, double v) {
+  char b[48];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+// Max and min aggregates take one step's value: where the step moves between two designs the
+// response has a kink, its gradient jumps, and the optimizer's model of it is wrong on one side.
+// One sentence per such response of the problem, naming the first move.
+std::vector<std::string> extreme_switches(const std::vector<Evaluation>& h) {
+  std::map<std::string, std::pair<int, std::string>> moves;  // name → (count, first move)
+  for (size_t k = 1; k < h.size(); ++k)
+    for (const auto& [name, t] : h[k].extreme_times) {
+      const auto prev = h[k - 1].extreme_times.find(name);
+      if (prev == h[k - 1].extreme_times.end() || prev->second == t) continue;
+      auto& m = moves[name];
+      if (m.first++ == 0)
+        m.second = "from t = " + number("%.6g", prev->second) + " s to t = " + number("%.6g", t) +
+                   " s at evaluation " + std::to_string(k + 1);
+    }
+  std::vector<std::string> w;
+  for (const auto& [name, m] : moves)
+    w.push_back("response '" + name +
+                "' is a maximum or minimum over time whose extreme step moved " +
+                std::to_string(m.first) + " time(s) in " + std::to_string(h.size()) +
+                " evaluations (first " + m.second +
+                "): the response has a kink there and its gradient jumps, so the optimizer may "
+                "stop at the kink rather than at an optimum; a KS aggregate (\"aggregate\": "
+                "\"ks\") is a smooth upper bound of the maximum");
+  return w;
+}
+
+std::vector<std::string> result_warnings(const DesignProblem& prob, const OptimizeResult& res) {
+  std::vector<std::string> w;
+  const auto& spec = prob.spec();
+  if (res.final.ok && res.final.max_violation > spec.tol_constraint)
+    w.push_back("the final design is infeasible: max relative constraint violation " +
+                number("%.3e", res.final.max_violation) + " > " +
+                number("%.3e", spec.tol_constraint) + " (relative_constraint_violation) after " +
+                std::to_string(res.evaluations) + " evaluations");
+  if (res.kkt && !res.kkt->satisfied())
+    w.push_back("the final design is not a first-order (KKT) point: stationarity " +
+                number("%.3g", res.kkt->stationarity) + ", wrong-signed gradients at bounds " +
+                number("%.3g", res.kkt->bound_sign_violation) + " (relative to the objective's " +
+                "largest scaled gradient; kkt_tolerance " + number("%.3g", spec.kkt_tolerance) +
+                "); the optimizer stopped on '" + res.stop_reason +
+                "'. Run on (a smaller relative_objective_change, more max_evaluations) or read "
+                "the design as a point on the way");
+  for (auto& s : extreme_switches(res.history)) w.push_back(std::move(s));
+  return w;
 }
 
 const char* status_text(nlopt_result r) {
@@ -248,7 +324,11 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
   c.lower = d.lower();
   c.range = d.upper() - d.lower();
   c.case_sha = o.input_sha256;
-  c.spec_json = prob.spec().to_json().dump();
+  // the options that decide the optimizer's path (a checkpoint of other ones is refused): all but
+  // the verdict's tolerance, which a resumed run may change
+  nlohmann::json path_spec = prob.spec().to_json();
+  path_spec.erase("kkt_tolerance");
+  c.spec_json = path_spec.dump();
 
   if (o.resume) {
     const std::string path = o.out_dir + "/checkpoint.json";
@@ -364,8 +444,13 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
     res.final = prob.evaluate(c.to_p(x.data()));
   }
   res.p = res.final.p;
-  res.converged = !c.interrupted && best >= 0 &&
-                  (r == NLOPT_FTOL_REACHED || r == NLOPT_XTOL_REACHED || r == NLOPT_SUCCESS);
+  res.stop_reason = !c.failure.empty() ? "failed" : c.interrupted ? "interrupted" : stop_word(r);
+  if (res.final.ok && res.final.objective_gradient.size() == n)
+    res.kkt = kkt_report(prob, res.final, 1e-2, 1e-6, c.f0);  // scaled as the optimizer scales
+  res.converged = !c.interrupted && c.failure.empty() && best >= 0 &&
+                  (r == NLOPT_FTOL_REACHED || r == NLOPT_XTOL_REACHED || r == NLOPT_SUCCESS) &&
+                  res.kkt && res.kkt->satisfied();
+  res.warnings = result_warnings(prob, res);
   if (!o.out_dir.empty()) write_history(o.out_dir + "/history.csv", prob, c.history);
   res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
@@ -377,13 +462,16 @@ RunStatus OptimizeResult::status() const {
 }
 
 std::string OptimizeResult::report() const {
-  char b[320];
+  char b[400], k[96] = "KKT not checked";
+  if (kkt)
+    std::snprintf(k, sizeof k, "KKT %s (stationarity %.3g)",
+                  kkt->satisfied() ? "satisfied" : "not satisfied", kkt->stationarity);
   std::snprintf(
       b, sizeof b,
       "optimization: %s (%s): %ld evaluations, %ld simulations in this run, objective %.9g, max "
-      "constraint violation %.3e, %s, %.1f s",
+      "constraint violation %.3e, %s, %s, %.1f s",
       run_status_name(status()), nlopt_status.c_str(), evaluations, simulations, final.objective,
-      final.max_violation, converged ? "converged" : "not converged", wall_seconds);
+      final.max_violation, k, converged ? "converged" : "not converged", wall_seconds);
   return failure.empty() ? std::string(b) : std::string(b) + "\n  " + failure;
 }
 

@@ -9,10 +9,12 @@
 // design as an uninterrupted one.
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "lsmbs/core/status.hpp"
+#include "lsmbs/optimization/kkt.hpp"
 #include "lsmbs/optimization/problem.hpp"
 
 namespace lsmbs {
@@ -35,9 +37,21 @@ struct OptimizeResult {
   Evaluation final;
   int nlopt_code = 0;
   std::string nlopt_status;
-  long evaluations = 0;    ///< distinct design points evaluated (incl. replayed ones)
-  long simulations = 0;    ///< simulations run in this process
-  bool converged = false;  ///< NLopt stopped on its tolerance with a feasible design
+  /// Why the optimizer stopped, one word: ftol (relative objective change below tol_objective),
+  /// xtol, success, max_evaluations, max_time, stopval, roundoff_limited, nlopt_failure,
+  /// interrupted, failed (a simulation failed). Apart from whether the design is optimal.
+  std::string stop_reason;
+  long evaluations = 0;  ///< distinct design points evaluated (incl. replayed ones)
+  long simulations = 0;  ///< simulations run in this process
+  /// First-order optimality at the final design (when its evaluation has gradients).
+  std::optional<KktReport> kkt;
+  /// Stopped on a tolerance (ftol, xtol, success), with a feasible final design that satisfies
+  /// the KKT conditions within spec().kkt_tolerance. A stop on the objective's change alone is not
+  /// convergence: MMA's steps shrink on a kink of a max aggregate as well as at an optimum.
+  bool converged = false;
+  /// What the user should know about the result: not a KKT point, an infeasible final design,
+  /// a max/min aggregate whose extreme step moved between evaluations (one sentence each).
+  std::vector<std::string> warnings;
   bool interrupted = false;
   /// Non-empty when an evaluation's simulation failed (the run stops there): which evaluation,
   /// at which design, and the integrator's message (when and why).

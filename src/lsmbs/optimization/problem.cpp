@@ -31,6 +31,7 @@ nlohmann::json OptimizationSpec::to_json() const {
           {"tol_constraint", tol_constraint},
           {"max_evaluations", max_evaluations},
           {"inner_max_evaluations", inner_max_evaluations},
+          {"kkt_tolerance", kkt_tolerance},
           {"move_limit", move_limit},
           {"asymptote_init", asymptote_init}};
 }
@@ -106,6 +107,11 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
   e.ok = res.ok;
   e.message = res.message;
   const auto& obj = res.responses[objective_index_];
+  auto note_extreme = [&](const ResponseSensitivity& r) {
+    if (std::isfinite(r.extreme_time)) e.extreme_times[r.name] = r.extreme_time;
+  };
+  note_extreme(obj);
+  for (int j : constraint_index_) note_extreme(res.responses[static_cast<size_t>(j)]);
   e.objective = obj.values.empty() ? NAN : obj.values[0];
   e.objective_gradient =
       obj.gradient.rows() ? Vec(obj.gradient.row(0).transpose()) : Vec::Zero(p.size());
@@ -141,6 +147,7 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
     e.upper = constraint_upper_;
     e.scale = constraint_scale_;
     e.constraint_gradient.setConstant(num_constraints_, p.size(), NAN);
+    e.extreme_times.clear();
   }
   e.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (res.interrupted) {  // not a result of p: evaluated again when the run resumes
@@ -192,7 +199,12 @@ nlohmann::json evaluation_to_json(const Evaluation& e) {
           {"max_violation", hex(e.max_violation)},
           {"wall_seconds", e.wall_seconds},
           {"ok", e.ok},
-          {"message", e.message}};
+          {"message", e.message},
+          {"extreme_times", [&] {
+             nlohmann::json t = nlohmann::json::object();
+             for (const auto& [name, time] : e.extreme_times) t[name] = hex(time);
+             return t;
+           }()}};
 }
 
 Evaluation evaluation_from_json(const nlohmann::json& j) {
@@ -220,6 +232,9 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
   e.wall_seconds = j.at("wall_seconds").get<double>();
   e.ok = j.at("ok").get<bool>();
   e.message = j.at("message").get<std::string>();
+  if (j.contains("extreme_times"))  // absent in checkpoints written before it was recorded
+    for (const auto& [name, time] : j.at("extreme_times").items())
+      e.extreme_times[name] = unhex(time.get<std::string>());
   return e;
 }
 

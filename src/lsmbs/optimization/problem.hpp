@@ -40,6 +40,10 @@ struct OptimizationSpec {
   int max_evaluations = 100;
   int inner_max_evaluations =
       0;  ///< NLopt CCSA inner iterations per outer one (0: NLopt's default)
+  /// The final design is a first-order (KKT) point when the scaled stationarity residual and the
+  /// wrong-signed reduced gradients at bounds are at most this, relative to ‖∇f‖∞ (kkt.hpp).
+  /// A verdict of the result, not a stopping rule: a resumed run may change it.
+  double kkt_tolerance = 1e-2;
   nlohmann::json to_json() const;
 };
 
@@ -57,6 +61,9 @@ struct Evaluation {
   double max_violation = 0;  ///< max_j (g_j − ū_j)/scale_j  (≤ 0: feasible; 0 without constraints)
   double wall_seconds = 0;
   bool ok = true;
+  /// The objective's and constraints' max and min aggregates: the time of the step whose value
+  /// each takes, by response name (a change between evaluations is a kink of the response).
+  std::map<std::string, double> extreme_times;
   /// Stopped by an interrupt before the simulation ended: not a result of p (never cached).
   bool interrupted = false;
   std::string message;

@@ -110,6 +110,7 @@ Aggregate aggregate(const ResponseSpec& r, const std::vector<double>& t,
       for (auto i : idx)
         if (r.kind == K::kMax ? v[i] > v[best] : v[i] < v[best]) best = i;
       val = v[best];
+      out.extreme_time = t[best];
       add_row(1, best);  // a subgradient: the extreme step's derivative
       break;
     }

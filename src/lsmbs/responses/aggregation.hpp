@@ -13,6 +13,7 @@
 //                 m + (1/ks) ln Σ exp(ks (f_n − m)), m = max f_n
 //   per_step      one value per step of the window (the local formulation, eq. 42)
 // n is the number of grid steps in the window (both ends included).
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,9 @@ struct Aggregate {
   /// Scalar kinds: ∂(value)/∂f_n for every step n of the input (zero outside the window), so
   /// that the gradient is Σ_n w_n df_n/dp (the adjoint's source terms); per_step: empty.
   std::vector<double> weights;
+  /// max and min: the time of the step whose value is taken (NaN for the other kinds). Where it
+  /// moves to another step between two designs the response has a kink there.
+  double extreme_time = std::numeric_limits<double>::quiet_NaN();
   /// The response as one number: the value, or the largest per-step value (NaN: empty window or
   /// average_eq45 of one step).
   double scalar() const;

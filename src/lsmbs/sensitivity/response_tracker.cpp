@@ -144,6 +144,7 @@ std::vector<ResponseSensitivity> ResponseTracker::results() const {
     rs.values = std::move(a.values);
     rs.times = std::move(a.times);
     rs.gradient = std::move(a.gradient);
+    rs.extreme_time = a.extreme_time;
     out.push_back(std::move(rs));
   }
   return out;

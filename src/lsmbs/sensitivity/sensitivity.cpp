@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
@@ -128,6 +129,7 @@ std::vector<ResponseSensitivity> simulate_responses_at_current_design(
 std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p,
                                                     SensitivityCounts& counts,
                                                     const ProgressCallback& progress) {
+  const std::lock_guard<std::recursive_mutex> one_evaluation_at_a_time(cs.evaluation_mutex());
   cs.design->apply(p, cs.model->params());
   return simulate_responses_at_current_design(cs, counts, nullptr, progress, 1);
 }
@@ -264,6 +266,7 @@ std::unique_ptr<SensitivityMethod> make_sensitivity_method(const SensitivityOpti
 }
 
 SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o) {
+  const std::lock_guard<std::recursive_mutex> one_evaluation_at_a_time(cs.evaluation_mutex());
   return make_sensitivity_method(o)->compute(cs, p);
 }
 

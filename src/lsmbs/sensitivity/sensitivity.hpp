@@ -24,6 +24,7 @@
 //                           (gradients NaN); the gradients are in `quadratures`.
 // Responses are the case's output.responses; their gradients follow eq. (24) at every grid
 // step and the aggregation (average eq. 45, per-step eq. 42, max, KS, integral, …).
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -110,6 +111,8 @@ struct ResponseSensitivity {
   std::vector<double> values;  ///< one, or one per grid step for a per-step response
   std::vector<double> times;   ///< per-step responses: the step times
   Mat gradient;                ///< values.size() × n_v
+  /// max and min aggregates: the time of the step whose value is taken (Aggregate::extreme_time)
+  double extreme_time = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A time-integral response evaluated by IDAS quadratures (see response_quadrature.hpp).

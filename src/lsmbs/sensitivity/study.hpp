@@ -4,6 +4,7 @@
 // recorded at every step, the responses aggregated from them and, optionally, the design
 // variables. Responses name their measure column; the library reports errors by these names.
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,22 @@ struct Study {
   int measure_column(const std::string& name) const;
   /// Index of the response `name`, −1 if there is none.
   int response_index(const std::string& name) const;
+
+  /// Held by every evaluation of the study, from writing its design into the model's parameters
+  /// to the end of the run (compute_sensitivities, and the Python module's runs): the model's
+  /// parameters are the study's state while it runs, so two threads that share one study take
+  /// turns instead of running on each other's design. Recursive: an evaluation may start
+  /// evaluations of its own (a gradient check). Threads that must run at once each load their
+  /// own study.
+  std::recursive_mutex& evaluation_mutex() const { return evaluation_.mutex; }
+
+ private:
+  struct EvaluationMutex {  // a moved study gets a mutex of its own (a mutex cannot move)
+    mutable std::recursive_mutex mutex;
+    EvaluationMutex() = default;
+    EvaluationMutex(EvaluationMutex&&) noexcept {}
+    EvaluationMutex& operator=(EvaluationMutex&&) noexcept { return *this; }
+  } evaluation_;
 };
 
 }  // namespace lsmbs

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -294,4 +295,63 @@ TEST(Table1D, ReadCsvAcceptsEveryDocumentedLayout) {
   EXPECT_EQ(t.x_min(), 0.0);
   EXPECT_EQ(t.x_max(), 4.0);
   for (int i = 0; i < 5; ++i) EXPECT_EQ(t.value(x[i]), y[i]) << "x = " << x[i];
+}
+
+// Every law at the time it starts and at each switch: the derivatives are those of the motion that
+// follows (right-sided), against closed forms. They give a run's initial velocities and
+// accelerations: a linear table from (0, 0) to (10 s, 1500 rad) is 150 rad/s from t = 0 (it
+// was 0, and a crank driven by it started at rest and rang: 0, 297, 10.8, 278.6 rad/s).
+TEST(TimeLaws, DerivativesAtTheStartAndAtEverySwitchAreThoseOfTheMotionThatFollows) {
+  struct Expect {
+    const char* what;
+    const TimeLaw* law;
+    double t, s, sd, sdd;
+  };
+  const TabulatedLaw linear(Table1D({0, 10}, {0, 1500}, Table1D::Interp::kLinear));
+  const TabulatedLaw linear_kink(Table1D({0, 1, 2}, {0, 1, 3}, Table1D::Interp::kLinear));
+  const TabulatedLaw cubic_line(Table1D({0, 1, 3, 4}, {1, 3, 7, 9}));  // y = 2x + 1 exactly
+  // natural cubic spline through (0, 0), (1, 1), (2, 0): m1 = −3 (the one interior equation
+  // 4 m1 = 6 (0 − 2·1 + 0)), so on [0, 1] y = 1.5 x − 0.5 x³: y'(0) = 1.5, y''(0) = 0;
+  // on [1, 2] y'(1) = 0, y''(1) = −3
+  const TabulatedLaw cubic_arc(Table1D({0, 1, 2}, {0, 1, 0}));
+  const TabulatedLaw late(Table1D({0.5, 1.5}, {2, 4}, Table1D::Interp::kLinear));
+  const RampLaw ramp(0.3, 400, 0.01);            // s̈ = 400/0.01 = 4e4 from t = 0
+  const RampLaw ramp_late(0.3, 400, 0.01, 0.2);  // at rest until 0.2 s
+  const TrapezoidLaw trap(0, 1, 4, 1);           // t_a = 0.25, t_c = 0.75
+  const TrapezoidLaw trap_down(1, 0, 4, 1, 0.1);
+  const ConstantLaw constant(2.5);
+  const Expect cases[] = {
+      {"linear table at its first point", &linear, 0, 0, 150, 0},
+      {"linear table at a knot", &linear_kink, 1, 1, 2, 0},
+      {"linear table at its last point", &linear_kink, 2, 3, 0, 0},
+      {"linear table before its first point", &late, 0, 2, 0, 0},
+      {"linear table starting later, at its first point", &late, 0.5, 2, 2, 0},
+      {"cubic table of a line at its first point", &cubic_line, 0, 1, 2, 0},
+      {"natural cubic at its first point", &cubic_arc, 0, 0, 1.5, 0},
+      {"natural cubic at a knot", &cubic_arc, 1, 1, 0, -3},
+      {"ramp at t = 0", &ramp, 0, 0.3, 0, 4e4},
+      {"ramp at the end of the ramp", &ramp, 0.01, 0.3 + 2, 400, 0},
+      {"ramp before its start", &ramp_late, 0.1, 0.3, 0, 0},
+      {"ramp at its start", &ramp_late, 0.2, 0.3, 0, 4e4},
+      {"trapezoid at t = 0", &trap, 0, 0, 0, 4},
+      {"trapezoid at the end of the acceleration", &trap, 0.25, 0.125, 1, 0},
+      {"trapezoid at the start of the deceleration", &trap, 1.0, 0.875, 1, -4},
+      {"trapezoid at its end", &trap, 1.25, 1, 0, 0},
+      {"decreasing trapezoid at its start", &trap_down, 0.1, 1, 0, -4},
+      {"constant", &constant, 0, 2.5, 0, 0},
+  };
+  for (const Expect& e : cases) {
+    double s, sd, sdd;
+    e.law->eval(e.t, s, sd, sdd);
+    const double tol = 1e-12 * std::max({1.0, std::abs(e.s), std::abs(e.sd), std::abs(e.sdd)});
+    EXPECT_NEAR(s, e.s, tol) << e.what;
+    EXPECT_NEAR(sd, e.sd, tol) << e.what;
+    EXPECT_NEAR(sdd, e.sdd, tol) << e.what;
+    // and the one-sided difference quotient of the motion after t agrees
+    const double h = 1e-7;
+    double sp, sdp, sddp;
+    e.law->eval(e.t + h, sp, sdp, sddp);
+    EXPECT_NEAR((sp - s) / h, sd, 1e-5 * std::max(1.0, std::abs(sd)) + 0.6 * h * std::abs(sdd))
+        << e.what;
+  }
 }
