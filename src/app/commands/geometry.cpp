@@ -27,9 +27,11 @@ int geometry_command(const CommonArgs& c, const GeometryArgs& a) {
   if (!c.quiet) {
     for (const auto& b : S["bodies"])
       std::printf(
-          "lsmbs geometry: body '%s': mass %.6f kg, void area %.6e m², %d cut elements of %d\n",
+          "lsmbs geometry: body '%s': mass %.6f kg, void area %.6e m², %d of %d elements cut "
+          "by a boundary (%d integrated on the sub-grid, within 30 bands of one)\n",
           b["body"].get<std::string>().c_str(), b["mass"].get<double>(),
-          b["void_area"].get<double>(), b["cut_elements"].get<int>(), b["elements"].get<int>());
+          b["void_area"].get<double>(), b["cut_elements"].get<int>(), b["elements"].get<int>(),
+          b["band_elements"].get<int>());
     std::printf("  results in %s\n", out.c_str());
   }
   return 0;

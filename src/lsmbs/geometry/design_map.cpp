@@ -69,7 +69,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
   std::vector<double> grad(nv), acc(nv);
   const double cut_dist = kTailBands * eps_;
   const int n = opt_.subgrid;
-  int cut = 0;
+  int cut = 0, band = 0;
   for (int e = 0; e < ne; ++e) {
     const auto& q = mesh_->quads[e];
     // classification
@@ -86,7 +86,11 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
       mu[e] = dc > 0 ? 1.0 : opt_.mu_min;
       continue;
     }
-    ++cut;
+    ++band;
+    // a boundary crosses the element when its samples (corners, centre, sub-cell centres) are
+    // on both sides of it
+    bool inside = dc > 0, outside = dc <= 0;
+    for (int k : q) (ls_.evaluate(mesh_->nodes[k], vals, nullptr) > 0 ? inside : outside) = true;
     // sub-grid integration over the parent square, midpoint rule per sub-cell
     const Vec2 X0 = mesh_->nodes[q[0]], X1 = mesh_->nodes[q[1]], X2 = mesh_->nodes[q[2]],
                X3 = mesh_->nodes[q[3]];
@@ -102,6 +106,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
         const Vec2 deta = 0.25 * ((1 - xi) * (X3 - X0) + (1 + xi) * (X2 - X1));
         const double w = (dxi.x() * deta.y() - dxi.y() * deta.x()) * (4.0 / (n * n));
         const double D = ls_.evaluate(x, vals, dmu_dp ? grad.data() : nullptr);
+        (D > 0 ? inside : outside) = true;
         const double z = D / eps_;
         // logistic H*(D) and its derivative, written to stay finite for large |z|
         const double ez = std::exp(-std::abs(z));
@@ -112,6 +117,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
         if (dmu_dp)
           for (int k = 0; k < nv; ++k) acc[k] += w * dh * grad[k];
       }
+    cut += inside && outside;
     const double s = (1 - opt_.mu_min) / W;
     mu[e] = opt_.mu_min + s * H;
     if (dmu_dp)
@@ -132,6 +138,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
     dmu_dp->setFromTriplets(kept.begin(), kept.end());
   }
   last_cut_ = cut;
+  last_band_ = band;
 }
 
 }  // namespace lsmbs

@@ -46,8 +46,12 @@ class DesignMap {
   /// features' own distances are used: exact for ellipses and circles, below the true distance
   /// for super-ellipses (convex), so a feature that overlaps an element is never reported.
   std::vector<int> features_outside_mesh(const Vec& p) const;
-  /// Elements evaluated on the sub-grid at the last map() call (diagnostics).
+  /// Elements a boundary crosses at the last map() call: their corners, centre and sub-cell
+  /// centres lie on both sides of it (diagnostics).
   int last_cut_count() const { return last_cut_.load(); }
+  /// Elements integrated on the sub-grid at the last map() call: those within their circumradius
+  /// + 30 ε of a boundary, the cut ones included (diagnostics: the cost of the mapping).
+  int last_band_count() const { return last_band_.load(); }
 
  private:
   const Mesh2D* mesh_;
@@ -56,6 +60,7 @@ class DesignMap {
   double eps_ = 0;
   std::vector<double> area_, radius_;
   mutable std::atomic<int> last_cut_{0};  ///< diagnostic; atomic: map() may run on two threads
+  mutable std::atomic<int> last_band_{0};
 };
 
 }  // namespace lsmbs

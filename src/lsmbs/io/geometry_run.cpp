@@ -53,6 +53,7 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
                          {"domain_area", solid},
                          {"void_area", voids},
                          {"cut_elements", bd.map->last_cut_count()},
+                         {"band_elements", bd.map->last_band_count()},
                          {"elements", mu.size()},
                          {"epsilon", bd.map->epsilon()},
                          {"mu_min", mu_min},
