@@ -9,6 +9,9 @@
 #                                the run in verification/reports/sanitizer/full.md (commit, date,
 #                                result, failures, slowest tests); the scheduled run (.ci/scheduled,
 #                                e.g. weekly) — commit the report it writes
+#   scripts/sanitize.sh --tsan   ThreadSanitizer build (build-tsan/) of the library and the tests
+#                                of evaluations that run at once (Concurrency.*, the design as a
+#                                value); the scheduled run (.ci/scheduled) runs it
 #   scripts/sanitize.sh [--ci|--full] [more ctest arguments]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -16,7 +19,21 @@ mode=all
 case "${1:-}" in
   --ci) mode=ci; shift ;;
   --full) mode=full; shift ;;
+  --tsan) mode=tsan; shift ;;
 esac
+if [ "$mode" = tsan ]; then
+  bash "$root/scripts/setup-deps.sh"
+  build="$root/build-tsan"
+  generator=()
+  [ -f "$build/CMakeCache.txt" ] || { command -v ninja >/dev/null && generator=(-G Ninja); }
+  cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" \
+    -DLSMBS_WITH_TSAN=ON -DLSMBS_BUILD_TESTS=ON -DLSMBS_BUILD_EXAMPLES=OFF -DCMAKE_UNITY_BUILD=ON >/dev/null
+  cmake --build "$build" -j"$(nproc)" --target test_concurrency
+  cd "$build"
+  # halt_on_error: a data race fails the test; second_deadlock_stack: both stacks of an inversion
+  export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
+  exec ./tests/test_concurrency "$@"
+fi
 bash "$root/scripts/setup-deps.sh"
 build="$root/build-asan"
 # unity build: the Eigen-heavy translation units compile about twice as fast batched

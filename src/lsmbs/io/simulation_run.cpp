@@ -38,8 +38,7 @@ class Recorder : public StepObserver {
   }
   void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double k, double,
                 const SparseLU*) override {
-    for (auto& m : cs_.measures)
-      if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
+    k_ = k;  // generalized-α's states carry λ/k (IDAS's, recorded by record_state, λ: k = 1)
     record(s0, 0);
   }
   void record_state(const State& s) {
@@ -58,7 +57,10 @@ class Recorder : public StepObserver {
     std::vector<double> row(ncols_);
     size_t c = 0;
     for (const auto& m : cs_.measures) {
-      m->evaluate(*cs_.model, s, cs_.model->params(), row.data() + c);
+      if (const auto* cf = dynamic_cast<const ConstraintForceMeasure*>(m.get()))
+        cf->evaluate_scaled(*cs_.model, s, cs_.model->params(), k_, row.data() + c);
+      else
+        m->evaluate(*cs_.model, s, cs_.model->params(), row.data() + c);
       c += m->components().size();
     }
     res_.times.push_back(s.t);
@@ -81,6 +83,7 @@ class Recorder : public StepObserver {
   SimulationResult& res_;
   const RunOptions& ro_;
   size_t ncols_ = 0;
+  double k_ = 1;  // the run's scaling of λ (ConstraintForceMeasure::evaluate_scaled)
   long grid_ = 0;
   std::vector<double> stresses_;
   std::vector<const StressMeasure*> stress_measures_;
@@ -129,7 +132,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     io.h_out = cs.simulation.h;
     io.t_end = cs.simulation.t_end;
     IdasGGL idas(*cs.model, cs.model->params(), io);
-    ResponseQuadrature quad(cs, {}, cs.initial.t, io.t_end);
+    ResponseQuadrature quad(cs, {}, cs.model->params(), cs.initial.t, io.t_end);
     if (!quad.empty()) idas.set_quadrature(&quad);
     bool first = true;
     res.idas =

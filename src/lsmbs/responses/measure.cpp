@@ -160,9 +160,9 @@ std::vector<std::string> ConstraintForceMeasure::units() const {
   return u;
 }
 
-void ConstraintForceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
-                                      double* out) const {
-  for (size_t i = 0; i < rows_.size(); ++i) out[i] = k_ * s.lambda[rows_[i]];
+void ConstraintForceMeasure::evaluate_scaled(const Model&, const State& s, const ModelParams&,
+                                             double k, double* out) const {
+  for (size_t i = 0; i < rows_.size(); ++i) out[i] = k * s.lambda[rows_[i]];
 }
 
 }  // namespace lsmbs

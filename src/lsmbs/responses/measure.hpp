@@ -169,18 +169,27 @@ class ConstraintForceMeasure : public Measure {
   }
   std::vector<std::string> components() const override;
   std::vector<std::string> units() const override;
-  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
-  void gradient(const Model&, const State&, const ModelParams&, int c,
-                MeasureGradient& g) const override {
-    g.dl.emplace_back(rows_[c], k_);
+  /// The forces of physical multipliers λ (a static solution, IDAS); a generalized-α state
+  /// carries λ/k: evaluate_scaled.
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override {
+    evaluate_scaled(m, s, p, 1.0, out);
   }
-  /// The scaling k of the run (set by the integrator's observer before evaluation).
-  void set_scaling(double k) { k_ = k; }
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override {
+    gradient_scaled(m, s, p, c, 1.0, g);
+  }
+  /// With the scaling k of the run whose state it is (GeneralizedAlpha::automatic_scaling): an
+  /// argument, so that two runs of one study with different k can evaluate at once.
+  void evaluate_scaled(const Model&, const State& s, const ModelParams&, double k,
+                       double* out) const;
+  void gradient_scaled(const Model&, const State&, const ModelParams&, int c, double k,
+                       MeasureGradient& g) const {
+    g.dl.emplace_back(rows_[c], k);
+  }
 
  private:
   std::vector<int> rows_;
   std::vector<bool> angular_;
-  double k_ = 1;
 };
 
 class KineticEnergyMeasure : public Measure {

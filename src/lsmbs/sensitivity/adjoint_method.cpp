@@ -104,7 +104,7 @@ struct SemiAnalyticalContraction {
 // The backward pass: adjoint state, accumulated contractions, workspace (sized once).
 class Backward {
  public:
-  Backward(Study& cs, const ModelParams& p, ResponseTracker& tracker,
+  Backward(const Study& cs, const ModelParams& p, ResponseTracker& tracker,
            const std::vector<std::vector<double>>& weights, const ParamDirection& support, double k,
            double zeta, const AdjointTerms& terms, SensitivityCounts& counts,
            const SemiAnalyticalContraction* semi)
@@ -264,7 +264,7 @@ class Backward {
     }
   }
 
-  Study& cs_;
+  const Study& cs_;
   const Model& m_;
   const ModelParams& p_;
   ResponseTracker& tracker_;
@@ -301,8 +301,10 @@ ParamDirection support_of(const std::vector<ParamDirection>& dirs) {
 
 }  // namespace
 
-SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o,
-                                        const AdjointTerms& terms) {
+namespace {
+
+SensitivityResult adjoint_with(const Study& cs, const Vec& p, ModelParams& params,
+                               const SensitivityOptions& o, const AdjointTerms& terms) {
   const Design& d = *cs.design;
   SensitivityResult res;
   for (size_t i = 0; i < cs.responses.size(); ++i)
@@ -313,9 +315,8 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
                            "\" is per_step (one value per grid step): the adjoint method takes "
                            "scalar responses (one backward pass each); use --method "
                            "direct-analytic for per-step responses");
-  ModelParams& params = cs.model->params();
   const auto dirs = d.apply_with_directions(p, params);
-  ResponseTracker tracker(cs, dirs);
+  ResponseTracker tracker(cs, dirs, params);
   const Model& m = *cs.model;
 
   // memory: the whole trajectory, or checkpoints every `stride` grid steps and one segment
@@ -453,8 +454,17 @@ SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const Sensitivi
   return res;
 }
 
-SensitivityResult AdjointSensitivity::run(Study& cs, const Vec& p) const {
-  return adjoint_sensitivities(cs, p, options(), AdjointTerms{});
+}  // namespace
+
+SensitivityResult adjoint_sensitivities(const Study& cs, const Vec& p, const SensitivityOptions& o,
+                                        const AdjointTerms& terms) {
+  ModelParams params = parameters_at(cs, p);
+  return adjoint_with(cs, p, params, o, terms);
+}
+
+SensitivityResult AdjointSensitivity::run(const Study& cs, const Vec& p,
+                                          ModelParams& params) const {
+  return adjoint_with(cs, p, params, options(), AdjointTerms{});
 }
 
 }  // namespace lsmbs

@@ -27,7 +27,7 @@ struct AdjointTerms {
 };
 
 /// The adjoint method with some terms dropped (tests only; see AdjointTerms).
-SensitivityResult adjoint_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o,
+SensitivityResult adjoint_sensitivities(const Study& cs, const Vec& p, const SensitivityOptions& o,
                                         const AdjointTerms& terms);
 
 }  // namespace lsmbs

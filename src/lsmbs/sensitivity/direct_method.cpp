@@ -14,12 +14,11 @@ namespace lsmbs {
 
 using Method = SensitivityOptions::Method;
 
-SensitivityResult DirectSensitivity::run(Study& cs, const Vec& p) const {
+SensitivityResult DirectSensitivity::run(const Study& cs, const Vec& p, ModelParams& params) const {
   const SensitivityOptions& o = options();
   const Design& d = *cs.design;
   const int nv = d.size();
   SensitivityResult res;
-  ModelParams& params = cs.model->params();
   if (cs.simulation.newton != GeneralizedAlphaOptions::Newton::kFull &&
       o.matrix == SensitivityOptions::Matrix::kLastIteration)
     throw SetupError("simulation.newton",
@@ -31,7 +30,7 @@ SensitivityResult DirectSensitivity::run(Study& cs, const Vec& p) const {
                          "\"converged\" (the default) or "
                          "\"refined\" (--matrix), or \"newton\": \"full\"");
   auto dirs = d.apply_with_directions(p, params);
-  ResponseTracker tracker(cs, dirs);
+  ResponseTracker tracker(cs, dirs, params);
   std::unique_ptr<PseudoLoad> load;
   if (o.method == Method::kDirectAnalytic) {
     load = std::make_unique<AnalyticPseudoLoad>(*cs.model, params, dirs);

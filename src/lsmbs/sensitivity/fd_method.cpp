@@ -7,17 +7,16 @@ namespace lsmbs {
 
 using Method = SensitivityOptions::Method;
 
-SensitivityResult FiniteDifferenceSensitivity::run(Study& cs, const Vec& p) const {
+SensitivityResult FiniteDifferenceSensitivity::run(const Study& cs, const Vec& p,
+                                                   ModelParams& params) const {
   const SensitivityOptions& o = options();
   const Design& d = *cs.design;
   const int nv = d.size();
   SensitivityResult res;
-  ModelParams& params = cs.model->params();
-  d.apply(p, params);
   try {
     const long n_runs = 1 + (o.method == Method::kFdCentral ? 2 : 1) * nv;
     const auto base =
-        simulate_responses_at_current_design(cs, res.counts, &res.primal, o.progress, n_runs);
+        simulate_responses_with(cs, params, res.counts, &res.primal, o.progress, n_runs);
     res.counts.primal_wall_seconds = res.primal.wall_seconds;
     res.responses = base;
     for (auto& r : res.responses)
@@ -28,13 +27,13 @@ SensitivityResult FiniteDifferenceSensitivity::run(Study& cs, const Vec& p) cons
       pp[i] += h;
       d.apply(pp, params);
       const auto plus =
-          simulate_responses_at_current_design(cs, res.counts, nullptr, o.progress, n_runs);
+          simulate_responses_with(cs, params, res.counts, nullptr, o.progress, n_runs);
       std::vector<ResponseSensitivity> minus;
       if (o.method == Method::kFdCentral) {
         Vec pm = p;
         pm[i] -= h;
         d.apply(pm, params);
-        minus = simulate_responses_at_current_design(cs, res.counts, nullptr, o.progress, n_runs);
+        minus = simulate_responses_with(cs, params, res.counts, nullptr, o.progress, n_runs);
       }
       for (size_t r = 0; r < res.responses.size(); ++r) {
         if (plus[r].values.size() != base[r].values.size())
@@ -50,7 +49,6 @@ SensitivityResult FiniteDifferenceSensitivity::run(Study& cs, const Vec& p) cons
     res.ok = false;
     res.message = e.what();
   }
-  d.apply(p, params);
   return res;
 }
 

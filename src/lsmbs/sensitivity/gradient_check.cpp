@@ -70,7 +70,7 @@ GradientDifference compare_gradients(const std::vector<ResponseSensitivity>& a,
   return d;
 }
 
-GradientCheckResult check_gradients(Study& cs, const Vec& p,
+GradientCheckResult check_gradients(const Study& cs, const Vec& p,
                                     const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o) {
   if (!cs.design) throw SetupError("design", "a gradient check needs design variables");
@@ -104,7 +104,6 @@ GradientCheckResult check_gradients(Study& cs, const Vec& p,
     res.interrupted = interrupted() != 0;  // not a failure of the check: it did not finish
     res.message = e.what();
   }
-  d.apply(p, cs.model->params());
   res.simulations = counts.simulations;
   if (!res.ok) return res;
   const Vec sd = scale.cwiseProduct(res.direction);

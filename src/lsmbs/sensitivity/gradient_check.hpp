@@ -74,7 +74,7 @@ GradientDifference compare_gradients(const std::vector<ResponseSensitivity>& a,
 
 /// Checks `gradients` (as computed by compute_sensitivities at p) along one random direction.
 /// Responses without gradients (NaN, e.g. idas-adjoint's grid aggregates) are skipped.
-GradientCheckResult check_gradients(Study& cs, const Vec& p,
+GradientCheckResult check_gradients(const Study& cs, const Vec& p,
                                     const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o = {});
 

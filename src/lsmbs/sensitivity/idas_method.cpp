@@ -23,22 +23,23 @@ namespace {
 // every grid shares), so each result is what a run on its own grid gives, but for IDAS's initial
 // step, which is chosen from h_out.
 // `d` at `p`: the study's design, or directions in it (DirectionalParameterization).
-std::vector<SensitivityResult> run_idas(Study& cs, const Parameterization& d, const Vec& p,
+// `params`: the study's model parameters, which the run sets to d at p.
+std::vector<SensitivityResult> run_idas(const Study& cs, ModelParams& params,
+                                        const Parameterization& d, const Vec& p,
                                         const SensitivityOptions& o, double h_out,
                                         const std::vector<int>& strides) {
-  ModelParams& params = cs.model->params();
   const bool adjoint = o.method == Method::kIdasAdjoint;
   std::vector<ResponseTracker> trackers;
   trackers.reserve(strides.size());
   for (size_t g = 0; g < strides.size(); ++g) {
-    trackers.emplace_back(cs, d.apply_with_directions(p, params));
+    trackers.emplace_back(cs, d.apply_with_directions(p, params), params);
     trackers.back().set_scaling(1.0);  // IDAS carries the physical multipliers
   }
   IdasOptions io = o.idas;
   io.h_out = h_out;
   io.t_end = cs.simulation.t_end;
   IdasGGL idas(*cs.model, params, io);
-  ResponseQuadrature quad(cs, d.apply_with_directions(p, params), cs.initial.t, io.t_end);
+  ResponseQuadrature quad(cs, d.apply_with_directions(p, params), params, cs.initial.t, io.t_end);
   if (adjoint && quad.empty())
     throw SetupError("responses",
                      "the idas-adjoint method differentiates time-integral responses (aggregate "
@@ -76,18 +77,17 @@ std::vector<SensitivityResult> run_idas(Study& cs, const Parameterization& d, co
 
 }  // namespace
 
-SensitivityResult IdasSensitivity::run(Study& cs, const Vec& p) const {
-  return std::move(run_idas(cs, *cs.design, p, options(), cs.simulation.h, {1})[0]);
+SensitivityResult IdasSensitivity::run(const Study& cs, const Vec& p, ModelParams& params) const {
+  return std::move(run_idas(cs, params, *cs.design, p, options(), cs.simulation.h, {1})[0]);
 }
 
 std::vector<SensitivityResult> IdasSensitivity::run_on_grids(
-    Study& cs, const Vec& p, const Mat* directions, double h_fine,
+    const Study& cs, const Vec& p, const Mat* directions, double h_fine,
     const std::vector<int>& strides) const {
-  if (!directions) return run_idas(cs, *cs.design, p, options(), h_fine, strides);
+  ModelParams params = parameters_at(cs, p);
+  if (!directions) return run_idas(cs, params, *cs.design, p, options(), h_fine, strides);
   const DirectionalParameterization along(*cs.design, p, *directions);
-  auto results = run_idas(cs, along, Vec::Zero(directions->cols()), options(), h_fine, strides);
-  cs.design->apply(p, cs.model->params());  // the study's parameters are left at p
-  return results;
+  return run_idas(cs, params, along, Vec::Zero(directions->cols()), options(), h_fine, strides);
 }
 
 }  // namespace lsmbs

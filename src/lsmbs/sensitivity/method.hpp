@@ -22,14 +22,15 @@ class SensitivityMethod {
   virtual ~SensitivityMethod() = default;
   const SensitivityOptions& options() const { return options_; }
 
-  /// Sensitivities of the study's responses at design p; the study's parameters are left at p.
-  /// Checks the study first (SetupError naming the missing part), measures the wall time, marks
-  /// an interrupted run, and turns a NaN or an infinity in the results into a numerical failure.
-  SensitivityResult compute(Study& study, const Vec& p) const;
+  /// Sensitivities of the study's responses at design p (the study is not changed). Checks the
+  /// study first (SetupError naming the missing part), measures the wall time, marks an
+  /// interrupted run, and turns a NaN or an infinity in the results into a numerical failure.
+  SensitivityResult compute(const Study& study, const Vec& p) const;
 
  protected:
-  /// The method proper (called by compute).
-  virtual SensitivityResult run(Study& study, const Vec& p) const = 0;
+  /// The method proper (called by compute), with `params`, the study's model parameters at p
+  /// (parameters_at): the method's own, to perturb and restore as it needs.
+  virtual SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const = 0;
   /// False when the grid responses carry no gradients (NaN by design), as with the IDAS adjoint.
   virtual bool grid_gradients() const { return true; }
 
@@ -43,7 +44,7 @@ class DirectSensitivity final : public SensitivityMethod {
   using SensitivityMethod::SensitivityMethod;
 
  protected:
-  SensitivityResult run(Study& study, const Vec& p) const override;
+  SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const override;
 };
 
 /// adjoint: the discrete adjoint of generalized-α (adjoint_method.cpp).
@@ -52,7 +53,7 @@ class AdjointSensitivity final : public SensitivityMethod {
   using SensitivityMethod::SensitivityMethod;
 
  protected:
-  SensitivityResult run(Study& study, const Vec& p) const override;
+  SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const override;
 };
 
 /// fd-forward, fd-central.
@@ -61,7 +62,7 @@ class FiniteDifferenceSensitivity final : public SensitivityMethod {
   using SensitivityMethod::SensitivityMethod;
 
  protected:
-  SensitivityResult run(Study& study, const Vec& p) const override;
+  SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const override;
 };
 
 /// idas (forward sensitivities), idas-adjoint (time-integral responses).
@@ -70,11 +71,12 @@ class IdasSensitivity final : public SensitivityMethod {
   using SensitivityMethod::SensitivityMethod;
   /// Method idas on several output grids from one run, along the columns of `directions` when
   /// given (idas_on_grids, sensitivity.hpp): no checks, no timing.
-  std::vector<SensitivityResult> run_on_grids(Study& study, const Vec& p, const Mat* directions,
-                                              double h_fine, const std::vector<int>& strides) const;
+  std::vector<SensitivityResult> run_on_grids(const Study& study, const Vec& p,
+                                              const Mat* directions, double h_fine,
+                                              const std::vector<int>& strides) const;
 
  protected:
-  SensitivityResult run(Study& study, const Vec& p) const override;
+  SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const override;
   bool grid_gradients() const override {
     return options().method != SensitivityOptions::Method::kIdasAdjoint;
   }

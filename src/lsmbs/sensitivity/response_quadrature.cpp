@@ -6,9 +6,9 @@
 namespace lsmbs {
 
 ResponseQuadrature::ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions,
-                                       double t_start, double t_end)
+                                       const ModelParams& params, double t_start, double t_end)
     : cs_(cs),
-      tracker_(cs, directions),
+      tracker_(cs, directions, params),
       t_start_(t_start),
       t_end_(t_end),
       nv_(static_cast<int>(directions.size())) {

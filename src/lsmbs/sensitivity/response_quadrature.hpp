@@ -17,9 +17,10 @@ namespace lsmbs {
 
 class ResponseQuadrature : public IdasQuadrature {
  public:
-  /// directions: ∂(ModelParams)/∂p_i (empty for values only). Run from t_start to t_end.
-  ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions, double t_start,
-                     double t_end);
+  /// directions: ∂(ModelParams)/∂p_i (empty for values only); params: the run's model parameters.
+  /// Run from t_start to t_end.
+  ResponseQuadrature(const Study& cs, std::vector<ParamDirection> directions,
+                     const ModelParams& params, double t_start, double t_end);
   /// Whether the case has any time-integral response.
   bool empty() const { return responses_.empty(); }
 

@@ -5,8 +5,9 @@
 
 namespace lsmbs {
 
-ResponseTracker::ResponseTracker(const Study& cs, std::vector<ParamDirection> directions)
-    : cs_(cs), dirs_(std::move(directions)), scratch_(cs.model->params()) {
+ResponseTracker::ResponseTracker(const Study& cs, std::vector<ParamDirection> directions,
+                                 const ModelParams& params)
+    : cs_(cs), dirs_(std::move(directions)), scratch_(params) {
   // flattened measure columns → (measure, component)
   std::vector<std::pair<const Measure*, int>> flat;
   for (const auto& m : cs.measures)
@@ -25,9 +26,20 @@ ResponseTracker::ResponseTracker(const Study& cs, std::vector<ParamDirection> di
   }
 }
 
-void ResponseTracker::set_scaling(double k) {
-  for (const auto& m : cs_.measures)
-    if (auto* cf = dynamic_cast<ConstraintForceMeasure*>(m.get())) cf->set_scaling(k);
+void ResponseTracker::values(const Measure* measure, const State& s, const ModelParams& p,
+                             double* out) const {
+  if (const auto* cf = dynamic_cast<const ConstraintForceMeasure*>(measure))
+    cf->evaluate_scaled(*cs_.model, s, p, k_, out);
+  else
+    measure->evaluate(*cs_.model, s, p, out);
+}
+
+void ResponseTracker::partials(const Measure* measure, const State& s, const ModelParams& p,
+                               int component, MeasureGradient& g) const {
+  if (const auto* cf = dynamic_cast<const ConstraintForceMeasure*>(measure))
+    cf->gradient_scaled(*cs_.model, s, p, component, k_, g);
+  else
+    measure->gradient(*cs_.model, s, p, component, g);
 }
 
 void ResponseTracker::record(const State& s, const ModelParams& p, const Mat* dq, const Mat* dv,
@@ -64,7 +76,7 @@ double ResponseTracker::response_partials(size_t r, const State& s, const ModelP
     value = evaluate(c.measure, c.component, s, p, nullptr, nullptr, nullptr, nullptr, nullptr);
   }
   g.clear();
-  c.measure->gradient(*cs_.model, s, p, c.component, g);
+  partials(c.measure, s, p, c.component, g);
   return value;
 }
 
@@ -72,14 +84,14 @@ double ResponseTracker::evaluate(const Measure* measure, int component, const St
                                  const ModelParams& p, const Mat* dq, const Mat* dv, const Mat* da,
                                  const Mat* dl, Eigen::RowVectorXd* grad) {
   buf_.resize(measure->components().size());
-  measure->evaluate(*cs_.model, s, p, buf_.data());
+  values(measure, s, p, buf_.data());
   const double value = buf_[component];
   if (!grad) return value;
   Eigen::RowVectorXd& row = *grad;
   const int nv = static_cast<int>(dirs_.size());
   MeasureGradient& g = grad_;
   g.clear();
-  measure->gradient(*cs_.model, s, p, component, g);
+  partials(measure, s, p, component, g);
   for (const auto& [j, w] : g.dq) row += w * dq->row(j);
   for (const auto& [j, w] : g.dv) row += w * dv->row(j);
   for (const auto& [j, w] : g.da) row += w * da->row(j);
@@ -111,10 +123,10 @@ double ResponseTracker::evaluate(const Measure* measure, int component, const St
         for (const auto& [j, v] : d.scalars) scratch_.scalars[j] += tt * v;
       };
       step(t);
-      measure->evaluate(*cs_.model, s, scratch_, buf_.data());
+      values(measure, s, scratch_, buf_.data());
       const double fp = buf_[component];
       step(-2 * t);
-      measure->evaluate(*cs_.model, s, scratch_, buf_.data());
+      values(measure, s, scratch_, buf_.data());
       const double fm = buf_[component];
       // restore the touched entries exactly (no copy of the whole parameter set per step)
       for (const auto& f : d.fields)

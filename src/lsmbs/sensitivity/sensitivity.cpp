@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <mutex>
 #include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
@@ -94,10 +93,18 @@ void SensitivityCounts::add_run(const IntegratorSummary& s) {
   residual_evaluations += s.residual_evaluations;
 }
 
-std::vector<ResponseSensitivity> simulate_responses_at_current_design(
-    Study& cs, SensitivityCounts& counts, IntegratorSummary* primal,
-    const ProgressCallback& progress, long n_runs) {
-  ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()));
+ModelParams parameters_at(const Study& cs, const Vec& p) {
+  ModelParams params = cs.model->params();
+  if (cs.design) cs.design->apply(p, params);
+  return params;
+}
+
+std::vector<ResponseSensitivity> simulate_responses_with(const Study& cs, const ModelParams& params,
+                                                         SensitivityCounts& counts,
+                                                         IntegratorSummary* primal,
+                                                         const ProgressCallback& progress,
+                                                         long n_runs) {
+  ResponseTracker tr(cs, std::vector<ParamDirection>(cs.design->size()), params);
   struct Obs : StepObserver {
     ResponseTracker& tr;
     const ModelParams& p;
@@ -111,11 +118,11 @@ std::vector<ResponseSensitivity> simulate_responses_at_current_design(
       if (i.grid_point) tr.record(*i.state, p, nullptr, nullptr, nullptr, nullptr);
       return true;
     }
-  } obs(tr, cs.model->params());
+  } obs(tr, params);
   ProgressObserver prog(progress, cs.simulation.t_end, run_label(counts.simulations + 1, n_runs));
   InterruptObserver stop;
-  const auto s = GeneralizedAlpha(cs.simulation)
-                     .run(*cs.model, cs.model->params(), cs.initial, {&obs, &prog, &stop});
+  const auto s =
+      GeneralizedAlpha(cs.simulation).run(*cs.model, params, cs.initial, {&obs, &prog, &stop});
   counts.add_run(s);
   if (primal) *primal = s;
   if (s.aborted && interrupted())
@@ -126,12 +133,10 @@ std::vector<ResponseSensitivity> simulate_responses_at_current_design(
   return tr.results();
 }
 
-std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p,
+std::vector<ResponseSensitivity> simulate_responses(const Study& cs, const Vec& p,
                                                     SensitivityCounts& counts,
                                                     const ProgressCallback& progress) {
-  const std::lock_guard<std::recursive_mutex> one_evaluation_at_a_time(cs.evaluation_mutex());
-  cs.design->apply(p, cs.model->params());
-  return simulate_responses_at_current_design(cs, counts, nullptr, progress, 1);
+  return simulate_responses_with(cs, parameters_at(cs, p), counts, nullptr, progress, 1);
 }
 
 namespace {
@@ -170,7 +175,7 @@ void flag_non_finite(SensitivityResult& res, const Design& d, bool grid_gradient
 
 }  // namespace
 
-SensitivityResult SensitivityMethod::compute(Study& cs, const Vec& p) const {
+SensitivityResult SensitivityMethod::compute(const Study& cs, const Vec& p) const {
   if (!cs.design)
     throw SetupError("design", "sensitivities need a design section (design variables)");
   if (cs.responses.empty())
@@ -188,7 +193,8 @@ SensitivityResult SensitivityMethod::compute(Study& cs, const Vec& p) const {
                     ") is below 1e-13 of its scale and lost in round-off; use a larger delta");
     }
   const auto t0 = std::chrono::steady_clock::now();
-  SensitivityResult res = run(cs, p);
+  ModelParams params = parameters_at(cs, p);  // this evaluation's own: the study's stay as they are
+  SensitivityResult res = run(cs, p, params);
   for (auto& w : res.primal.warnings()) res.warnings.push_back("primal run: " + w);
   if (auto w = cs.design->coincident_features(p); !w.empty()) res.warnings.push_back(w);
   if (auto w = cs.design->features_outside(p); !w.empty()) res.warnings.push_back(w);
@@ -205,7 +211,7 @@ SensitivityResult SensitivityMethod::compute(Study& cs, const Vec& p) const {
   return res;
 }
 
-std::vector<SensitivityResult> idas_on_grids(Study& cs, const Vec& p, SensitivityOptions o,
+std::vector<SensitivityResult> idas_on_grids(const Study& cs, const Vec& p, SensitivityOptions o,
                                              double h_fine, const std::vector<int>& strides,
                                              const Mat* directions) {
   o.method = Method::kIdas;
@@ -265,8 +271,8 @@ std::unique_ptr<SensitivityMethod> make_sensitivity_method(const SensitivityOpti
   throw std::logic_error("make_sensitivity_method: unknown method");
 }
 
-SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o) {
-  const std::lock_guard<std::recursive_mutex> one_evaluation_at_a_time(cs.evaluation_mutex());
+SensitivityResult compute_sensitivities(const Study& cs, const Vec& p,
+                                        const SensitivityOptions& o) {
   return make_sensitivity_method(o)->compute(cs, p);
 }
 

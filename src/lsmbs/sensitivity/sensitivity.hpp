@@ -166,18 +166,29 @@ struct SensitivityResult {
   std::string report() const;  ///< outcome and counts, one paragraph
 };
 
-/// Response values of one generalized-α simulation at design p (gradients empty); the case's
-/// model parameters are left at p. Throws NumericalFailure when the simulation fails.
-std::vector<ResponseSensitivity> simulate_responses(Study& cs, const Vec& p,
+// The design is a value: an evaluation at p runs with its own copy of the study's model parameters
+// with p written in (parameters_at), and the study itself is not changed. Evaluations of one study
+// at different designs may therefore run at once, from several threads, and give the results of
+// the same evaluations one after the other, bit for bit (tests/integration/concurrency_test.cpp).
+
+/// The study's model parameters with design p written in (the study's own are not changed).
+ModelParams parameters_at(const Study& cs, const Vec& p);
+
+/// Response values of one generalized-α simulation at design p (gradients empty). Throws
+/// NumericalFailure when the simulation fails.
+std::vector<ResponseSensitivity> simulate_responses(const Study& cs, const Vec& p,
                                                     SensitivityCounts& counts,
                                                     const ProgressCallback& progress = {});
-/// The same at the case's current parameters; `primal` receives the integrator summary.
-std::vector<ResponseSensitivity> simulate_responses_at_current_design(
-    Study& cs, SensitivityCounts& counts, IntegratorSummary* primal,
-    const ProgressCallback& progress, long n_runs);
+/// The same with the model parameters `params` (e.g. parameters_at(cs, p) changed by a step);
+/// `primal` receives the integrator summary.
+std::vector<ResponseSensitivity> simulate_responses_with(const Study& cs, const ModelParams& params,
+                                                         SensitivityCounts& counts,
+                                                         IntegratorSummary* primal,
+                                                         const ProgressCallback& progress,
+                                                         long n_runs);
 
-/// Sensitivities at design p (the case's model parameters are left at p).
-SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const SensitivityOptions& o);
+/// Sensitivities at design p.
+SensitivityResult compute_sensitivities(const Study& cs, const Vec& p, const SensitivityOptions& o);
 
 /// Method idas on several output grids from one IDAS run (the time-step study of `lsmbs verify`):
 /// outputs every h_fine, result k recorded on the grid of step strides[k]·h_fine. IDAS's steps do
@@ -185,7 +196,7 @@ SensitivityResult compute_sensitivities(Study& cs, const Vec& p, const Sensitivi
 /// agrees with compute_sensitivities on that grid to IDAS's tolerance. With `directions` (n_v ×
 /// k), the gradients are the k directional derivatives ∂f/∂p · W (one IDAS sensitivity per
 /// column instead of one per variable). o.method is ignored (idas).
-std::vector<SensitivityResult> idas_on_grids(Study& cs, const Vec& p, SensitivityOptions o,
+std::vector<SensitivityResult> idas_on_grids(const Study& cs, const Vec& p, SensitivityOptions o,
                                              double h_fine, const std::vector<int>& strides,
                                              const Mat* directions = nullptr);
 

@@ -50,12 +50,11 @@ struct Study {
   /// Index of the response `name`, −1 if there is none.
   int response_index(const std::string& name) const;
 
-  /// Held by every evaluation of the study, from writing its design into the model's parameters
-  /// to the end of the run (compute_sensitivities, and the Python module's runs): the model's
-  /// parameters are the study's state while it runs, so two threads that share one study take
-  /// turns instead of running on each other's design. Recursive: an evaluation may start
-  /// evaluations of its own (a gradient check). Threads that must run at once each load their
-  /// own study.
+  /// For callers that change the study while others run from it: the Python module holds it from
+  /// writing a run's design into the model's parameters (the start checks) to the end of the run,
+  /// so that two threads sharing one case take turns. Evaluations of sensitivities do not need
+  /// it: they run with their own copy of the parameters (parameters_at, sensitivity.hpp) and may
+  /// run at once. Recursive: a run may start runs of its own.
   std::recursive_mutex& evaluation_mutex() const { return evaluation_.mutex; }
 
  private:
