@@ -450,9 +450,12 @@ class ModelBuilder:
     def measure(self, name, type, **keys):
         """A measure recorded every step (history columns): type 'position', 'velocity', 'angle',
         'angular_velocity', 'distance', 'elongation', 'path_deviation', 'constraint_force',
-        'kinetic_energy', 'strain_energy', 'mass' or 'stress', with that type's keys (point=…,
-        body=…, a=…, b=…, joint=…, path=…; stress: body=…, reference=…, aggregate=…,
-        parameter=…, relaxation=…; docs/case-format.md)."""
+        'kinetic_energy', 'strain_energy', 'mass', 'stress', 'frame_position', 'frame_velocity',
+        'line_distance' or 'combination', with that type's keys (point=…, body=…, a=…, b=…,
+        joint=…, path=…; stress: body=…, reference=…, aggregate=…, parameter=…, relaxation=…;
+        frame_position, frame_velocity: point=…, frame=at('body', …); line_distance: point=…,
+        a=…, b=…; combination: terms=[{'measure': 'tip.y', 'weight': 2}, …], constant=…;
+        docs/case-format.md)."""
         call = f"measure({name!r})"
         e = {"name": _name(name, "measure: name"), "type": _name(type, call + ": type")}
         for k, v in keys.items():

@@ -14,6 +14,7 @@
 //
 // This file only parses the command line; each command is in commands/ (one file each).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +23,7 @@
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
+#include "app/terminal.hpp"
 #include "lsmbs/core/allocator.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
@@ -64,11 +66,24 @@ CLI::Validator decimal_integer(long long lo, unsigned long long hi) {
       "");
 }
 
+// The command line as summary.json records it: each argument quoted for a POSIX shell where it
+// holds anything but plain characters, so that the recorded command, pasted into a shell, is the
+// command that ran (a --set value '/name=a\n$(touch x)' is one argument again, and runs nothing).
 std::string joined_args(int argc, char** argv) {
   std::string s;
   for (int i = 0; i < argc; ++i) {
     if (i) s += ' ';
-    s += argv[i];
+    const std::string a = argv[i];
+    const bool plain = !a.empty() && a.find_first_not_of(
+                                         "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                         "0123456789_./=:,+@%-") == std::string::npos;
+    if (plain) {
+      s += a;
+      continue;
+    }
+    s += '\'';
+    for (char c : a) s += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    s += '\'';
   }
   return s;
 }
@@ -80,6 +95,8 @@ int main(int argc, char** argv) {
   // SIGINT and SIGTERM from the start: every phase polls the flag and ends with exit 130 and its
   // results flagged (core/interrupt.hpp); a second signal ends the process at once
   lsmbs::install_interrupt_handlers();
+  // names from the case reach the terminal in messages and reports: as text, never as control
+  lsmbs::app::filter_control_characters();
   static const char* kSetHelp =
       "override a value of the case by JSON path, /simulation/h=1e-3 or "
       "/bodies/1/material/E=70e9, or a design variable, name=value (repeatable; recorded in "
@@ -362,6 +379,51 @@ int main(int argc, char** argv) {
       if (*opt && opt->count(o) && no_check)
         throw lsmbs::Error(std::string(o) +
                            ": an option of the gradient check, which --no-check skips");
+    // an option of sensitivity methods none of which runs (--delta 0.5 with direct-analytic left
+    // gradients.csv byte for byte as it was, and summary.json recorded it as if used)
+    if (*sen) {
+      std::vector<std::string> methods;
+      for (size_t b = 0; b <= sen_args.method.size();) {
+        const size_t e = std::min(sen_args.method.find(',', b), sen_args.method.size());
+        methods.push_back(sen_args.method.substr(b, e - b));
+        b = e + 1;
+      }
+      struct Use {
+        const char* option;
+        std::vector<std::string> by;
+      };
+      const std::vector<std::string> semi = {"semi-analytical", "semi-analytical-central",
+                                             "adjoint-semi-analytical"};
+      std::vector<std::string> steps = semi;
+      steps.insert(steps.end(), {"fd-forward", "fd-central"});
+      const Use uses[] = {
+          {"--delta", steps},
+          {"--absolute", steps},
+          {"--full-residual", semi},
+          {"--matrix", {"semi-analytical", "semi-analytical-central", "direct-analytic"}},
+          {"--rtol", {"idas", "idas-adjoint"}},
+          {"--atol", {"idas", "idas-adjoint"}},
+          {"--adjoint-memory", {"adjoint", "adjoint-semi-analytical"}},
+      };
+      for (const Use& u : uses) {
+        if (!sen->count(u.option)) continue;
+        const bool used = std::any_of(methods.begin(), methods.end(), [&](const std::string& m) {
+          return std::find(u.by.begin(), u.by.end(), m) != u.by.end();
+        });
+        if (!used) {
+          std::string list;
+          for (const auto& m : u.by) list += (list.empty() ? "" : ", ") + m;
+          throw lsmbs::Error(std::string(u.option) + ": an option of the methods " + list +
+                             ", and --method " + sen_args.method + " does not use it");
+        }
+      }
+    }
+    if (*sim && sim_args.integrator != "idas")
+      for (const char* o : {"--rtol", "--atol", "--max-order", "--error-test"})
+        if (sim->count(o))
+          throw lsmbs::Error(std::string(o) +
+                             ": an option of IDAS (--integrator idas); generalized-alpha does not "
+                             "use it");
     // summary.json records the case file's name, and JSON text is UTF-8: a name that is not
     // would fail only when the summary is written, after the run
     if (lsmbs::invalid_utf8_at(case_file) != std::string::npos)

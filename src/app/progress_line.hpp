@@ -6,6 +6,7 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include "app/terminal.hpp"
 #include "lsmbs/core/progress.hpp"
 
 namespace lsmbs::app {
@@ -25,7 +26,7 @@ class ProgressLine {
     drawn_ = true;
     std::va_list ap;
     va_start(ap, fmt);
-    std::fputs("\r\033[K", stderr);  // carriage return, erase to the end of the line
+    raw_control("\r\033[K");  // carriage return, erase to the end of the line
     std::vfprintf(stderr, fmt, ap);
     va_end(ap);
     std::fflush(stderr);
@@ -33,8 +34,7 @@ class ProgressLine {
   /// Erases the line so that ordinary output can follow.
   void clear() {
     if (!enabled_ || !drawn_) return;
-    std::fputs("\r\033[K", stderr);
-    std::fflush(stderr);
+    raw_control("\r\033[K");
     drawn_ = false;
   }
   /// The library's progress reports drawn on this line (empty when disabled: no calls at all).

@@ -387,6 +387,23 @@ ls -A "$tmp/reuse" > "$tmp/reuse_ls_after.txt"
 mkdir -p "$tmp/reuse/.lsmbs-replaced-run" && touch "$tmp/reuse/.lsmbs-replaced-run/old.vtu"
 "$exe" simulate "$spring" -o "$tmp/reuse" -q --overwrite && [ ! -e "$tmp/reuse/.lsmbs-replaced-run" ] \
   && [ -f "$tmp/reuse/notes.txt" ] || fail "a run over a left stash: $(ls -A "$tmp/reuse")"
+# a run killed during --overwrite (SIGKILL: no summary.json of its own, its history.csv half
+# written, the earlier run in the stash): the next run puts the earlier run back before it judges
+# the folder, so the earlier run is never lost (it was deleted with the stash)
+"$exe" simulate "$spring" -o "$tmp/killed" -q || fail "simulate into killed/"
+cp "$tmp/killed/history.csv" "$tmp/killed_history_before.csv"
+cp "$tmp/killed/summary.json" "$tmp/killed_summary_before.json"
+mkdir -p "$tmp/killed/.lsmbs-replaced-run"
+for f in $(python3 -c "import json; print(' '.join(json.load(open('$tmp/killed/summary.json'))['files']))"); do
+  [ -e "$tmp/killed/$f" ] && mkdir -p "$(dirname "$tmp/killed/.lsmbs-replaced-run/$f")" \
+    && mv "$tmp/killed/$f" "$tmp/killed/.lsmbs-replaced-run/$f"
+done
+echo "t,partial" > "$tmp/killed/history.csv"
+"$exe" simulate "$spring" -o "$tmp/killed" -q 2> "$tmp/erk.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "holds an earlier run" "$tmp/erk.txt" && [ ! -e "$tmp/killed/.lsmbs-replaced-run" ] \
+  && cmp -s "$tmp/killed/history.csv" "$tmp/killed_history_before.csv" \
+  && cmp -s "$tmp/killed/summary.json" "$tmp/killed_summary_before.json" \
+  || fail "the earlier run after a killed --overwrite: rc $rc $(cat "$tmp/erk.txt"); $(ls -A "$tmp/killed")"
 # a static run writes <body>.vtu and model.vtm beside summary.json; a run that replaces it with
 # --overwrite leaves none of them: the folder holds exactly what the new summary.json lists
 cant="$src/tests/integration/data/cantilever_ramp.json"

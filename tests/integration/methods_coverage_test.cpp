@@ -447,6 +447,20 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
   EXPECT_EQ(r[2].at("status"), "complete");
   EXPECT_EQ(r[2].at("initial.m1"), a[2].at("initial.m1")) << "the stored start, not a new draw";
   EXPECT_EQ(r[2].at("objective"), a[2].at("objective")) << "the same optimum (a deterministic run)";
+  // a start that ends without a summary.json (here its folder holds a user's history.csv, which
+  // it refuses to replace: exit 2) is ranked as not run, and the multi-start is partial (exit 1);
+  // the ranking read that start's final design from a summary it did not have and crashed
+  fs::remove_all(dir + "/a/start_2");
+  fs::create_directories(dir + "/a/start_2");
+  std::ofstream(dir + "/a/start_2/history.csv") << "a user's file\n";
+  EXPECT_EQ(run("a", " --starts 3 --seed 7 --resume"), 1);
+  const auto broken = starts("a");
+  ASSERT_EQ(broken.size(), 3u);
+  EXPECT_EQ(broken[1].at("exit_code"), "2");
+  EXPECT_EQ(broken[1].at("status"), "not run");
+  EXPECT_EQ(broken[1].at("final.m1"), "nan");
+  EXPECT_EQ(broken[1].at("rank"), "");
+  EXPECT_TRUE(fs::exists(dir + "/a/start_2/history.csv")) << "the user's file is kept";
 }
 
 TEST(MethodsCoverage, MultiStartRanksAnUnconstrainedProblemByItsObjective) {

@@ -167,6 +167,15 @@ def check_outputs(out):
                     for g in S.get("files", []):
                         if not os.path.exists(os.path.join(d, g)):
                             raise AssertionError(f"lists {g!r}, which does not exist")
+                elif f == "report.md":  # Markdown: names never split a row or carry controls
+                    with open(p, encoding="utf-8") as fh:
+                        text = fh.read()
+                    if any(c in text for c in "\x00\x1b\x7f\r") or "<a x=" in text:
+                        raise AssertionError("a control character or raw markup in the report")
+                    rows = [l for l in text.splitlines() if l.startswith("| ")]
+                    for l in rows:  # a row has as many unescaped '|' as its table's header
+                        if l.replace("\\|", "").count("|") < 2:
+                            raise AssertionError(f"a broken table row: {l[:80]!r}")
                 elif ".tmp." in f:
                     raise AssertionError("a temporary file was left")
             except Exception as e:  # noqa: BLE001 - any failure to read is a finding
@@ -174,9 +183,18 @@ def check_outputs(out):
     return problems
 
 
+TERMINAL_CONTROLS = ("\x1b", "\x07", "\x00", "\x7f", "\u009b")
+
+
 def run(lsmbs, args, cwd, verbose):
     p = subprocess.run([lsmbs] + args, cwd=cwd, capture_output=True, timeout=600)
     err = p.stderr.decode("utf-8", "replace")
+    out = p.stdout.decode("utf-8", "replace")
+    # what reaches the terminal carries no control characters of the case's names (escape
+    # sequences retitle, recolour or rewrite the terminal): they are printed as escapes
+    for c in TERMINAL_CONTROLS:
+        if c in out or c in err:
+            return -1000, f"control character {c!r} printed to the terminal: " + (out + err)[:200]
     if verbose:
         print(f"  rc {p.returncode}: {' '.join(a[:40] for a in args)[:160]!r}")
     return p.returncode, err

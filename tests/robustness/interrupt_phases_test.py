@@ -4,7 +4,7 @@ that goes on, a complete summary, a numerical failure or a failed check.
 
     interrupt_phases_test.py --lsmbs BIN --root SOURCE_DIR [-v]
 
-The signal is sent at the phase by the testing hook LSMBS_TEST_SIGNAL=POINT[:TERM] (the process
+The signal is sent at the phase by the testing hook LSMBS_TEST_SIGNAL=POINT[:TERM|:HUP] (the process
 signals itself the first time it reaches the point; docs/verification.md), so the test does not
 depend on timing: without polling in that phase the run would finish (exit 0) or fail (exit 1).
 The case is the clamped plate with one design hole of tests/integration/data/cantilever_ramp.json
@@ -67,6 +67,13 @@ def main():
                                 f"{None if S is None else S.get('status')!r}, expected interrupted")
             elif any(not os.path.exists(os.path.join(out, x)) for x in S.get("files", [])):
                 findings.append(f"{label}: summary lists files that do not exist")
+            else:  # and every file there is listed (an unlisted one blocks the next --overwrite)
+                listed = set(S.get("files", []))
+                for d, _, names in os.walk(out):
+                    for n in names:
+                        rel = os.path.relpath(os.path.join(d, n), out)
+                        if rel not in listed and rel != "summary.json":
+                            findings.append(f"{label}: {rel} is there but not listed")
             if "interrupted" not in p.stderr:
                 findings.append(f"{label}: the message does not say interrupted: {p.stderr!r}")
         return S, out
@@ -87,6 +94,7 @@ def main():
             findings.append(f"resumed: status {R.get('status')}, design {R['final']['design']} "
                             f"!= {ref and ref['final']['design']}")
     run("opt_check_term", "gradient-check:TERM", ["optimize", path])
+    run("opt_check_hup", "gradient-check:HUP", ["optimize", path])  # the terminal closed
 
     # sensitivity: --check, the adjoint's backward pass and its recomputation
     S, _ = run("sens_check", "gradient-check", ["sensitivity", path, "--check"])
@@ -106,6 +114,7 @@ def main():
                                                           "--no-mesh-study"])
 
     # simulate: the writing of a finished run's outputs
+    run("write_hup", "write-outputs:HUP", ["simulate", path])
     S, out = run("write", "write-outputs", ["simulate", path])
     if S and "history.csv" not in S.get("files", []):
         findings.append(f"write: summary lists {S.get('files')}, expected history.csv among them")

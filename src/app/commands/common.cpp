@@ -155,8 +155,8 @@ lsmbs::CaseOverride parse_override(const std::string& s) {
   o.origin = "--set " + s;
   const std::string v = s.substr(eq + 1);
   if (v.empty()) throw lsmbs::Error("--set " + s + ": expected a value after '='");
-  try {
-    o.value = nlohmann::json::parse(v);
+  try {  // JSON as a case file is read: a key given twice is refused (the last one won silently)
+    o.value = lsmbs::parse_json_document(v, o.origin);
   } catch (const nlohmann::json::exception&) {
     o.value = v;
   }

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "app/commands/commands.hpp"
@@ -105,12 +106,18 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       p[i] = d.variables[i].lower + u(gen) * (d.variables[i].upper - d.variables[i].lower);
     ++candidates;
     const lsmbs::Evaluation& e = prob.evaluate(p);
+    if (e.interrupted || lsmbs::interrupted()) {  // not an infeasible candidate: not judged at all
+      std::fprintf(stderr,
+                   "lsmbs optimize: interrupted while screening candidate %d of the multi-start "
+                   "(no start had begun; nothing was written: run the command again)\n",
+                   candidates);
+      return 130;
+    }
     if (e.ok && e.max_violation <= 0) starts.push_back(p);
     if (!c.quiet)
       std::printf("multi-start: candidate %d %s (max violation %.3e)\n", candidates,
                   e.ok && e.max_violation <= 0 ? "feasible, kept" : "infeasible, skipped",
                   e.max_violation);
-    if (lsmbs::interrupted()) return 130;
   }
   if (static_cast<int>(starts.size()) == a.starts && !a.resume) {
     nlohmann::json rows = nlohmann::json::array();
@@ -218,6 +225,7 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
   const double tol = prob.spec().tol_constraint;
   for (size_t k = 0; k < starts.size(); ++k) {
     Row r{static_cast<int>(k) + 1, rc[k], "not run"};
+    r.final_design.assign(static_cast<size_t>(n), NAN);  // a start with no summary.json has none
     const std::string f = c.out + "/start_" + std::to_string(k + 1) + "/summary.json";
     std::error_code ec;
     if (std::filesystem::exists(f, ec)) {
@@ -249,7 +257,6 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       if (S.contains("kkt") && S["kkt"].is_object() && S["kkt"].contains("verdict") &&
           S["kkt"]["verdict"].is_string())
         r.kkt_verdict = S["kkt"]["verdict"].get<std::string>();
-      r.final_design.assign(static_cast<size_t>(n), NAN);
       if (S.contains("final") && S["final"].is_object() && S["final"].contains("design"))
         for (int i = 0; i < n; ++i)
           r.final_design[static_cast<size_t>(i)] =
@@ -277,7 +284,7 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
                                        "stop_reason",   "kkt",       "converged",   "rank"};
     for (const auto& v : d.variables) header.push_back("initial." + v.name);
     for (const auto& v : d.variables) header.push_back("final." + v.name);
-    std::ofstream f(c.out + "/starts.csv");
+    std::ostringstream f;  // written whole (write_file_atomic: a full disk is an error, not a cut)
     for (size_t i = 0; i < header.size(); ++i) f << (i ? "," : "") << header[i];
     f << "\n";
     char buf[64];
@@ -304,6 +311,7 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
       }
       f << "\n";
     }
+    lsmbs::write_file_atomic(c.out + "/starts.csv", f.str());
   }
   nlohmann::json S = lsmbs::provenance(c.command_line, cs.file, cs.sha256);
   S["overrides"] = cs.overrides;

@@ -228,7 +228,12 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
   S["counts"] = nlohmann::json(res.counts);
   S["primal"] = nlohmann::json(res.primal);
   S["warnings"] = res.warnings;
-  if (checked) S["gradient_check"] = lsmbs::gradient_check_json(*checked, *check);
+  if (checked)
+    S["gradient_check"] = lsmbs::gradient_check_json(*checked, *check);
+  else if (check && stopped)  // asked for, and the interrupt came before it could run
+    S["gradient_check"] = {{"completed", false},
+                           {"verdict", "interrupted"},
+                           {"message", "interrupted before the check's simulations began"}};
   for (const auto& w : res.warnings)
     std::fprintf(stderr, "lsmbs sensitivity: warning: %s\n", w.c_str());
   S["wall_seconds"] = res.counts.wall_seconds;
@@ -271,9 +276,12 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
     std::printf(
         "lsmbs sensitivity (%s): %s — %ld simulations, %ld steps, %ld factorizations, %ld "
         "back-solves (%ld rhs), %.3f s\n",
-        method.c_str(), res.ok ? "complete" : "FAILED", res.counts.simulations, res.counts.steps,
-        res.counts.factorizations, res.counts.back_solves, res.counts.back_solve_rhs,
-        res.counts.wall_seconds);
+        method.c_str(),
+        stopped  ? "INTERRUPTED"
+        : res.ok ? "complete"
+                 : "FAILED",
+        res.counts.simulations, res.counts.steps, res.counts.factorizations, res.counts.back_solves,
+        res.counts.back_solve_rhs, res.counts.wall_seconds);
     for (const auto& rs : res.responses) {
       if (!res.ok) break;  // aggregates of a failed run are not responses
       if (!rs.times.empty()) {

@@ -430,10 +430,10 @@ struct Loader {
 
   // ---------------------------------------------------------------- measures and responses
   void measure(const JsonReader& r) {
-    const std::string type =
-        r.one_of("type", {"position", "velocity", "angle", "angular_velocity", "distance",
-                          "elongation", "path_deviation", "constraint_force", "kinetic_energy",
-                          "strain_energy", "mass", "stress"});
+    const std::string type = r.one_of(
+        "type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation",
+                 "path_deviation", "constraint_force", "kinetic_energy", "strain_energy", "mass",
+                 "stress", "frame_position", "frame_velocity", "line_distance", "combination"});
     const std::string name = r.string("name");
     // constraint_force measures are placeholders (null) until the model is built: their names are
     // pending
@@ -446,9 +446,29 @@ struct Loader {
       const std::string body = r.string("body");
       return at_key(r, "body", [&] { return builder.angle_dof(body); });
     };
+    // a point of a rigid body, whose frame (origin there, the body's axes) a measure refers to
+    auto frame_ref = [&](const std::string& key) {
+      const PointRef f = point_ref(key);
+      if (f.kind != PointRef::Kind::kBody)
+        r.child(key).fail("body",
+                          "expected a rigid body: the frame is a rigid body's (its axes, "
+                          "origin at the point given)");
+      return f;
+    };
     std::unique_ptr<Measure> m;
     if (type == "position")
       m = std::make_unique<PositionMeasure>(name, point_ref("point"));
+    else if (type == "frame_position")
+      m = std::make_unique<FramePositionMeasure>(name, point_ref("point"), frame_ref("frame"));
+    else if (type == "frame_velocity")
+      m = std::make_unique<FrameVelocityMeasure>(name, point_ref("point"), frame_ref("frame"));
+    else if (type == "line_distance") {
+      const PointRef p = point_ref("point"), a = point_ref("a"), b = point_ref("b");
+      if (!((builder.initial_position(b) - builder.initial_position(a)).norm() > 0))
+        r.fail("b", "the line's two points coincide at t = 0 (a and b): no line through them");
+      m = std::make_unique<LineDistanceMeasure>(name, p, a, b);
+    } else if (type == "combination")
+      m = combination(r, name);
     else if (type == "velocity")
       m = std::make_unique<VelocityMeasure>(name, point_ref("point"));
     else if (type == "angle")
@@ -513,6 +533,59 @@ struct Loader {
     }
     r.finish();
     cs.measures.push_back(std::move(m));
+  }
+
+  // c0 + Σ w_i (measure column)_i over columns of measures listed before this one
+  std::unique_ptr<Measure> combination(const JsonReader& r, const std::string& name) {
+    std::vector<CombinationMeasure::Term> terms;
+    std::string unit;
+    const StressMeasure* stress = nullptr;
+    bool other_in_params = false;
+    for (const auto& t : r.items("terms", true)) {
+      const std::string col = t.string("measure");
+      const double w = t.number("weight", 1.0);
+      const Measure* found = nullptr;
+      int component = -1;
+      for (const auto& m : cs.measures) {
+        if (!m) continue;  // a constraint force, filled after the build
+        const auto comps = m->components();
+        for (size_t c = 0; c < comps.size(); ++c)
+          if (comps[c] == col) found = m.get(), component = static_cast<int>(c);
+      }
+      if (!found) {
+        for (const auto& pending : pending_forces)
+          if (col == pending.first || col.rfind(pending.first + ".", 0) == 0)
+            t.fail("measure", "'" + col +
+                                  "' is a constraint force: its scaling belongs to the run, and "
+                                  "combinations do not take one");
+        t.fail("measure", "unknown measure column '" + col +
+                              "' (a column of a measure listed before this one, e.g. 'tip.x')");
+      }
+      const std::string u = found->units()[static_cast<size_t>(component)];
+      if (unit.empty())
+        unit = u;
+      else if (u != unit)
+        t.fail("measure", "'" + col + "' is in " + u + ", the terms before it in " + unit +
+                              ": a combination adds quantities of one unit");
+      if (const auto* sm = dynamic_cast<const StressMeasure*>(found)) {
+        if (stress && stress != sm && &stress->body() != &sm->body())
+          t.fail("measure",
+                 "stresses of two bodies: their exact design derivatives do not add "
+                 "up in one combination; combine each body's separately");
+        stress = sm;
+      } else if (found->depends_on_params()) {
+        other_in_params = true;
+      }
+      if (stress && other_in_params)
+        t.fail("measure",
+               "a stress combined with a measure that depends on the design's "
+               "parameters (mass, energy): the stress's exact design derivative and "
+               "the other's difference quotient cannot be added in one measure");
+      terms.push_back({found, component, w});
+      t.finish();
+    }
+    return std::make_unique<CombinationMeasure>(name, r.number("constant", 0.0), std::move(terms),
+                                                unit);
   }
 
   void response(const JsonReader& r) {

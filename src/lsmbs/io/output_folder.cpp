@@ -162,7 +162,17 @@ ReplacedRun claim_output_folder(const std::string& out, bool overwrite, bool res
   std::error_code ec;
   if (resume || !fs::is_directory(out, ec)) return {};
   const fs::path root(out), stash = root / ReplacedRun::stash_name();
-  fs::remove_all(stash, ec);  // a run killed before it could delete or restore its stash
+  // A run killed (SIGKILL, power loss) before it could delete or restore its stash: when it left no
+  // summary.json it did not finish, and the earlier run it was replacing is put back (its files
+  // replace the same-named ones the killed run wrote); when it finished, the stash is deleted.
+  if (fs::exists(stash, ec)) {
+    if (!fs::exists(root / "summary.json", ec))
+      for (const auto& f : listed_run_files(stash.string())) {
+        fs::create_directories((root / f).parent_path(), ec);
+        fs::rename(stash / f, root / f, ec);
+      }
+    fs::remove_all(stash, ec);
+  }
   const std::vector<std::string> earlier = listed_run_files(out);
   std::set<std::string> earlier_top;  // the top-level entries the earlier run's files are in
   for (const auto& f : earlier) earlier_top.insert(fs::path(f).begin()->string());

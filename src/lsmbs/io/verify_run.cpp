@@ -53,6 +53,44 @@ std::string below(double worst, double tolerance) {
 }
 
 // "within 1 ± 0.2" or "outside 1 ± 0.2", as the value lies
+// User text (names of the case, variables, responses; the case file's path) as Markdown text of
+// report.md: a '|' would split a table row, a line break a table or a list, '<' start HTML, and
+// control characters reach whoever cats the file; each is written as an escape or an entity.
+std::string md_text(const std::string& s) {
+  std::string r;
+  char b[8];
+  for (unsigned char c : s) {
+    switch (c) {
+      case '|':
+        r += "\\|";
+        break;
+      case '<':
+        r += "&lt;";
+        break;
+      case '>':
+        r += "&gt;";
+        break;
+      case '&':
+        r += "&amp;";
+        break;
+      case '\\':
+        r += "\\\\";
+        break;
+      case '`':
+        r += "\\`";
+        break;
+      default:
+        if (c < 0x20 || c == 0x7f) {
+          std::snprintf(b, sizeof b, "\\x%02x", c);
+          r += b;
+        } else {
+          r += static_cast<char>(c);
+        }
+    }
+  }
+  return r;
+}
+
 std::string within(bool ok, const std::string& range) {
   return (ok ? "within " : "outside ") + range;
 }
@@ -103,13 +141,13 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   };
   // a check that could not decide (its reference is not accurate enough): said, not failed
   auto note = [&](const std::string& what) { verdicts.push_back("NOTE — " + what); };
-  md << "# Verification report: " << cs.name << "\n\nCase `" << file << "` (SHA-256 "
-     << cs.sha256.substr(0, 16) << "…), " << d.size()
+  md << "# Verification report: " << md_text(cs.name) << "\n\nCase `" << md_text(file)
+     << "` (SHA-256 " << cs.sha256.substr(0, 16) << "…), " << d.size()
      << (d.size() == 1 ? " design variable, " : " design variables, ") << cs.responses.size()
      << " responses, h = " << cs.simulation.h << " s, t_end = " << cs.simulation.t_end
      << " s. Produced by `" << o.command_line << "`.\n\nDesign point:";
   for (int i = 0; i < d.size(); ++i)
-    md << (i ? ", " : " ") << d.variables[i].name << " = " << fmt("%.6g", p[i]);
+    md << (i ? ", " : " ") << md_text(d.variables[i].name) << " = " << fmt("%.6g", p[i]);
   md << (o.design_overrides.empty() ? " (the case's initial design).\n\n" : ".\n\n");
 
   // ---- primal and all methods
@@ -265,9 +303,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   for (size_t k = 0; k < ref.responses.size(); ++k) {
     const auto& rr = ref.responses[k];
     const bool per_step = !rr.times.empty();
-    md << "### " << rr.name << (per_step ? " (per step: worst step shown)" : "")
+    md << "### " << md_text(rr.name) << (per_step ? " (per step: worst step shown)" : "")
        << "\n\n| variable | direct-analytic |";
-    for (size_t m = 1; m < runs.size(); ++m) md << " " << runs[m].name << " |";
+    for (size_t m = 1; m < runs.size(); ++m) md << " " << md_text(runs[m].name) << " |";
     md << "\n|---|---|";
     for (size_t m = 1; m < runs.size(); ++m) md << "---|";
     md << "\n";
@@ -283,7 +321,8 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     }
     const double n = std::max(scale_of(rr.gradient), 1e-300);
     for (int i = 0; i < d.size(); ++i) {
-      md << "| " << d.variables[i].name << " | " << fmt("%.8e", rr.gradient(row, i)) << " |";
+      md << "| " << md_text(d.variables[i].name) << " | " << fmt("%.8e", rr.gradient(row, i))
+         << " |";
       gcsv << csv_field(rr.name) << "," << csv_field(d.variables[i].name) << "," << row << ","
            << csv_number(rr.gradient(row, i));
       for (size_t m = 1; m < runs.size(); ++m) {
@@ -327,8 +366,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         (a.gradient - b.gradient).rowwise().lpNorm<Eigen::Infinity>().maxCoeff(&row);
       const double n = std::max(scale_of(b.gradient), 1e-300);
       for (Eigen::Index j = 0; j < b.gradient.cols(); ++j)
-        md << "| " << a.name << (a.times.empty() ? "" : " (step " + std::to_string(row) + ")")
-           << " | " << dir_names[static_cast<size_t>(j)] << " | " << fmt("%.8e", a.gradient(row, j))
+        md << "| " << md_text(a.name)
+           << (a.times.empty() ? "" : " (step " + std::to_string(row) + ")") << " | "
+           << md_text(dir_names[static_cast<size_t>(j)]) << " | " << fmt("%.8e", a.gradient(row, j))
            << " | " << fmt("%.8e", b.gradient(row, j)) << " | "
            << fmt("%.1e", std::abs(a.gradient(row, j) - b.gradient(row, j)) / n) << " |\n";
     }
@@ -342,7 +382,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         "| pseudo-load residuals | element pseudo-loads |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : runs) {
     const auto& c = r.r.counts;
-    md << "| " << r.name << " | " << fmt("%.3f", c.wall_seconds) << " | "
+    md << "| " << md_text(r.name) << " | " << fmt("%.3f", c.wall_seconds) << " | "
        << fmt("%.2f", c.wall_seconds / primal) << " | " << c.simulations << " | "
        << c.factorizations << " | " << c.back_solve_rhs << " | " << c.residual_evaluations << " | "
        << c.pseudo_load_residuals << " | " << c.element_pseudo_loads << " |\n";
@@ -362,7 +402,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   {
     stage("Δp study of the semi-analytical methods (10 values of Δp)");
     const auto exact = sens(Method::kDirectAnalytic, 1e-6, false, M::kRefined);
-    std::ofstream c(o.out_dir + "/dp_study.csv");
+    // written whole once the study is done (an interrupted study leaves no half table that no
+    // summary lists: the next --overwrite refused the folder), registered as the run's own
+    std::ostringstream c;
     c << "delta,forward,central\n";
     md << "## 3. Δp study\n\nError of the semi-analytical gradients against direct-analytic (same "
           "matrix, `refined`), "
@@ -414,7 +456,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         if (std::isfinite(v)) m = std::max(m, v);
       return m;
     };
-    c.close();
+    write_file_atomic(o.out_dir + "/dp_study.csv", c.str());
     files.push_back("dp_study.csv");
     // Slopes on the finest decade of Δp on the truncation side of the smallest error (the round-off
     // floor; finer Δp only add round-off) whose two errors both stand 3× above that floor
@@ -572,7 +614,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
             "the case's h in section 1 only): nothing to fit.\n\n";
     if (!series.empty()) {
       md << "| h |";
-      for (const auto& sr : series) md << " " << sr.name << " | IDAS self |";
+      for (const auto& sr : series) md << " " << md_text(sr.name) << " | IDAS self |";
       md << "\n|---|";
       for (size_t i = 0; i < series.size(); ++i) md << "---|---|";
       md << "\n";
@@ -620,7 +662,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
               "aggregate converges irregularly until its peak is resolved); a smaller case h "
               "(--set /simulation/h=…) may decide";
         verdict(ok, line);
-        md << "- " << sr.name << ": order " << fmt("%.2f", order)
+        md << "- " << md_text(sr.name) << ": order " << fmt("%.2f", order)
            << " (halving to h = " << fmt("%.3e", h_fit) << ", floor " << fmt("%.1e", floor)
            << ").\n";
       } else if (largest <= 1e2 * rtol_tight && 1e2 * rtol_tight <= 1e-6) {
@@ -628,7 +670,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
                           " agrees with IDAS within 100 × its rtol at every h (largest "
                           "difference " +
                           fmt("%.1e", largest) + "; no order to fit)");
-        md << "- " << sr.name
+        md << "- " << md_text(sr.name)
            << ": every difference within 100 × IDAS's rtol (agreement, no "
               "order to fit).\n";
       } else {
@@ -644,7 +686,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
                       " on two consecutive h";
         note(sr.name + " against IDAS: inconclusive, " + why +
              "; a tighter --idas-rtol may decide");
-        md << "- " << sr.name << ": inconclusive, " << why << ".\n";
+        md << "- " << md_text(sr.name) << ": inconclusive, " << why << ".\n";
       }
     }
     md << "\n";
@@ -676,7 +718,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
           "responses and the "
           "largest gradient component (direct-analytic).\n\n| scale | elements | ";
     for (const auto& r : cs.responses)
-      if (r.kind != ResponseSpec::Kind::kPerStep) md << r.name << " | max |grad| | ";
+      if (r.kind != ResponseSpec::Kind::kPerStep) md << md_text(r.name) << " | max |grad| | ";
     md << "\n|---|---|";
     for (const auto& r : cs.responses)
       if (r.kind != ResponseSpec::Kind::kPerStep) md << "---|---|";
@@ -717,7 +759,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       const auto& v = mesh_values[k];
       const MeshConvergence mc = mesh_convergence(v[0], v[1], v[2], mesh_sizes[0], mesh_sizes[1],
                                                   mesh_sizes[2], o.tol_mesh);
-      md << "- " << cs.responses[k].name << ": " << mc.explanation << "\n";
+      md << "- " << md_text(cs.responses[k].name) << ": " << md_text(mc.explanation) << "\n";
       verdict(mc.pass(), "mesh study, " + cs.responses[k].name + ": " + mc.explanation);
     }
     md << "\n";
@@ -730,7 +772,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
 
   // ---- 6. verdicts
   md << "## 6. Pass/fail\n\n";
-  for (const auto& v : verdicts) md << "- " << v << "\n";
+  for (const auto& v : verdicts) md << "- " << md_text(v) << "\n";
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   md << "\nWall time of the verification: " << fmt("%.1f", wall) << " s.\n";
   write_file_atomic(o.out_dir + "/report.md", md.str());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace lsmbs {
 namespace {
@@ -54,6 +55,172 @@ void VelocityMeasure::gradient(const Model&, const State& s, const ModelParams&,
     const double th = s.q[pt_.dof0 + 2];  // ∂(θ̇ R′(θ) d)/∂θ = θ̇ R″(θ) d = −θ̇ R(θ) d
     g.dq.emplace_back(pt_.dof0 + 2, -s.v[pt_.dof0 + 2] * w.dot(rotation(th) * pt_.local));
   }
+}
+
+namespace {
+// The frame of a rigid-body point: its origin o and the body's rotation R(θ).
+struct Frame {
+  Vec2 o;
+  Mat2 R, dR;  // R(θ), R′(θ)
+  double theta;
+};
+Frame frame_at(const PointRef& f, const Vec& q) {
+  const double th = q[f.dof0 + 2];
+  return {point_position(f, q), rotation(th), rotation_derivative(th), th};
+}
+// J: the rotation by +90°, J (x, y) = (−y, x)
+Vec2 perp(const Vec2& v) { return Vec2(-v.y(), v.x()); }
+// ∂r_c/∂q · w added to `out`, r = Rᵀ (p − o): through p (Rᵀ ∂p/∂q), through o (−Rᵀ ∂o/∂q) and
+// through θ (R′ᵀ (p − o)).
+void frame_position_rows(const PointRef& pt, const PointRef& frame, const Vec& q, int c, double w,
+                         std::vector<std::pair<int, double>>& out) {
+  const Frame F = frame_at(frame, q);
+  const Vec2 d = point_position(pt, q) - F.o;
+  point_row(pt, q, w * F.R.col(c), out);
+  point_row(frame, q, -w * F.R.col(c), out);
+  out.emplace_back(frame.dof0 + 2, w * F.dR.col(c).dot(d));
+}
+// ṗ of a point (VelocityMeasure).
+Vec2 point_velocity(const PointRef& pt, const State& s) {
+  Vec2 v = Vec2::Zero();
+  if (pt.kind != PointRef::Kind::kGround) v = s.v.segment<2>(pt.dof0);
+  if (pt.kind == PointRef::Kind::kBody)
+    v += s.v[pt.dof0 + 2] * (rotation_derivative(s.q[pt.dof0 + 2]) * pt.local);
+  return v;
+}
+// ∂(w · ṗ)/∂q of a point: a body point's ṗ depends on θ (∂(θ̇ R′ d)/∂θ = −θ̇ R d).
+void velocity_q_row(const PointRef& pt, const State& s, const Vec2& w,
+                    std::vector<std::pair<int, double>>& out) {
+  if (pt.kind != PointRef::Kind::kBody) return;
+  out.emplace_back(pt.dof0 + 2, -s.v[pt.dof0 + 2] * w.dot(rotation(s.q[pt.dof0 + 2]) * pt.local));
+}
+}  // namespace
+
+void FramePositionMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                    double* out) const {
+  const Frame F = frame_at(frame_, s.q);
+  const Vec2 r = F.R.transpose() * (point_position(pt_, s.q) - F.o);
+  out[0] = r.x();
+  out[1] = r.y();
+}
+
+void FramePositionMeasure::gradient(const Model&, const State& s, const ModelParams&, int c,
+                                    MeasureGradient& g) const {
+  frame_position_rows(pt_, frame_, s.q, c, 1.0, g.dq);
+}
+
+void FrameVelocityMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                    double* out) const {
+  const Frame F = frame_at(frame_, s.q);
+  const Vec2 r = F.R.transpose() * (point_position(pt_, s.q) - F.o);
+  const double w = s.v[frame_.dof0 + 2];
+  const Vec2 rd =
+      F.R.transpose() * (point_velocity(pt_, s) - point_velocity(frame_, s)) - w * perp(r);
+  out[0] = rd.x();
+  out[1] = rd.y();
+}
+
+void FrameVelocityMeasure::gradient(const Model&, const State& s, const ModelParams&, int c,
+                                    MeasureGradient& g) const {
+  // ṙ_c = R_c · (ṗ − ȯ) − θ̇ (J r)_c, R_c the c-th column of R; (J r)_0 = −r_1, (J r)_1 = r_0
+  const Frame F = frame_at(frame_, s.q);
+  const Vec2 Rc = F.R.col(c);
+  const double w = s.v[frame_.dof0 + 2];
+  // velocities: ∂ṗ/∂q̇ = ∂p/∂q, and θ̇ of the frame in −θ̇ (J r)_c
+  point_row(pt_, s.q, Rc, g.dv);
+  point_row(frame_, s.q, -Rc, g.dv);
+  const Vec2 r = F.R.transpose() * (point_position(pt_, s.q) - F.o);
+  g.dv.emplace_back(frame_.dof0 + 2, -perp(r)[c]);
+  // positions: ṗ and ȯ through the bodies' angles, R_c through θ, r in −θ̇ (J r)_c
+  velocity_q_row(pt_, s, Rc, g.dq);
+  velocity_q_row(frame_, s, -Rc, g.dq);
+  g.dq.emplace_back(frame_.dof0 + 2,
+                    F.dR.col(c).dot(point_velocity(pt_, s) - point_velocity(frame_, s)));
+  if (c == 0)
+    frame_position_rows(pt_, frame_, s.q, 1, w, g.dq);  // −θ̇ (−r_1)
+  else
+    frame_position_rows(pt_, frame_, s.q, 0, -w, g.dq);  // −θ̇ r_0
+}
+
+void LineDistanceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                   double* out) const {
+  const Vec2 a = point_position(a_, s.q), u = point_position(b_, s.q) - a,
+             w = point_position(pt_, s.q) - a;
+  const double L = u.norm();
+  *out = L > 0 ? (u.x() * w.y() - u.y() * w.x()) / L : std::numeric_limits<double>::quiet_NaN();
+}
+
+void LineDistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int,
+                                   MeasureGradient& g) const {
+  // f = (u × w)/L, u = b − a, w = p − a: ∂f/∂w = J u / L, ∂f/∂u = −J w / L − f u / L²,
+  // ∂f/∂a = −∂f/∂u − ∂f/∂w
+  const Vec2 a = point_position(a_, s.q), u = point_position(b_, s.q) - a,
+             w = point_position(pt_, s.q) - a;
+  const double L = u.norm();
+  if (!(L > 0)) return;
+  const double f = (u.x() * w.y() - u.y() * w.x()) / L;
+  const Vec2 dw = perp(u) / L, du = -perp(w) / L - f * u / (L * L);
+  point_row(pt_, s.q, dw, g.dq);
+  point_row(b_, s.q, du, g.dq);
+  point_row(a_, s.q, -du - dw, g.dq);
+}
+
+void CombinationMeasure::evaluate(const Model& m, const State& s, const ModelParams& p,
+                                  double* out) const {
+  double v = constant_;
+  std::vector<double> buf;
+  for (const auto& t : terms_) {
+    buf.resize(t.measure->components().size());
+    t.measure->evaluate(m, s, p, buf.data());
+    v += t.weight * buf[static_cast<size_t>(t.component)];
+  }
+  *out = v;
+}
+
+void CombinationMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int,
+                                  MeasureGradient& g) const {
+  MeasureGradient part;
+  auto add = [](const std::vector<std::pair<int, double>>& from, double w,
+                std::vector<std::pair<int, double>>& to) {
+    for (const auto& [j, v] : from) to.emplace_back(j, w * v);
+  };
+  for (const auto& t : terms_) {
+    part.clear();
+    t.measure->gradient(m, s, p, t.component, part);
+    add(part.dq, t.weight, g.dq);
+    add(part.dv, t.weight, g.dv);
+    add(part.da, t.weight, g.da);
+    add(part.dl, t.weight, g.dl);
+  }
+}
+
+bool CombinationMeasure::depends_on_params() const {
+  return std::any_of(terms_.begin(), terms_.end(),
+                     [](const Term& t) { return t.measure->depends_on_params(); });
+}
+
+bool CombinationMeasure::field_partials(const Model& m, const State& s, const ModelParams& p, int,
+                                        int& field, Vec& df_dmu) const {
+  // the terms with exact ∂f/∂μ (the loader lets them combine only with terms that do not depend
+  // on the parameters, so the sum is exact): Σ w_i ∂f_i/∂μ of one field
+  bool any = false;
+  Vec part;
+  for (const auto& t : terms_) {
+    int f = -1;
+    if (!t.measure->depends_on_params() ||
+        !t.measure->field_partials(m, s, p, t.component, f, part))
+      continue;
+    if (!any) {
+      field = f;
+      df_dmu = t.weight * part;
+      any = true;
+    } else if (f == field) {
+      df_dmu += t.weight * part;
+    } else {
+      return false;  // two fields: refused by the loader
+    }
+  }
+  return any;
 }
 
 void DistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int,

@@ -130,6 +130,85 @@ class DistanceMeasure : public Measure {
   double ref_;
 };
 
+/// Position of a point in the frame of a rigid body (deflection as seen from the body): r =
+/// R(θ)ᵀ (p − o), o the frame's origin (a point of the body) and θ the body's angle. Components
+/// .x, .y along the body's axes.
+class FramePositionMeasure : public Measure {
+ public:
+  std::vector<std::string> units() const override { return {"m", "m"}; }
+  FramePositionMeasure(std::string name, PointRef point, PointRef frame)
+      : Measure(std::move(name)), pt_(point), frame_(frame) {}
+  std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+
+ private:
+  PointRef pt_, frame_;  // frame_: a point of a rigid body (PointRef::Kind::kBody)
+};
+
+/// Velocity of a point in the frame of a rigid body: ṙ, the time derivative of the
+/// FramePositionMeasure, ṙ = R(θ)ᵀ (ṗ − ȯ) − θ̇ J r (J the rotation by +90°): what an observer
+/// riding on the body sees. Components .x, .y along the body's axes.
+class FrameVelocityMeasure : public Measure {
+ public:
+  std::vector<std::string> units() const override { return {"m/s", "m/s"}; }
+  FrameVelocityMeasure(std::string name, PointRef point, PointRef frame)
+      : Measure(std::move(name)), pt_(point), frame_(frame) {}
+  std::vector<std::string> components() const override { return {name() + ".x", name() + ".y"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+
+ private:
+  PointRef pt_, frame_;
+};
+
+/// Signed distance of a point P from the line through A and B: ((B − A) × (P − A)) / |B − A|,
+/// positive to the left of the direction A → B (a beam's deflection from its chord).
+class LineDistanceMeasure : public Measure {
+ public:
+  std::vector<std::string> units() const override { return {"m"}; }
+  LineDistanceMeasure(std::string name, PointRef point, PointRef a, PointRef b)
+      : Measure(std::move(name)), pt_(point), a_(a), b_(b) {}
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+
+ private:
+  PointRef pt_, a_, b_;
+};
+
+/// A linear combination c0 + Σ w_i f_i of components of other measures (each given by its
+/// measure and component): its partials are the same combination of theirs. A measure whose
+/// explicit ∂f/∂μ is exact (stress) combines only with measures that do not depend on the
+/// design's parameters, and constraint forces are not combined (their scaling belongs to the run).
+class CombinationMeasure : public Measure {
+ public:
+  struct Term {
+    const Measure* measure;
+    int component;
+    double weight;
+  };
+  CombinationMeasure(std::string name, double constant, std::vector<Term> terms, std::string unit)
+      : Measure(std::move(name)),
+        constant_(constant),
+        terms_(std::move(terms)),
+        unit_(std::move(unit)) {}
+  std::vector<std::string> units() const override { return {unit_}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+  bool depends_on_params() const override;
+  bool field_partials(const Model& m, const State& s, const ModelParams& p, int c, int& field,
+                      Vec& df_dmu) const override;
+
+ private:
+  double constant_;
+  std::vector<Term> terms_;
+  std::string unit_;
+};
+
 /// Prescribed planar path of a serial chain driven by time laws: link i has absolute angle
 /// φ_i = s_i(t) (absolute driver) or φ_{i−1} + s_i(t) (relative driver); the path point is
 /// origin + Σ L_i (cos φ_i, sin φ_i) — the rigid kinematics of the drivers (§6).
