@@ -409,6 +409,13 @@ echo "t,partial" > "$tmp/killed/history.csv"
 cant="$src/tests/integration/data/cantilever_ramp.json"
 "$exe" static "$cant" -o "$tmp/st" -q || fail "static"
 [ -f "$tmp/st/pl.vtu" ] || fail "static wrote no pl.vtu: $(ls "$tmp/st")"
+# a user's file at a path this run would write, which the earlier (static) run does not list:
+# kept, and the message says the earlier run does not list it (not that there is no earlier run)
+echo "mine" > "$tmp/st/history.png"
+"$exe" simulate "$cant" -o "$tmp/st" -q --overwrite 2> "$tmp/er_st.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q "holds history.png, which this run would write; the earlier run in this folder (its summary.json) does not list it as its own" "$tmp/er_st.txt" \
+  && [ "$(cat "$tmp/st/history.png")" = mine ] || fail "user's history.png in a static run's folder: rc $rc $(cat "$tmp/er_st.txt")"
+rm "$tmp/st/history.png"
 # units of every column static writes, as simulate's (a tip displacement in m, by hand)
 python3 -c "
 import csv, json

@@ -214,7 +214,7 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
     bool feasible = false;
     bool converged = false;
     std::string stop_reason = "", kkt_verdict = "";
-    std::vector<double> final_design;
+    std::vector<double> final_design = {};
     int tier() const {
       return converged                                                                      ? 0
              : (stop_reason == "ftol" || stop_reason == "xtol" || stop_reason == "success") ? 1
@@ -586,6 +586,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   // coincident features: the gradients at such a design are one-sided (Design::coincident_features)
   if (auto w = d.coincident_features(init); !w.empty()) warnings.push_back("initial design: " + w);
   if (auto w = d.features_outside(init); !w.empty()) warnings.push_back("initial design: " + w);
+  if (auto w = d.idle_variables(); !w.empty()) warnings.push_back(w);
   if (auto w = d.coincident_features(res.p); !w.empty()) warnings.push_back("final design: " + w);
   S["warnings"] = warnings;
   // no KKT report of a failed evaluation: its gradients were never computed

@@ -147,6 +147,30 @@ std::string Design::features_outside(const Vec& p) const {
   return w;
 }
 
+std::string Design::idle_variables() const {
+  std::vector<char> drives(variables.size(), 0);
+  for (const auto& b : bindings) drives[static_cast<size_t>(b.variable)] = 1;
+  for (const BodyDesign& b : bodies)
+    for (const auto& f : b.map->level_set().features())
+      for (const auto& pb : f.params())
+        if (pb.variable >= 0 && pb.scale != 0) drives[static_cast<size_t>(pb.variable)] = 1;
+  std::string names;
+  int n = 0;
+  for (size_t k = 0; k < drives.size(); ++k)
+    if (!drives[k]) {
+      names += (names.empty() ? "'" : ", '") + variables[k].name + "'";
+      ++n;
+    }
+  if (names.empty()) return {};
+  return std::string(n == 1 ? "design variable " : "design variables ") + names +
+         (n == 1 ? " drives" : " drive") +
+         " nothing: no feature parameter (with a nonzero scale) and no entry of \"parameters\" is "
+         "bound to " +
+         (n == 1 ? "it" : "them") +
+         ", so the gradient is zero there whatever the design and an optimizer leaves " +
+         (n == 1 ? "it" : "them") + " where " + (n == 1 ? "it starts" : "they start");
+}
+
 double Design::mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
                              Vec& grad) {
   const double rt = params.scalars[b.body->rho_param] * params.scalars[b.body->thickness_param];

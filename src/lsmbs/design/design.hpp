@@ -80,6 +80,10 @@ class Design final : public Parameterization {
   /// (DesignMap::features_outside_mesh): they have no effect there until a design variable
   /// moves them in.
   std::string features_outside(const Vec& p) const;
+  /// Empty if every design variable drives something, else a warning naming those that no
+  /// feature parameter (with a nonzero scale) and no model parameter is bound to: their gradient
+  /// is zero whatever the design, and an optimizer leaves them where they start.
+  std::string idle_variables() const;
   /// Mass of a designed body and its gradient m(p), ∂m/∂p = ρ t Σ_e A_e ∂μ_e/∂p.
   static double mass_gradient(const BodyDesign& b, const SpMat& dmu, const ModelParams& params,
                               Vec& grad);

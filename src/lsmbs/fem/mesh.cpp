@@ -185,6 +185,7 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
   std::vector<int> node_line;
   std::map<long long, int> node_index;    // Gmsh tag -> node index
   std::map<long long, int> element_line;  // Gmsh element tag -> its line
+  std::vector<long long> quad_tag;        // per quadrilateral: its Gmsh element tag
   std::map<long long, std::string> phys_names[4];
   std::set<std::pair<int, long long>> entities;                // (dim, tag) declared in $Entities
   std::map<long long, std::vector<long long>> entity_phys[4];  // entity tag -> physical tags
@@ -431,7 +432,10 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
             if (etype != 3)
               for (const auto& g : groups) sets[g].insert(it->second);
           }
-          if (etype == 3) m.quads.push_back(q);
+          if (etype == 3) {
+            m.quads.push_back(q);
+            quad_tag.push_back(tag);
+          }
         }
       }
       if (total != nelem)
@@ -511,9 +515,30 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
           }
         }
   }
-  for (auto& q : m.quads) {  // orient counter-clockwise
+  for (size_t e = 0; e < m.quads.size(); ++e) {  // orient counter-clockwise
+    auto& q = m.quads[e];
     const Vec2 d1 = m.nodes[q[2]] - m.nodes[q[0]], d2 = m.nodes[q[3]] - m.nodes[q[1]];
     if (d1.x() * d2.y() - d1.y() * d2.x() < 0) std::swap(q[1], q[3]);
+    // The element needs det J > 0 at its 2 × 2 Gauss points (QuadElement). A quadrilateral whose
+    // corners are not in order around it (a bow-tie) or that is degenerate fails here, named by
+    // its tag and line rather than by its index in the model.
+    const double g = 1 / std::sqrt(3.0);
+    for (const double xi : {-g, g})
+      for (const double eta : {-g, g}) {
+        const double dxi[4] = {-(1 - eta), 1 - eta, 1 + eta, -(1 + eta)};
+        const double deta[4] = {-(1 - xi), -(1 + xi), 1 + xi, 1 - xi};
+        Vec2 a = Vec2::Zero(), b = Vec2::Zero();
+        for (int k = 0; k < 4; ++k) {
+          a += 0.25 * dxi[k] * m.nodes[static_cast<size_t>(q[static_cast<size_t>(k)])];
+          b += 0.25 * deta[k] * m.nodes[static_cast<size_t>(q[static_cast<size_t>(k)])];
+        }
+        if (a.x() * b.y() - a.y() * b.x() > 0) continue;
+        throw Error(path, "line " + std::to_string(element_line.at(quad_tag[e])),
+                    "quadrilateral " + std::to_string(quad_tag[e]) +
+                        " is self-intersecting or degenerate (det J <= 0 inside it: its four "
+                        "corners are not in order around it, or three lie on a line); list the "
+                        "corners in order around the element");
+      }
   }
   // Nodes used by no quad (geometry points such as a bore centre) would carry neither mass
   // nor stiffness: drop them and renumber, keeping node sets consistent.

@@ -61,6 +61,15 @@ std::vector<int> DesignMap::features_outside_mesh(const Vec& p) const {
   return outside;
 }
 
+bool DesignMap::disc_can_reach_mesh(const Vec2& lo, const Vec2& hi, double radius) const {
+  for (int e = 0; e < num_elements(); ++e) {
+    const Vec2 c = mesh_->centroid(e);
+    const Vec2 nearest = c.cwiseMax(lo).cwiseMin(hi);  // the box's point nearest to c
+    if ((c - nearest).norm() - radius <= radius_[e]) return true;
+  }
+  return false;
+}
+
 void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
   const int ne = num_elements(), nv = ls_.num_variables();
   const auto vals = ls_.values(p);

@@ -46,6 +46,10 @@ class DesignMap {
   /// features' own distances are used: exact for ellipses and circles, below the true distance
   /// for super-ellipses (convex), so a feature that overlaps an element is never reported.
   std::vector<int> features_outside_mesh(const Vec& p) const;
+  /// Whether a shape inside the disc of radius `radius` about some centre in the box
+  /// [lo, hi] can overlap an element (the test of features_outside_mesh, taken over every such
+  /// shape): false means no value of the design variables within their bounds brings it in.
+  bool disc_can_reach_mesh(const Vec2& lo, const Vec2& hi, double radius) const;
   /// Elements a boundary crosses at the last map() call: their corners, centre and sub-cell
   /// centres lie on both sides of it (diagnostics).
   int last_cut_count() const { return last_cut_.load(); }

@@ -1,3 +1,4 @@
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -787,6 +788,8 @@ struct Loader {
         if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
       std::vector<Feature> feats;
       std::map<std::string, int> by_name, fixed;  // design features, non-design ones
+      std::vector<double> reach;  // per feature: a radius about its centre that holds its shape
+      std::vector<std::array<Vec2, 2>> centres;  // per feature: the box its centre moves in
       for (const auto& f : g.items("features", true)) {
         const std::string name = f.string("name");
         if (by_name.count(name) || fixed.count(name))
@@ -823,6 +826,12 @@ struct Loader {
         for (const auto* th : {&lo, &hi})
           if (auto msg = feat.check(*th); !msg.empty())
             f.fail("feature '" + name + "' is degenerate within the design bounds: " + msg);
+        // the shape lies within a disc about (cx, cy): r (circle), d·max(a, b) (ellipse, eq. 41),
+        // |(a, b)| (super-ellipse, eq. 43: inside the box |u| <= a, |v| <= b)
+        reach.push_back(type == Feature::Type::kCircle    ? hi[2]
+                        : type == Feature::Type::kEllipse ? hi[4] * std::max(hi[2], hi[3])
+                                                          : std::hypot(hi[2], hi[3]));
+        centres.push_back({Vec2(lo[0], lo[1]), Vec2(hi[0], hi[1])});
         (non_design ? fixed : by_name)[name] = static_cast<int>(feats.size());
         feats.push_back(std::move(feat));
       }
@@ -873,16 +882,24 @@ struct Loader {
       // A feature wholly outside its body changes nothing. One that no design variable moves
       // never will (a ring or hole drawn in another frame or unit): refused. One that a variable
       // moves may come in during an optimization: the runs warn (Design::features_outside).
+      // One that the variables move but that no values within their bounds bring in (its shape's
+      // disc never reaches an element) never will either: refused as well.
       for (int k : bd.map->features_outside_mesh(d->initial())) {
         const auto& ls = bd.map->level_set();
-        if (!ls.feature_variables(k).empty()) continue;
-        const Feature& feat = ls.features()[static_cast<size_t>(k)];
+        const size_t kk = static_cast<size_t>(k);
+        const bool moved = !ls.feature_variables(k).empty();
+        if (moved && bd.map->disc_can_reach_mesh(centres[kk][0], centres[kk][1], reach[kk]))
+          continue;
+        const Feature& feat = ls.features()[kk];
         g.child("features")
-            .at(static_cast<size_t>(k))
+            .at(kk)
             .fail(std::string(fixed.count(feat.name()) ? "non-design feature '" : "feature '") +
                   feat.name() + "' lies wholly outside body '" + fb.name +
-                  "' (it overlaps no element), and no design variable moves it: it has no "
-                  "effect; check its centre and size against the mesh, in the body's frame");
+                  "' (it overlaps no element), and " +
+                  (moved ? "no values of its design variables within their bounds bring it in"
+                         : "no design variable moves it") +
+                  ": it has no effect; check its centre and size against the mesh, in the "
+                  "body's frame");
       }
       d->bodies.push_back(std::move(bd));
     }

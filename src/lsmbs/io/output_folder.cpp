@@ -200,10 +200,16 @@ ReplacedRun claim_output_folder(const std::string& out, bool overwrite, bool res
     std::string list = conflicts.front();
     for (size_t k = 1; k < conflicts.size() && k < 4; ++k) list += ", " + conflicts[k];
     if (conflicts.size() > 4) list += ", … (" + std::to_string(conflicts.size()) + " in all)";
-    throw Error(names.folder + " " + out + ": holds " + list +
-                ", which this run would write but no earlier run's summary.json lists as its "
-                "own; lsmbs does not replace files it did not write: move them, or give another "
-                "folder");
+    const std::string whose =
+        earlier.empty()
+            ? ", which this run would write, and no summary.json there lists as a run's own"
+            : ", which this run would write; the earlier run in this folder (its summary.json) "
+              "does not list " +
+                  std::string(conflicts.size() == 1 ? "it" : "them") + " as its own";
+    throw Error(names.folder + " " + out + ": holds " + list + whose +
+                ": lsmbs takes such files for yours and never replaces them (not even with " +
+                names.overwrite + "): move " + (conflicts.size() == 1 ? "it" : "them") +
+                ", or give another folder");
   }
   if (earlier.empty()) return {};
   if (!overwrite)

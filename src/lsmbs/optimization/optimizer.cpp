@@ -92,7 +92,9 @@ struct Context {
     g.resize(m);
     dg.resize(m, range.size());
     for (Eigen::Index j = 0; j < m; ++j) {
-      const double s = j < e.scale.size() ? e.scale[j] : std::max(std::abs(e.upper[j]), 1e-300);
+      const double s = static_cast<size_t>(j) < e.scale.size()
+                           ? e.scale[j]
+                           : std::max(std::abs(e.upper[j]), 1e-300);
       g[j] = (e.constraints[j] - e.upper[j]) / s;
       dg.row(j) = e.constraint_gradient.row(j).cwiseProduct(range.transpose()) / s;
     }

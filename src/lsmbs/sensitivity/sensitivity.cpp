@@ -198,6 +198,7 @@ SensitivityResult SensitivityMethod::compute(const Study& cs, const Vec& p) cons
   for (auto& w : res.primal.warnings()) res.warnings.push_back("primal run: " + w);
   if (auto w = cs.design->coincident_features(p); !w.empty()) res.warnings.push_back(w);
   if (auto w = cs.design->features_outside(p); !w.empty()) res.warnings.push_back(w);
+  if (auto w = cs.design->idle_variables(); !w.empty()) res.warnings.push_back(w);
   res.counts.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!res.ok && interrupted()) {  // stopped by SIGINT/SIGTERM: not a numerical failure

@@ -173,7 +173,8 @@ std::string gmsh_error(const std::string& text) {
 
 // Each of these was read without a word, and the mesh (and the results) changed: a quad with a
 // repeated node, two coincident nodes (a crack), a node tag defined twice, a missing $EndNodes or
-// $EndElements, an extra node tag on an element line, a number with a suffix. Each is refused
+// $EndElements, an extra node tag on an element line, a number with a suffix; a bow-tie quad was
+// refused by its index in the model, not its tag and line. Each is refused
 // with the file, the line and what was expected.
 TEST(Mesh2D, GmshReaderRefusesWhatItWouldMisread) {
   ASSERT_EQ(gmsh_error(kTwoQuads), "");
@@ -192,6 +193,9 @@ TEST(Mesh2D, GmshReaderRefusesWhatItWouldMisread) {
       {replaced(kTwoQuads, "3 2 3 6 5\n", "3 2 3 6 6\n"),
        "bad.msh: line 41: quadrilateral 3 repeats node 6 (a quadrilateral has four distinct "
        "corners)"},
+      {replaced(kTwoQuads, "3 2 3 6 5\n", "3 2 3 5 6\n"),
+       "bad.msh: line 41: quadrilateral 3 is self-intersecting or degenerate (det J <= 0 inside "
+       "it"},
       {crack_entities,
        "bad.msh: line 37: nodes 2 (line 31) and 8 coincide at (1, 0): the quadrilaterals on "
        "either side are not connected there"},

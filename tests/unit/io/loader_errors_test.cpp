@@ -412,6 +412,41 @@ TEST(LoaderErrors, FeaturesOutsideTheirBodyAreRefusedOrWarned) {
   EXPECT_NE(cs.design->features_outside(p), "");
   p[1] = 0.5;
   EXPECT_EQ(cs.design->features_outside(p), "");
+  // A hole whose centre may only move within x in [2, 3] never reaches the plate (x <= 1): the
+  // warning said "until a design variable moves it in", which no value within the bounds does.
+  // The shape lies within r <= 0.08 of its centre; the nearest element centre, (0.95, 0.05), lies
+  // 1.05 from the box, beyond 0.08 + the element's circumradius 0.0707: refused.
+  json never = plate_with_hole();
+  never["design"]["variables"][1] = {{"name", "cx"}, {"initial", 2.5}, {"lower", 2}, {"upper", 3}};
+  expect_error(never, "/design/geometry/0/features/0",
+               "feature 'hole' lies wholly outside body 'p' (it overlaps no element), and no "
+               "values of its design variables within their bounds bring it in: it has no effect");
+  // from x = 1.05 on, (0.95, 0.05) lies 0.112 from the box: 0.112 - 0.08 is within the
+  // circumradius, so the hole may come in: accepted, and warned at this design as above
+  never["design"]["variables"][1]["lower"] = 1.05;
+  EXPECT_NE(test::make_case(never).design->features_outside(Vec2(0.05, 2.5)), "");
+}
+
+// A design variable that nothing is bound to has a zero gradient at every design and an
+// optimizer leaves it where it starts: said by the runs that differentiate or optimize
+// (Design::idle_variables), not refused (a study of fixed features needs one variable).
+TEST(LoaderErrors, DesignVariablesThatDriveNothingAreNamed) {
+  EXPECT_EQ(test::make_case(plate_with_hole()).design->idle_variables(), "");
+  json idle = plate_with_hole();
+  idle["design"]["variables"].push_back(
+      {{"name", "t"}, {"initial", 1}, {"lower", 0}, {"upper", 2}});
+  EXPECT_EQ(test::make_case(idle).design->idle_variables(),
+            "design variable 't' drives nothing: no feature parameter (with a nonzero scale) and "
+            "no entry of \"parameters\" is bound to it, so the gradient is zero there whatever "
+            "the design and an optimizer leaves it where it starts");
+  // a binding with scale 0 drives nothing either; a model parameter binding does
+  json zero = plate_with_hole();
+  zero["design"]["geometry"][0]["features"][0]["r"] = {
+      {"variable", "r"}, {"scale", 0}, {"offset", 0.05}};
+  EXPECT_NE(test::make_case(zero).design->idle_variables().find("variable 'r' drives nothing"),
+            std::string::npos);
+  zero["design"]["parameters"] = {{{"parameter", "p.thickness"}, {"variable", "r"}}};
+  EXPECT_EQ(test::make_case(zero).design->idle_variables(), "");
 }
 
 // Text that is not UTF-8 in a case file: the parser's message gave a byte, line and column, and
