@@ -53,7 +53,7 @@ def test_the_command_line_writes_the_same_equilibrium_and_the_vtk_files(tmp_path
     assert -S["responses"]["tip_y"] == pytest.approx(beam, rel=2e-2)
     assert S["responses"]["tip_y"] == lsmbs.static(m.build()).responses["tip_y"]
     assert (tmp_path / "out" / "beam.vtu").stat().st_size > 1000
-    assert set(S["files"]) == {"summary.json", "history.csv", "beam.vtu", "model.vtm"}
+    assert set(S["files"]) == {"summary.json", "history.csv", "beam.vtu", "model.vtm", "final_state.json"}
     rows = (tmp_path / "out" / "history.csv").read_text().splitlines()
     assert len(rows) == 2
 

@@ -587,6 +587,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   if (auto w = d.coincident_features(init); !w.empty()) warnings.push_back("initial design: " + w);
   if (auto w = d.features_outside(init); !w.empty()) warnings.push_back("initial design: " + w);
   if (auto w = d.idle_variables(); !w.empty()) warnings.push_back(w);
+  if (!cs.initial_state_note.empty()) warnings.push_back(cs.initial_state_note);
   if (auto w = d.coincident_features(res.p); !w.empty()) warnings.push_back("final design: " + w);
   S["warnings"] = warnings;
   // no KKT report of a failed evaluation: its gradients were never computed

@@ -9,6 +9,7 @@
 
 #include "lsmbs/core/file_check.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/io/initial_state_file.hpp"
 #include "lsmbs/io/json_reader.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -978,6 +979,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
     for (const auto& r : out->items("responses")) L.response(r);
     out->finish();
   }
+  const auto initial_state = root.optional_child("initial_state");
   root.finish();
   try {  // refuses undetermined bodies, numbers the constraint rows
     cs.model = builder.build();
@@ -1010,6 +1012,8 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
   st.held_velocities = builder.held_velocities();
   st.given_velocities = builder.given_velocities();
   st.paths = L.paths;
+  if (initial_state)
+    read_initial_state(*initial_state, *cs.model, L.base_dir, st, cs.initial_state_note);
   for (size_t f = 0; f < cs.model->forces().size(); ++f)
     st.force_owners.push_back(builder.force_owner(f));
   for (const auto& [name, path] : L.paths)

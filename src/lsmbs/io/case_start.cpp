@@ -192,7 +192,7 @@ void hold_given_velocities(Case& cs) {
     for (int j : rep.conflicting_held)
       if (j >= g.first && j < g.end && path == "/bodies")
         if (const auto at = paths.find(g.body); at != paths.end())
-          path = at->second + "/" + g.field;
+          path = at->second + (g.field.empty() ? "" : "/" + g.field);
   throw Error(
       cs.file, path,
       st.message +

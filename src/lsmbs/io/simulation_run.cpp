@@ -7,6 +7,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/io/initial_state_file.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
 #include "lsmbs/records/json.hpp"
@@ -293,6 +294,15 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
     write_csv(ro.out_dir + "/history.csv", header, rows, poll);
     poll();
     std::vector<std::string> files = {"history.csv", "summary.json"};
+    // the state reached, for a later run to start from ("initial_state": {"from": ...})
+    if (res.final_state.q.size() == cs.model->nq() && res.final_state.v.size() == cs.model->nq()) {
+      write_json_atomic(
+          ro.out_dir + "/final_state.json",
+          final_state_json(*cs.model, res.final_state, cs.name,
+                           res.integrator.ok && !res.interrupted ? "complete" : "partial",
+                           "simulate"));
+      files.push_back("final_state.json");
+    }
     // history.png: one panel per measure, its columns in it (layout: io/plot.hpp)
     PanelPlotSpec ps;
     ps.png = ro.out_dir + "/history.png";

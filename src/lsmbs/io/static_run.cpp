@@ -8,6 +8,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
+#include "lsmbs/io/initial_state_file.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/responses/aggregation.hpp"
 
@@ -95,6 +96,10 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
       const ModelVtkFiles f = write_model_vtk(o.out_dir, "", "", m, res.state.q);
       for (const auto& b : f.bodies) files.push_back(b.second);
       files.push_back(f.multiblock);
+      // the equilibrium, for a run to start from ("initial_state": {"from": ...})
+      write_json_atomic(o.out_dir + "/final_state.json",
+                        final_state_json(m, res.state, cs.name, "complete", "static"));
+      files.push_back("final_state.json");
     }
     S["files"] = file_list(std::move(files));
     write_json_atomic(o.out_dir + "/summary.json", S);

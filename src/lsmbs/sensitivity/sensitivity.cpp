@@ -199,6 +199,7 @@ SensitivityResult SensitivityMethod::compute(const Study& cs, const Vec& p) cons
   if (auto w = cs.design->coincident_features(p); !w.empty()) res.warnings.push_back(w);
   if (auto w = cs.design->features_outside(p); !w.empty()) res.warnings.push_back(w);
   if (auto w = cs.design->idle_variables(); !w.empty()) res.warnings.push_back(w);
+  if (!cs.initial_state_note.empty()) res.warnings.push_back(cs.initial_state_note);
   res.counts.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!res.ok && interrupted()) {  // stopped by SIGINT/SIGTERM: not a numerical failure

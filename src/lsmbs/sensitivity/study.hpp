@@ -18,6 +18,9 @@ namespace lsmbs {
 struct Study {
   std::unique_ptr<Model> model;
   State initial;
+  /// Non-empty when the initial state is data that was itself computed at one design (a static
+  /// equilibrium read from a file): gradients treat it as fixed, and the runs say so.
+  std::string initial_state_note;
   GeneralizedAlphaOptions simulation;
   std::vector<std::unique_ptr<Measure>> measures;
   std::vector<ResponseSpec> responses;
