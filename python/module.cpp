@@ -776,17 +776,8 @@ PYBIND11_MODULE(_lsmbs, m) {
             o.out_dir = out_dir;
             o.resume = resume;
             // a resumed run must see the same problem: the file, its overrides, and what Python
-            // changed since (simulation options, model parameters)
-            std::string state =
-                cs->sha256 + cs->overrides.dump() + nlohmann::json(cs->simulation).dump();
-            const auto& scalars = cs->model->params().scalars;
-            for (size_t i = 0; i < scalars.size(); ++i) {  // those the design sets excepted
-              bool bound = false;
-              for (const auto& b : cs->design->bindings)
-                bound |= b.parameter == static_cast<int>(i);
-              state += bound ? std::string("design,") : exact(scalars[i]) + ",";
-            }
-            o.input_sha256 = sha256_hex(state);
+            // changed since (simulation options, model parameters); the command line's hash
+            o.input_sha256 = resume_hash(*cs);
             const OptimizeResult r = run([&] { return optimize(prob, o); });
             if (!out_dir.empty()) {  // every output folder carries a summary.json
               nlohmann::json S = provenance("lsmbs.optimize (Python)", cs->file, cs->sha256);

@@ -45,26 +45,27 @@ std::string dir() {
 // origin, free length 1 m, placed at x = 1.1 m: x(t) = 1 + 0.1 cos(2πt)
 json oscillator(double t_end) {
   const double k = 4 * std::numbers::pi * std::numbers::pi;
-  return {{"name", "oscillator"},
-          {"bodies",
-           {{{"name", "m"}, {"type", "rigid"}, {"mass", 1.0}, {"inertia", 1.0},
-             {"position", {1.1, 0.0}}}}},
-          {"joints",
-           {{{"name", "slide"},
-             {"type", "prismatic"},
-             {"a", {{"body", "m"}}},
-             {"direction", {1, 0}}}}},
-          {"forces",
-           {{{"name", "s"},
-             {"type", "spring_damper"},
-             {"a", {{"ground", {0, 0}}}},
-             {"b", {{"body", "m"}}},
-             {"stiffness", k},
-             {"free_length", 1.0}}}},
-          {"simulation", {{"t_end", t_end}, {"h", 1e-4}, {"rho_inf", 1.0}}},
-          {"output",
-           {{"measures", {{{"name", "x"}, {"type", "position"}, {"point", {{"body", "m"}}}}}},
-            {"responses", {{{"name", "x_end"}, {"measure", "x.x"}, {"aggregate", "final"}}}}}}};
+  return {
+      {"name", "oscillator"},
+      {"bodies",
+       {{{"name", "m"},
+         {"type", "rigid"},
+         {"mass", 1.0},
+         {"inertia", 1.0},
+         {"position", {1.1, 0.0}}}}},
+      {"joints",
+       {{{"name", "slide"}, {"type", "prismatic"}, {"a", {{"body", "m"}}}, {"direction", {1, 0}}}}},
+      {"forces",
+       {{{"name", "s"},
+         {"type", "spring_damper"},
+         {"a", {{"ground", {0, 0}}}},
+         {"b", {{"body", "m"}}},
+         {"stiffness", k},
+         {"free_length", 1.0}}}},
+      {"simulation", {{"t_end", t_end}, {"h", 1e-4}, {"rho_inf", 1.0}}},
+      {"output",
+       {{"measures", {{{"name", "x"}, {"type", "position"}, {"point", {{"body", "m"}}}}}},
+        {"responses", {{{"name", "x_end"}, {"measure", "x.x"}, {"aggregate", "final"}}}}}}};
 }
 
 double x_end(const Case& cs, const std::string& out) {
@@ -119,20 +120,24 @@ TEST(InitialState, RestartFromAnEarlierRunsFinalStateFollowsTheClosedForm) {
 
 // a free square plate, 0.2 m × 0.2 m, 4 × 4 elements, no gravity
 json free_plate() {
-  return {{"name", "plate"},
-          {"bodies",
-           {{{"name", "p"},
-             {"type", "flexible"},
-             {"mesh",
-              {{"type", "rectangle"}, {"origin", {0, 0}}, {"size", {0.2, 0.2}}, {"elements", {4, 4}}}},
-             {"material", {{"E", 1e9}, {"nu", 0.3}, {"rho", 1000}}},
-             {"thickness", 0.01}}}},
-          {"simulation", {{"t_end", 0.01}, {"h", 1e-3}}},
-          {"output",
-           {{"measures",
-             {{{"name", "c"}, {"type", "position"}, {"point", {{"body", "p"}, {"nearest", {0.2, 0.2}}}}}}},
-            {"responses", {{{"name", "cx"}, {"measure", "c.x"}, {"aggregate", "final"}},
-                           {{"name", "cy"}, {"measure", "c.y"}, {"aggregate", "final"}}}}}}};
+  return {
+      {"name", "plate"},
+      {"bodies",
+       {{{"name", "p"},
+         {"type", "flexible"},
+         {"mesh",
+          {{"type", "rectangle"}, {"origin", {0, 0}}, {"size", {0.2, 0.2}}, {"elements", {4, 4}}}},
+         {"material", {{"E", 1e9}, {"nu", 0.3}, {"rho", 1000}}},
+         {"thickness", 0.01}}}},
+      {"simulation", {{"t_end", 0.01}, {"h", 1e-3}}},
+      {"output",
+       {{"measures",
+         {{{"name", "c"},
+           {"type", "position"},
+           {"point", {{"body", "p"}, {"nearest", {0.2, 0.2}}}}}}},
+        {"responses",
+         {{{"name", "cx"}, {"measure", "c.x"}, {"aggregate", "final"}},
+          {{"name", "cy"}, {"measure", "c.y"}, {"aggregate", "final"}}}}}}};
 }
 
 void write_nodes(const std::string& file, int n, const std::function<std::array<double, 4>(int)>& f,
@@ -153,8 +158,12 @@ TEST(InitialState, NodalVelocitiesOfARigidMotionMoveThePlateAsTheRigidField) {
   const FlexibleBody& fb = *plain.model->flexible_bodies()[0];
   const int n = fb.mesh.num_nodes();
   // a uniform velocity (1, -0.5) m/s: x(t) = X + v t at every node, to round-off
-  write_nodes(d + "/translate.csv", n, [](int) { return std::array<double, 4>{0, 0, 1, -0.5}; },
-              false);
+  write_nodes(
+      d + "/translate.csv", n,
+      [](int) {
+        return std::array<double, 4>{0, 0, 1, -0.5};
+      },
+      false);
   json tr = free_plate();
   tr["initial_state"] = {{"nodes", {{{"body", "p"}, {"file", "translate.csv"}}}}};
   const Case ct = load_case_json(tr, "<translate>", d);
@@ -186,8 +195,7 @@ TEST(InitialState, NodalVelocitiesOfARigidMotionMoveThePlateAsTheRigidField) {
   // errors name the file and line
   std::ofstream(d + "/short.csv") << "ux,uy,vx,vy\n0,0,1,1\n";
   std::ofstream(d + "/bad.csv") << "ux,uy,vx,vy\n0,0,1x,1\n";
-  for (const auto& [file, message] :
-       std::vector<std::pair<std::string, std::string>>{
+  for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
            {"short.csv", "short.csv: holds 1 rows, body 'p' has 25 nodes"},
            {"bad.csv", "bad.csv: line 2: expected a finite number for vx, got '1x'"}}) {
     json j = free_plate();
@@ -204,14 +212,15 @@ TEST(InitialState, NodalVelocitiesOfARigidMotionMoveThePlateAsTheRigidField) {
 // the plate clamped at x = 0, with a design hole; a bending velocity field vy = V (x / L)²
 json clamped_plate_with_hole() {
   json j = free_plate();
-  j["bodies"][0]["mesh"] = {{"type", "rectangle"}, {"origin", {0, 0}}, {"size", {1.0, 0.2}},
-                            {"elements", {10, 2}}};
+  j["bodies"][0]["mesh"] = {
+      {"type", "rectangle"}, {"origin", {0, 0}}, {"size", {1.0, 0.2}}, {"elements", {10, 2}}};
   j["joints"] = {{{"name", "c"}, {"type", "clamp"}, {"flexible", "p"}, {"node_set", "left"}}};
   j["simulation"] = {{"t_end", 0.004}, {"h", 5e-4}};
   j["output"]["measures"] = {
       {{"name", "tip"}, {"type", "position"}, {"point", {{"body", "p"}, {"nearest", {1.0, 0.1}}}}}};
-  j["output"]["responses"] = {{{"name", "tip_end"}, {"measure", "tip.y"}, {"aggregate", "final"}},
-                              {{"name", "tip_mean"}, {"measure", "tip.y"}, {"aggregate", "average"}}};
+  j["output"]["responses"] = {
+      {{"name", "tip_end"}, {"measure", "tip.y"}, {"aggregate", "final"}},
+      {{"name", "tip_mean"}, {"measure", "tip.y"}, {"aggregate", "average"}}};
   j["design"] = json::parse(R"({
     "variables": [{"name": "r", "initial": 0.05, "lower": 0.01, "upper": 0.08}],
     "geometry": [{"body": "p", "features": [
@@ -255,8 +264,12 @@ TEST(InitialState, SensitivitiesFromANodalVelocityFieldAgreeWithCentralDifferenc
   EXPECT_GT(std::abs(run_simulation(cs, ro).responses.at("tip_mean") - at_rest), 1e-4);
 
   // a velocity at the clamped nodes contradicts the clamp: refused at the entry's path
-  write_nodes(d + "/lift.csv", fb.mesh.num_nodes(),
-              [](int) { return std::array<double, 4>{0, 0, 0, 1.0}; }, false);
+  write_nodes(
+      d + "/lift.csv", fb.mesh.num_nodes(),
+      [](int) {
+        return std::array<double, 4>{0, 0, 0, 1.0};
+      },
+      false);
   j["initial_state"] = {{"nodes", {{{"body", "p"}, {"file", "lift.csv"}}}}};
   try {
     load_case_json(j, "<lift>", d);

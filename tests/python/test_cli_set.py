@@ -71,3 +71,33 @@ def test_optimize_takes_overrides_and_its_resume_refuses_other_overrides(tmp_pat
     p = cli("optimize", case, "--resume", "--no-check", "--set", "k=6000", "--set",
             "/simulation/h=2e-3", "-o", out)
     assert p.returncode == 0, p.stderr
+
+
+def test_a_resume_started_in_one_interface_ends_in_the_other_on_the_same_design(tmp_path,
+                                                                               spring_doc,
+                                                                               write_case):
+    """The command line and Python hash a resumed run's problem with one function
+    (lsmbs::resume_hash): a run interrupted on the command line after 2 evaluations and resumed
+    from Python ends on the design of an uninterrupted run, and a Python run is replayed by the
+    command line's --resume without a simulation, on the same design."""
+    import os
+    import lsmbs
+    spring_doc["optimization"] = {"objective": "mean_piston_x", "constraints": [],
+                                  "stop": {"max_evaluations": 5}}
+    case = write_case(spring_doc)
+    whole = run_cli("optimize", case, "--no-check", "-o", tmp_path / "whole")
+    env = dict(os.environ, LSMBS_STOP_AFTER_EVALUATIONS="2")
+    p = subprocess.run([CLI, "optimize", str(case), "--no-check", "-q", "-o",
+                        str(tmp_path / "split")], capture_output=True, text=True, env=env)
+    assert p.returncode == 130, p.stderr
+    r = lsmbs.optimize(lsmbs.load_case(case), out_dir=str(tmp_path / "split"), resume=True,
+                       check=False)
+    assert r["status"] == "complete"
+    S = json.loads((tmp_path / "split" / "summary.json").read_text())
+    assert S["final"]["design"] == whole["final"]["design"], (S["final"], whole["final"])
+    assert S["final"]["objective"] == whole["final"]["objective"]
+    # Python first, then the command line replays it
+    lsmbs.optimize(lsmbs.load_case(case), out_dir=str(tmp_path / "py"), check=False)
+    S = run_cli("optimize", case, "--resume", "--no-check", "-o", tmp_path / "py")
+    assert S["counts"]["simulations_this_run"] == 0
+    assert S["final"]["design"] == whole["final"]["design"]

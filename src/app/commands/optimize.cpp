@@ -462,9 +462,8 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   if (a.starts >= 1) return multistart(c, a, cs, prob);
   const auto& d = *cs.design;
   lsmbs::OptimizeOptions o;
-  // a resumed run must see the same case: the file's hash, and the overrides' when there are any
-  o.input_sha256 =
-      cs.overrides.empty() ? cs.sha256 : lsmbs::sha256_hex(cs.sha256 + cs.overrides.dump());
+  // a resumed run must see the same case (the one hash Python uses too)
+  o.input_sha256 = lsmbs::resume_hash(cs);
   o.out_dir = out;
   o.resume = resume;
   o.stop_after = stop_after;

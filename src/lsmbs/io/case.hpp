@@ -79,6 +79,12 @@ Error locate(const std::string& case_file, const SetupError& e);
 /// Throws Error (file, JSON path of the entry at fault, what is wrong).
 void prepare_case(Case& cs, const Vec* design = nullptr);
 
+/// What a resumed optimization must find unchanged, hashed (SHA-256, hex): the case file's bytes,
+/// its overrides, the simulation options and every model parameter that no design variable sets
+/// (what Python may change after loading). The command line and Python use this one hash, so a
+/// run started in one resumes in the other.
+std::string resume_hash(const Case& cs);
+
 /// The JSON path in the case document of model parameter `i` ("crank.mass" → /bodies/0/mass,
 /// "rod.E" → /bodies/1/material/E); "" when the case does not say where its entity is.
 std::string parameter_json_path(const Case& cs, int i);

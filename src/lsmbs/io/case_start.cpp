@@ -13,6 +13,8 @@
 
 #include "lsmbs/integrators/initial_state.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/io/sha256.hpp"
+#include "lsmbs/records/json.hpp"
 
 namespace lsmbs {
 
@@ -301,6 +303,20 @@ void prepare_case(Case& cs, const Vec* design) {
   hold_given_velocities(cs);
   check_initial_placement(cs, cs.start.placed);
   check_finite_measures(cs);
+}
+
+std::string resume_hash(const Case& cs) {
+  std::string state = cs.sha256 + cs.overrides.dump() + nlohmann::json(cs.simulation).dump();
+  const auto& scalars = cs.model->params().scalars;
+  char b[32];
+  for (size_t i = 0; i < scalars.size(); ++i) {  // those the design sets excepted
+    bool bound = false;
+    if (cs.design)
+      for (const auto& pb : cs.design->bindings) bound |= pb.parameter == static_cast<int>(i);
+    std::snprintf(b, sizeof b, "%.17g,", scalars[i]);
+    state += bound ? std::string("design,") : std::string(b);
+  }
+  return sha256_hex(state);
 }
 
 std::string parameter_json_path(const Case& cs, int i) {

@@ -94,8 +94,9 @@ std::string from_run(const JsonReader& r, const Model& m, const std::string& fil
     const JsonReader& b = find(fb->name, "flexible");
     const int n = fb->mesh.num_nodes();
     if (b.integer("nodes", 0) != n)
-      r.fail("from", file + ": body '" + fb->name + "' has " + std::to_string(b.integer("nodes", 0)) +
-                         " nodes there and " + std::to_string(n) + " in this case (the same mesh is needed)");
+      r.fail("from", file + ": body '" + fb->name + "' has " +
+                         std::to_string(b.integer("nodes", 0)) + " nodes there and " +
+                         std::to_string(n) + " in this case (the same mesh is needed)");
     const auto q = vec_of(b, "q", 2 * static_cast<size_t>(n)),
                v = vec_of(b, "v", 2 * static_cast<size_t>(n));
     for (int k = 0; k < 2 * n; ++k) {
@@ -153,8 +154,7 @@ void nodal(const JsonReader& e, const Model& m, const std::string& file, CaseSta
     if (f.size() != cols)
       fail("expected " + std::to_string(cols) + " comma-separated fields, got " +
            std::to_string(f.size()) + ": " + shown(line));
-    if (row >= n)
-      fail("more rows than the " + std::to_string(n) + " nodes of body '" + name + "'");
+    if (row >= n) fail("more rows than the " + std::to_string(n) + " nodes of body '" + name + "'");
     if (with_node) {
       const auto k = parse_integer(f[0]);
       if (!k || *k != row)
@@ -165,8 +165,9 @@ void nodal(const JsonReader& e, const Model& m, const std::string& file, CaseSta
     for (int c = 0; c < 4; ++c) {
       const auto v = parse_finite_double(f[static_cast<size_t>(c) + (with_node ? 1 : 0)]);
       if (!v)
-        fail("expected a finite number for " + std::string(c < 2 ? "u" : "v") + (c % 2 ? "y" : "x") +
-             ", got " + shown(f[static_cast<size_t>(c) + (with_node ? 1 : 0)]));
+        fail("expected a finite number for " + std::string(c < 2 ? "u" : "v") +
+             (c % 2 ? "y" : "x") + ", got " +
+             shown(f[static_cast<size_t>(c) + (with_node ? 1 : 0)]));
       x[c] = *v;
     }
     const int d = fb->node_dof(row);
@@ -178,8 +179,9 @@ void nodal(const JsonReader& e, const Model& m, const std::string& file, CaseSta
   }
   if (!header) throw Error(file, "", "expected the header 'ux,uy,vx,vy' and a row per node");
   if (row != n)
-    throw Error(file, "", "holds " + std::to_string(row) + " rows, body '" + name + "' has " +
-                              std::to_string(n) + " nodes (a row per node, in node order)");
+    throw Error(file, "",
+                "holds " + std::to_string(row) + " rows, body '" + name + "' has " +
+                    std::to_string(n) + " nodes (a row per node, in node order)");
   hold(st, "initial_state:nodes:" + name, path, fb->dof0, fb->dof0 + 2 * n);
 }
 
@@ -197,8 +199,7 @@ nlohmann::json final_state_json(const Model& m, const State& s, const std::strin
     const int n = fb->mesh.num_nodes();
     std::vector<double> q(s.q.data() + fb->dof0, s.q.data() + fb->dof0 + 2 * n),
         v(s.v.data() + fb->dof0, s.v.data() + fb->dof0 + 2 * n);
-    bodies.push_back(
-        {{"name", fb->name}, {"type", "flexible"}, {"nodes", n}, {"q", q}, {"v", v}});
+    bodies.push_back({{"name", fb->name}, {"type", "flexible"}, {"nodes", n}, {"q", q}, {"v", v}});
   }
   return {{"format", kFormat},
           {"version", 1},
@@ -231,7 +232,8 @@ void read_initial_state(const JsonReader& r, const Model& m, const std::string& 
     nodal(e, m, resolve(e.string("file")), st, r.path() + "/nodes/" + std::to_string(k++));
     e.finish();
   }
-  if (!r.has("from") && k == 0) r.fail("expected \"from\" (an earlier run's final_state.json) or \"nodes\"");
+  if (!r.has("from") && k == 0)
+    r.fail("expected \"from\" (an earlier run's final_state.json) or \"nodes\"");
   r.finish();
 }
 
