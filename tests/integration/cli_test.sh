@@ -533,6 +533,16 @@ assert s['direct-analytic']['matrix'] == 'converged' and s['direct-analytic/last
 # the default refactorizes once per step more than the paper's last-iteration matrix
 assert s['direct-analytic']['factorizations'] == s['direct-analytic/last']['factorizations'] + s['direct-analytic']['steps']
 assert b['peak_rss_kb'] > 0" || fail "bench.json"
+# verify says what it will cost after the primal run, and shows progress inside its parts off a
+# terminal (LSMBS_PROGRESS_SECONDS=0: every report); the plan's count is the documented one:
+# 6 gradient runs + 2n fd-central + 21 Δp runs + Σ h0/h of the time-step study (4h, 2h, h, h/2)
+LSMBS_PROGRESS_SECONDS=0 "$exe" verify "$spring" -o "$tmp/vprog" > /dev/null 2> "$tmp/vprog.txt" || fail "verify with progress: $(tail -3 "$tmp/vprog.txt")"
+grep -q "lsmbs verify: one simulation took .* s; the verification runs about [0-9]* simulations' worth" "$tmp/vprog.txt" \
+  && grep -q "lsmbs verify:   IDAS t = " "$tmp/vprog.txt" || fail "verify's plan and progress lines: $(head -5 "$tmp/vprog.txt")"
+python3 -c "
+import json; S = json.load(open('$tmp/vprog/summary.json')); c = S['cost']
+h0 = json.load(open('$spring'))['simulation']['h']
+assert c['simulations_planned_besides_idas'] == 6 + 2 * 2 + 21 + sum(h0 / h for h in S['options']['h_study_steps']), c" || fail "verify's cost in summary.json"
 # verify on a rigid mechanism nobody here wrote (a skeptical user's): the forward semi-analytical
 # method fails at Δp = 1e-2 and 1e-3 (the pendulum mass's pseudo-load; its derivative is not
 # finite); the study records the failed points and the verification goes on to its report

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
+#include "lsmbs/core/text.hpp"
 
 namespace lsmbs::app {
 
@@ -34,6 +36,29 @@ int verify_command(const CommonArgs& c, VerifyArgs a) {
   vo.on_stage = [&](const std::string& what) {  // a line per part: verify runs for a while
     std::fprintf(stderr, "lsmbs verify: %s … (%.1f s)\n", what.c_str(),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  };
+  vo.on_plan = [&](const std::string& what) {
+    std::fprintf(stderr, "lsmbs verify: %s\n", what.c_str());
+  };
+  // Inside a part, a line about every 10 s (on a terminal or not: a batch job's log shows that a
+  // long IDAS reference is moving). LSMBS_PROGRESS_SECONDS sets the interval (a testing hook: 0
+  // prints every report).
+  double every = 10;
+  if (const char* env = std::getenv("LSMBS_PROGRESS_SECONDS")) {
+    const auto v = parse_finite_double(env);
+    if (!v || *v < 0)
+      throw Error("environment variable LSMBS_PROGRESS_SECONDS=" + shown(env) +
+                  ": expected a number of seconds >= 0");
+    every = *v;
+  }
+  double last = -1e300;
+  vo.on_progress = [&, every](const Progress& pr) {
+    const double now =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (now - last < every) return;
+    last = now;
+    std::fprintf(stderr, "lsmbs verify:   %s t = %.6g of %.6g s (%.0f %%) (%.1f s)\n",
+                 pr.label.c_str(), pr.t, pr.t_end, 100 * pr.fraction(), now);
   };
   vo.on_loaded = [&](const Case& cs) { claim_output(c, *cs.model); };
   const auto r = run_verify(c.case_file, vo);

@@ -535,9 +535,9 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
         if (a.x() * b.y() - a.y() * b.x() > 0) continue;
         throw Error(path, "line " + std::to_string(element_line.at(quad_tag[e])),
                     "quadrilateral " + std::to_string(quad_tag[e]) +
-                        " is self-intersecting or degenerate (det J <= 0 inside it: its four "
-                        "corners are not in order around it, or three lie on a line); list the "
-                        "corners in order around the element");
+                        " is self-intersecting or degenerate (det J <= 0 at a Gauss point: its "
+                        "four corners are not in order around it, or it is flat or folded); list "
+                        "the corners in order around the element");
       }
   }
   // Nodes used by no quad (geometry points such as a bore centre) would carry neither mass

@@ -8,6 +8,14 @@
 namespace lsmbs {
 
 namespace {
+std::string speed_text(double v) {  // 7.8e-05, 0.68, 11.1: small violations stay visible
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", v);
+  return b;
+}
+}  // namespace
+
+namespace {
 
 std::string short_number(double v) {
   char b[32];
@@ -146,7 +154,7 @@ Status project_initial_state(const Model& model, const ModelParams& p, State& s,
               rep->conflict_speed.push_back(std::abs(vc[i]) / row_norm[i]);
         if (msg.size() < 400)
           msg += (msg.empty() ? "" : "; ") + model.describe_unknown(nq + i) + " violated by " +
-                 std::to_string(std::abs(vc[i]) / row_norm[i]) + " m/s";
+                 speed_text(std::abs(vc[i]) / row_norm[i]) + " m/s";
       }
       for (int j = 0; j < J.outerSize(); ++j)
         for (SpMat::InnerIterator e(J, j); e; ++e)

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "lsmbs/core/file_check.hpp"
@@ -55,8 +56,13 @@ std::string from_run(const JsonReader& r, const Model& m, const std::string& fil
     doc.fail("status", "the run that wrote this state did not complete (status '" +
                            doc.string("status") +
                            "'): its last state is not one it reached; start from a complete run");
+  if (doc.integer("version", 0) != 1)
+    doc.fail("version", "expected 1 (the final_state.json format this lsmbs writes)");
+  doc.number("t");  // a number (the time the state was reached; the run starts at its own t = 0)
   std::map<std::string, JsonReader> bodies;
-  for (const auto& b : doc.items("bodies", true)) bodies.emplace(b.string("name"), b);
+  for (const auto& b : doc.items("bodies", true))
+    if (!bodies.emplace(b.string("name"), b).second)
+      b.fail("name", "body '" + b.string("name") + "' is listed twice");
   auto vec_of = [&](const JsonReader& b, const std::string& key, size_t n) {
     const nlohmann::json& a = b.child(key).raw();
     if (!a.is_array() || a.size() != n)
@@ -87,7 +93,6 @@ std::string from_run(const JsonReader& r, const Model& m, const std::string& fil
       st.placed.q[rb.dof0 + k] = q[static_cast<size_t>(k)];
       st.placed.v[rb.dof0 + k] = v[static_cast<size_t>(k)];
     }
-    hold(st, "initial_state:" + rb.name, path, rb.dof0, rb.dof0 + 3);
     bodies.erase(rb.name);
   }
   for (const auto& fb : m.flexible_bodies()) {
@@ -103,7 +108,6 @@ std::string from_run(const JsonReader& r, const Model& m, const std::string& fil
       st.placed.q[fb->dof0 + k] = q[static_cast<size_t>(k)];
       st.placed.v[fb->dof0 + k] = v[static_cast<size_t>(k)];
     }
-    hold(st, "initial_state:" + fb->name, path, fb->dof0, fb->dof0 + 2 * n);
     bodies.erase(fb->name);
   }
   if (!bodies.empty())
@@ -119,7 +123,14 @@ void nodal(const JsonReader& e, const Model& m, const std::string& file, CaseSta
            const std::string& path) {
   const std::string name = e.string("body");
   const FlexibleBody* fb = m.find_flexible(name);
-  if (!fb) e.fail("body", "unknown flexible body '" + name + "'");
+  if (!fb) {
+    for (const auto& rb : m.rigid_bodies())
+      if (rb.name == name)
+        e.fail("body", "body '" + name +
+                           "' is rigid: nodal states are for flexible bodies (a rigid body's "
+                           "state comes from \"from\", or its own position and velocity)");
+    e.fail("body", "unknown flexible body '" + name + "'");
+  }
   const std::string text = read_text(file, e, "file");
   std::istringstream in(text);
   std::string line;
@@ -228,10 +239,18 @@ void read_initial_state(const JsonReader& r, const Model& m, const std::string& 
              "derivative is not included)";
   }
   size_t k = 0;
+  std::set<std::string> seen;
   for (const auto& e : r.items("nodes")) {
+    if (!seen.insert(e.string("body")).second)
+      e.fail("body", "body '" + e.string("body") + "' has two entries");
     nodal(e, m, resolve(e.string("file")), st, r.path() + "/nodes/" + std::to_string(k++));
     e.finish();
   }
+  // an element folded or inverted at the start is an input error, not a failure of step 1
+  const auto inv = m.most_compressed_element(st.placed.q, m.params());
+  if (inv.folded())
+    r.fail("the initial state folds or inverts an element: " + inv.describe_fold() +
+           " (det F <= 0 at t = 0): check the displacements against the mesh");
   if (!r.has("from") && k == 0)
     r.fail("expected \"from\" (an earlier run's final_state.json) or \"nodes\"");
   r.finish();

@@ -3,9 +3,11 @@
 // simulate) and nodal displacements and velocities of a flexible body (a CSV file). Both are data
 // of the case, not of the design: they do not depend on p, so every sensitivity method stays exact
 // (q0 and q̇0 carry no design derivative, as for a placed start). Both go through the same
-// consistency projection and start checks as a placed start (prepare_case): their velocities are
-// held as given, and velocities or positions that contradict the joints and drivers at t = 0 are
-// refused, naming /initial_state.
+// consistency projection and start checks as a placed start (prepare_case). Nodal velocities are
+// held as given (a contradiction with the joints is refused, naming /initial_state/nodes/<i>);
+// an earlier run's velocities are projected like its positions (smallest change), since
+// generalized-α meets the velocity constraints only to its discretization error. Positions that
+// contradict the joints and drivers at t = 0 are refused naming the body.
 #include <nlohmann/json.hpp>
 #include <string>
 

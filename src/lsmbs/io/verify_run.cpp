@@ -179,6 +179,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     so.delta = delta;
     so.relative = !absolute;
     so.matrix = mx;
+    so.progress = o.on_progress;
     return checked(compute_sensitivities(c, p, so), SensitivityOptions::name(m));
   };
   using M = SensitivityOptions::Matrix;
@@ -189,6 +190,9 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     if (b.value("type", "") == "flexible" && b.at("mesh").value("type", "") != "rectangle")
       rect = false;
   rect = rect && !cs.model->flexible_bodies().empty();
+  // an initial state from data belongs to the case's mesh: no mesh study (said in the report)
+  const bool state_from_data = base.contains("initial_state");
+  rect = rect && !state_from_data;
   const int n_stages = 2 + (o.idas ? 2 : 0) + (rect ? 1 : 0);
   int stage_no = 0;
   auto stage = [&](const std::string& what) {
@@ -237,12 +241,39 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       for (auto& x : r.responses) x.gradient = (x.gradient * W).eval();
     return r;
   };
+  // What the rest costs, in simulations of the case at h (a run at h/2 counts 2, a mesh with 4×
+  // the elements 4): the six gradient runs and fd-central's 2n, the Δp study's 21, the
+  // time-step study's Σ h0/h, the mesh study's 1/4 + 1 + 4. The IDAS reference has no such
+  // estimate (its steps adapt): it is said, and its progress is shown as it runs.
+  double planned = 6 + 2.0 * d.size() + 21;
+  if (o.idas)
+    for (double h : steps) planned += h0 / h;
+  if (rect) planned += 5.25;
+  const nlohmann::json cost = {
+      {"primal_seconds", primal},
+      {"simulations_planned_besides_idas", planned},
+      {"estimated_seconds_besides_idas", planned * primal},
+      {"idas_runs", o.idas ? 2 : 0},
+      {"definition",
+       "simulations of the case at its h and mesh (a run at h/2 counts 2, a mesh of 4x the "
+       "elements 4); a sensitivity run by a direct or semi-analytical method counts 1, fd-central "
+       "1 per simulation; the IDAS reference is not estimated"}};
+  if (o.on_plan)
+    o.on_plan("one simulation took " + fmt("%.3g", primal) + " s; the verification runs about " +
+              fmt("%.0f", planned) + " simulations' worth (about " + fmt("%.3g", planned * primal) +
+              " s)" +
+              (o.idas ? " plus two IDAS runs with forward sensitivities (rtol " +
+                            fmt("%.0e", rtol_tight) + " and " + fmt("%.0e", rtol_loose) +
+                            "), whose cost is not known ahead and is shown as they run; "
+                            "--no-idas skips them"
+                      : ""));
   std::vector<SensitivityResult> idas_tight, idas_loose;  // per grid of `steps`
   auto idas_runs = [&](double rtol) {
     Case c = load_case(file, o.case_overrides);
     SensitivityOptions so;
     so.idas.rtol = rtol;
     so.idas.atol = 1e-3 * rtol;  // in units of the model's length scale
+    so.progress = o.on_progress;
     std::vector<int> strides;
     for (double h : steps) strides.push_back(static_cast<int>(std::lround(h / (h0 / 2))));
     return idas_on_grids(c, p, so, h0 / 2, strides, W.size() ? &W : nullptr);
@@ -272,10 +303,12 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
                   sens(Method::kDirectAnalytic, 1e-6, false, M::kLastIteration)});
   {  // what a user gets without options: checked against fd-central like the reference
     Case c = load_case(file, o.case_overrides);
+    SensitivityOptions so;
+    so.progress = o.on_progress;
     runs.push_back(
         {"default options (" + std::string(SensitivityOptions::name(SensitivityOptions{}.method)) +
              ", --matrix " + SensitivityOptions::matrix_name(SensitivityOptions{}.matrix) + ")",
-         checked(compute_sensitivities(c, p, SensitivityOptions{}), "the default method")});
+         checked(compute_sensitivities(c, p, so), "the default method")});
   }
   const auto& defaults = runs.back().r;
   const auto& ref = runs[0].r;
@@ -422,6 +455,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       so.delta = x;
       so.relative = true;
       so.matrix = M::kRefined;
+      so.progress = o.on_progress;
       std::string why;
       try {
         const SensitivityResult r = compute_sensitivities(cx, p, so);
@@ -569,6 +603,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
       SensitivityOptions sa;
       sa.method = Method::kDirectAnalytic;
       sa.matrix = M::kRefined;
+      sa.progress = o.on_progress;
       auto ra = compute_sensitivities(a, p, sa);
       throw_if_interrupted("during verify's time-step study");
       if (!ra.ok)
@@ -737,6 +772,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
         }
       Case c = make(j, file);
       SensitivityOptions so;
+      so.progress = o.on_progress;
       const auto r = checked(compute_sensitivities(c, p, so),
                              "the mesh study at " + std::to_string(ne) + " elements");
       md << "| " << f << " | " << ne << " | ";
@@ -765,8 +801,11 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     md << "\n";
   } else {
     md << "## 5. Mesh study\n\nSkipped ("
-       << (o.mesh_study ? "it scales rectangle meshes of flexible bodies; the case has none"
-                        : "`--no-mesh-study`")
+       << (!o.mesh_study ? "`--no-mesh-study`"
+           : state_from_data
+               ? "the case starts from an initial state given as data (`initial_state`), which "
+                 "belongs to its mesh"
+               : "it scales rectangle meshes of flexible bodies; the case has none")
        << ").\n\n";
   }
 
@@ -800,6 +839,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
     S["idas_directions"] = w;
   }
   S["wall_seconds"] = wall;
+  S["cost"] = cost;
   S["responses"] = json::object();  // at the design point (direct-analytic's run)
   for (const auto& r : ref.responses)
     S["responses"][r.name] = r.times.empty() ? json(r.values[0]) : json(r.values);

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "lsmbs/core/progress.hpp"
 #include "lsmbs/io/case.hpp"
 
 namespace lsmbs {
@@ -34,6 +35,11 @@ struct VerifyOptions {
   std::vector<CaseOverride> case_overrides;  ///< values of the case document (--set /pointer=v)
   /// Called as each part of the report starts ("gradients by every method", …; empty: none).
   std::function<void(const std::string&)> on_stage;
+  /// Called once, after the primal run, with what the verification will cost: the primal run's
+  /// time and the estimate of the rest in simulations (empty: none).
+  std::function<void(const std::string&)> on_plan;
+  /// Progress of every run inside the parts (IDAS reference included; empty: none).
+  ProgressCallback on_progress;
   /// Called once the case has loaded and passed its checks, before anything is written (the
   /// command line claims the output folder there).
   std::function<void(const Case&)> on_loaded;

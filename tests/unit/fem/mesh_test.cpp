@@ -194,8 +194,8 @@ TEST(Mesh2D, GmshReaderRefusesWhatItWouldMisread) {
        "bad.msh: line 41: quadrilateral 3 repeats node 6 (a quadrilateral has four distinct "
        "corners)"},
       {replaced(kTwoQuads, "3 2 3 6 5\n", "3 2 3 5 6\n"),
-       "bad.msh: line 41: quadrilateral 3 is self-intersecting or degenerate (det J <= 0 inside "
-       "it"},
+       "bad.msh: line 41: quadrilateral 3 is self-intersecting or degenerate (det J <= 0 at a "
+       "Gauss point"},
       {crack_entities,
        "bad.msh: line 37: nodes 2 (line 31) and 8 coincide at (1, 0): the quadrilaterals on "
        "either side are not connected there"},
