@@ -780,7 +780,7 @@ PYBIND11_MODULE(_lsmbs, m) {
             o.input_sha256 = resume_hash(*cs);
             const OptimizeResult r = run([&] { return optimize(prob, o); });
             if (!out_dir.empty()) {  // every output folder carries a summary.json
-              nlohmann::json S = provenance("lsmbs.optimize (Python)", cs->file, cs->sha256);
+              nlohmann::json S = case_provenance("lsmbs.optimize (Python)", *cs);
               S["case_name"] = cs->name;
               S["overrides"] = cs->overrides;
               S["status"] = run_status_name(r.status());

@@ -19,10 +19,12 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <sstream>
 #include <string>
 
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/initial_state_file.hpp"
+#include "lsmbs/io/sha256.hpp"
 #include "lsmbs/io/simulation_run.hpp"
 #include "lsmbs/io/static_run.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
@@ -92,6 +94,17 @@ TEST(InitialState, RestartFromAnEarlierRunsFinalStateFollowsTheClosedForm) {
               1 + 0.1 * std::cos(w * 0.7));
   EXPECT_NEAR(second, 1 + 0.1 * std::cos(w * 0.7), 1e-7);
   EXPECT_NEAR(second, whole, 1e-7);
+  // the state file is an input of the run: its hash is in the Case and in summary.json
+  {
+    std::ifstream in(d + "/first/final_state.json", std::ios::binary);
+    std::stringstream bytes;
+    bytes << in.rdbuf();
+    const std::string path = (fs::path(d) / "first/final_state.json").string();
+    ASSERT_EQ(restarted.input_files.count(path), 1u);
+    EXPECT_EQ(restarted.input_files.at(path), sha256_hex(bytes.str()));
+    const json S = json::parse(std::ifstream(d + "/second/summary.json"));
+    EXPECT_EQ(S["input_files_sha256"][path], sha256_hex(bytes.str()));
+  }
   // the restarted run's initial velocity is the first run's final one: ẋ = -0.1 ω sin(0.3 ω)
   EXPECT_NEAR(restarted.initial.v[0], -0.1 * w * std::sin(w * 0.3), 1e-6);
 

@@ -313,7 +313,7 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
     }
     lsmbs::write_file_atomic(c.out + "/starts.csv", f.str());
   }
-  nlohmann::json S = lsmbs::provenance(c.command_line, cs.file, cs.sha256);
+  nlohmann::json S = lsmbs::case_provenance(c.command_line, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   // every child ended well (exit 0); a start that failed or was refused makes the run partial
@@ -485,7 +485,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
     checked = lsmbs::check_problem_gradients(prob, d.initial(), *check);
     if (lsmbs::interrupted()) {
       line.clear();
-      nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+      nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
       S["overrides"] = cs.overrides;
       S["case_name"] = cs.name;
       S["status"] = "interrupted";
@@ -509,7 +509,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                               std::to_string(checked->worst) + " (relative)"
                         : checked->message;
         if (verdict == "fail") {
-          nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+          nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
           S["overrides"] = cs.overrides;
           S["case_name"] = cs.name;
           S["status"] = "refused";
@@ -544,7 +544,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   go.out_dir = out + "/final_design";
   const auto geo = lsmbs::run_geometry(cs, res.p, go);
   const bool plotted = plot_history(out, res, prob.num_constraints() > 0);
-  nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+  nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = !res.failure.empty() ? "partial"

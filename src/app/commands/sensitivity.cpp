@@ -213,7 +213,7 @@ int sensitivity_command(const CommonArgs& c, const SensitivityArgs& a) {
                lsmbs::csv_number(rs.values[k]) + "," +
                lsmbs::csv_number(rs.gradient(static_cast<Eigen::Index>(k), i)) + "\n";
   }
-  nlohmann::json S = lsmbs::provenance(cmdline, cs.file, cs.sha256);
+  nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = stopped ? "interrupted" : res.ok ? "complete" : "partial";

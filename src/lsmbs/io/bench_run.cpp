@@ -86,6 +86,7 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   if (!primal.ok) throw NumericalFailure("primal run failed: " + primal.message);
   const double step = t_primal / primal.steps;
   nlohmann::json J = provenance(o.command_line, file, cs.sha256);
+  if (!cs.input_files.empty()) J["input_files_sha256"] = cs.input_files;
   J["case_name"] = cs.name;
   J["status"] = "complete";
   J["model"] = {{"dofs", m.nq()},

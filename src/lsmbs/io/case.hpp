@@ -52,7 +52,13 @@ struct Case : Study {
   /// when none. `sha256` stays the file's; summaries record both.
   nlohmann::json overrides = nlohmann::json::object();
   CaseStart start;
+  /// Files the case reads besides itself (tables, meshes, initial states): path as resolved ->
+  /// SHA-256 of its bytes when loaded. Summaries record them beside case_sha256.
+  std::map<std::string, std::string> input_files;
 };
+
+/// provenance() of a run of `cs` (its file and hash) with the files it reads (input_files).
+nlohmann::json case_provenance(const std::string& command, const Case& cs);
 
 /// A change of one value of the case document before it is loaded: `lsmbs … --set
 /// /simulation/h=1e-3`, `--set /bodies/1/material/E=70e9`. The pointer's parent must exist (an

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "lsmbs/core/file_check.hpp"
@@ -83,9 +84,12 @@ struct Loader {
   ModelBuilder builder;
   std::map<std::string, std::string> paths;  ///< JSON path of each body, joint and force by name
 
-  std::string resolve(const std::string& f) const {
-    return fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
+  std::string resolve(const std::string& f) {
+    const std::string path = fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
+    files_read.insert(path);
+    return path;
   }
+  std::set<std::string> files_read;  ///< every file name resolved (hashed once loaded)
 
   // A named entry (body, joint or force): its name is checked as soon as it is read.
   void entry(const JsonReader& r, const std::string& name, bool body) {
@@ -1013,12 +1017,20 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
   st.given_velocities = builder.given_velocities();
   st.paths = L.paths;
   if (initial_state)
-    read_initial_state(*initial_state, *cs.model, L.base_dir, st, cs.initial_state_note);
+    read_initial_state(*initial_state, *cs.model, L.base_dir, st, cs.initial_state_note,
+                       L.files_read);
   for (size_t f = 0; f < cs.model->forces().size(); ++f)
     st.force_owners.push_back(builder.force_owner(f));
   for (const auto& [name, path] : L.paths)
     if (auto ps = builder.parameters_of(name); !ps.empty()) st.entity_parameters[name] = ps;
   prepare_case(cs);
+  for (const auto& f : L.files_read) {  // the bytes each file held when the case was loaded
+    std::ifstream in(f, std::ios::binary);
+    if (!in) continue;
+    std::stringstream ss;
+    ss << in.rdbuf();
+    cs.input_files[f] = sha256_hex(ss.str());
+  }
   return cs;
 }
 

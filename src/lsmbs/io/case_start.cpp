@@ -13,6 +13,7 @@
 
 #include "lsmbs/integrators/initial_state.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/io/output.hpp"
 #include "lsmbs/io/sha256.hpp"
 #include "lsmbs/records/json.hpp"
 
@@ -303,6 +304,12 @@ void prepare_case(Case& cs, const Vec* design) {
   hold_given_velocities(cs);
   check_initial_placement(cs, cs.start.placed);
   check_finite_measures(cs);
+}
+
+nlohmann::json case_provenance(const std::string& command, const Case& cs) {
+  nlohmann::json S = provenance(command, cs.file, cs.sha256);
+  if (!cs.input_files.empty()) S["input_files_sha256"] = cs.input_files;
+  return S;
 }
 
 std::string resume_hash(const Case& cs) {

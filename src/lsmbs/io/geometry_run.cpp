@@ -75,8 +75,7 @@ nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o)
     }
     bodies.push_back(jb);
   }
-  nlohmann::json S =
-      provenance(o.command_line.empty() ? "geometry" : o.command_line, cs.file, cs.sha256);
+  nlohmann::json S = case_provenance(o.command_line.empty() ? "geometry" : o.command_line, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = "complete";

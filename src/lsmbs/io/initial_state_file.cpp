@@ -226,9 +226,11 @@ nlohmann::json final_state_json(const Model& m, const State& s, const std::strin
 }
 
 void read_initial_state(const JsonReader& r, const Model& m, const std::string& base_dir,
-                        CaseStart& st, std::string& note) {
+                        CaseStart& st, std::string& note, std::set<std::string>& files) {
   auto resolve = [&](const std::string& f) {
-    return fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
+    const std::string path = fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
+    files.insert(path);
+    return path;
   };
   st.placed.v.conservativeResize(m.nq());
   if (r.has("from")) {

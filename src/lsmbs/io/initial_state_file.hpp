@@ -9,6 +9,7 @@
 // generalized-α meets the velocity constraints only to its discretization error. Positions that
 // contradict the joints and drivers at t = 0 are refused naming the body.
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "lsmbs/io/case.hpp"
@@ -26,7 +27,8 @@ nlohmann::json final_state_json(const Model& model, const State& s, const std::s
 /// final_state.json) and "nodes" (per flexible body, a CSV of ux, uy, vx, vy per node). File names
 /// are relative to `base_dir`. Throws Error naming the file (and line) or the JSON path.
 /// A state that a static analysis computed sets `note` (Study::initial_state_note).
+/// Every file it reads is added to `files`.
 void read_initial_state(const JsonReader& r, const Model& model, const std::string& base_dir,
-                        CaseStart& start, std::string& note);
+                        CaseStart& start, std::string& note, std::set<std::string>& files);
 
 }  // namespace lsmbs

@@ -210,7 +210,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
                       {"elements", b->mesh.num_elements()},
                       {"mass", b->mass(m.params())}});
   nlohmann::json& S = res.summary;
-  S = provenance(ro.command_line.empty() ? "simulate" : ro.command_line, cs.file, cs.sha256);
+  S = case_provenance(ro.command_line.empty() ? "simulate" : ro.command_line, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = res.integrator.ok ? "complete" : "partial";

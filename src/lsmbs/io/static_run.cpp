@@ -63,7 +63,7 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
     responses[r.name] = std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
   }
   nlohmann::json& S = res.summary;
-  S = provenance(o.command_line.empty() ? "static" : o.command_line, cs.file, cs.sha256);
+  S = case_provenance(o.command_line.empty() ? "static" : o.command_line, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["units"] = units_json(cs);  // of every measure column and response, as simulate's

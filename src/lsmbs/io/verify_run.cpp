@@ -816,6 +816,7 @@ VerifyResult run_verify(const std::string& file, const VerifyOptions& o) {
   md << "\nWall time of the verification: " << fmt("%.1f", wall) << " s.\n";
   write_file_atomic(o.out_dir + "/report.md", md.str());
   json S = provenance(o.command_line, file, cs.sha256);
+  if (!cs.input_files.empty()) S["input_files_sha256"] = cs.input_files;
   S["overrides"] = cs.overrides;
   S["status"] = "complete";
   S["pass"] = vr.pass;
