@@ -23,6 +23,7 @@
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/core/text.hpp"
 #include "lsmbs/core/version.hpp"
+#include "lsmbs/fem/element_types.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/output.hpp"
@@ -849,15 +850,28 @@ PYBIND11_MODULE(_lsmbs, m) {
             phi[i] =
                 bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
           }
-          py::array_t<int> quads({static_cast<py::ssize_t>(mesh.num_elements()), py::ssize_t{4}});
-          auto q = quads.mutable_unchecked<2>();
-          for (int e = 0; e < mesh.num_elements(); ++e)
-            for (int k = 0; k < 4; ++k)
-              q(e, k) = mesh.quads[static_cast<size_t>(e)][static_cast<size_t>(k)];
+          // cells: one array of node indices per cell (counter-clockwise); quads: the same as an
+          // (elements × 4) array when every cell is a quadrilateral
+          py::list cells, types;
+          bool all_quads = true;
+          for (const Cell& c : mesh.cells) {
+            cells.append(py::array_t<int>(c.size(), c.begin()));
+            types.append(element_type(c.type).name);
+            all_quads = all_quads && c.size() == 4;
+          }
+          py::object quads = py::none();
+          if (all_quads) {
+            py::array_t<int> a({static_cast<py::ssize_t>(mesh.num_elements()), py::ssize_t{4}});
+            auto q = a.mutable_unchecked<2>();
+            for (int e = 0; e < mesh.num_elements(); ++e)
+              for (int k = 0; k < 4; ++k) q(e, k) = mesh.cells[static_cast<size_t>(e)][k];
+            quads = a;
+          }
           Vec grad;
           const double mass = Design::mass_gradient(bd, dmu[b], params, grad);
           bodies[py::str(body.name)] =
-              py::dict(py::arg("nodes") = array(nodes), py::arg("quads") = quads,
+              py::dict(py::arg("nodes") = array(nodes), py::arg("cells") = cells,
+                       py::arg("cell_types") = types, py::arg("quads") = quads,
                        py::arg("mu") = array(params.fields[static_cast<size_t>(body.field)]),
                        py::arg("phi") = array(phi), py::arg("mass") = mass,
                        py::arg("mass_gradient") = array(grad));
@@ -865,7 +879,8 @@ PYBIND11_MODULE(_lsmbs, m) {
         return bodies;
       },
       py::arg("case").none(false), py::arg("design") = py::none(),
-      "Per designed body: mesh nodes and quads (body frame), μ_e, the nodal level set φ (material "
+      "Per designed body: mesh nodes and cells (body frame; 'quads' as an array when all are "
+      "quadrilaterals), μ_e, the nodal level set φ (material "
       "where φ > 0), the mass and its gradient");
 
   // ---------------------------------------------------------------- verify

@@ -27,16 +27,17 @@ def _axes(ax):
 
 def design(body, ax=None, cmap="Greys", contour=True, colorbar=True):
     """μ_e of a designed body (a value of lsmbs.geometry(case)) in its body frame, with the
-    features' boundary φ = 0 (nodal level set, linear on each quad's two triangles)."""
+    features' boundary φ = 0 (nodal level set, linear on the triangles of a fan over each cell)."""
     from matplotlib.collections import PolyCollection
     import matplotlib.tri as mtri
     ax = _axes(ax)
-    nodes, quads = body["nodes"], body["quads"]
-    pc = PolyCollection(nodes[quads], array=body["mu"], cmap=cmap, edgecolors="face")
+    nodes, cells = body["nodes"], body["cells"]
+    pc = PolyCollection([nodes[c] for c in cells], array=body["mu"], cmap=cmap,
+                        edgecolors="face")
     pc.set_clim(0, 1)
     ax.add_collection(pc)
     if contour:
-        tris = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+        tris = np.array([[c[0], c[k], c[k + 1]] for c in cells for k in range(1, len(c) - 1)])
         ax.tricontour(mtri.Triangulation(nodes[:, 0], nodes[:, 1], tris), body["phi"], levels=[0.0],
                       colors="tab:red", linewidths=1.0)
     ax.set_xlim(nodes[:, 0].min(), nodes[:, 0].max())

@@ -1,6 +1,7 @@
 """Values and gradients from Python against the command line's summary.json, bit for bit (the
 same library computes both; the reference is the program users already trust), and the
 options and parameters changed from Python against the command line on the edited JSON."""
+import json
 import math
 
 import numpy as np
@@ -128,6 +129,24 @@ def test_geometry_of_a_level_set_design(tmp_path):
     ref = {b["body"]: b for b in s["bodies"]}[name]
     assert body["mass"] == ref["mass"]
     assert body["phi"].min() < 0 < body["phi"].max()  # a hole: void and material nodes
+
+
+def test_geometry_of_a_triangle_mesh(tmp_path):
+    """A body meshed with triangles: cells of three nodes, no 'quads' array, and the mass of the
+    designed plate within the level-set band's error of the quadrilaterals' on the same nodes."""
+    doc = json.loads((SPRING.parents[1] / "robot_arm" / "robot_arm_holes.json").read_text())
+    masses = {}
+    for cells in ("quad4", "tri3"):
+        doc["bodies"][2]["mesh"]["cells"] = cells
+        (tmp_path / f"{cells}.json").write_text(json.dumps(doc))
+        (name, body), = lsmbs.geometry(lsmbs.load_case(str(tmp_path / f"{cells}.json"))).items()
+        n = 4 if cells == "quad4" else 3
+        assert all(len(c) == n for c in body["cells"]) and set(body["cell_types"]) == {cells}
+        assert (body["quads"] is None) == (cells == "tri3")
+        assert body["mu"].shape == (len(body["cells"]),)
+        masses[cells] = body["mass"]
+    assert len(body["cells"]) == 2 * 120 * 10
+    assert masses["tri3"] == pytest.approx(masses["quad4"], rel=1e-3)
 
 
 def test_adjoint_from_python_equals_direct_analytic_and_refuses_per_step(spring_doc, write_case):

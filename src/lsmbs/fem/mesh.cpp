@@ -12,12 +12,17 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/file_check.hpp"
 #include "lsmbs/core/text.hpp"
+#include "lsmbs/fem/element_types.hpp"
 
 namespace lsmbs {
 
-Mesh2D Mesh2D::rectangle(double x0, double y0, double lx, double ly, int nx, int ny) {
+Mesh2D Mesh2D::rectangle(double x0, double y0, double lx, double ly, int nx, int ny,
+                         const std::string& cells) {
   if (nx < 1 || ny < 1 || !(lx > 0) || !(ly > 0))
     throw Error("Mesh2D::rectangle: expected positive sizes and element counts");
+  CellType type;
+  if (!element_type_named(cells, &type) || (cells != "quad4" && cells != "tri3"))
+    throw Error("Mesh2D::rectangle: cells '" + cells + "': expected quad4 or tri3");
   Mesh2D m;
   m.nodes.reserve((nx + 1) * (ny + 1));
   for (int j = 0; j <= ny; ++j)
@@ -25,7 +30,13 @@ Mesh2D Mesh2D::rectangle(double x0, double y0, double lx, double ly, int nx, int
   auto id = [nx](int i, int j) { return j * (nx + 1) + i; };
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i)
-      m.quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      if (cells == "quad4") {
+        m.cells.push_back(
+            make_cell(type, {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)}));
+      } else {
+        m.cells.push_back(make_cell(type, {id(i, j), id(i + 1, j), id(i + 1, j + 1)}));
+        m.cells.push_back(make_cell(type, {id(i, j), id(i + 1, j + 1), id(i, j + 1)}));
+      }
   for (int j = 0; j <= ny; ++j) {
     m.node_sets["left"].push_back(id(0, j));
     m.node_sets["right"].push_back(id(nx, j));
@@ -49,16 +60,24 @@ double Mesh2D::size() const {
 
 double Mesh2D::area() const {
   double a = 0;
-  for (const auto& q : quads) {
-    const Vec2 d1 = nodes[q[2]] - nodes[q[0]], d2 = nodes[q[3]] - nodes[q[1]];
-    a += 0.5 * (d1.x() * d2.y() - d1.y() * d2.x());
-  }
+  for (int e = 0; e < num_elements(); ++e)
+    a += element_type(cells[e].type).shape->area(cell_nodes(e).data());
   return a;
 }
 
+std::array<Vec2, Cell::kMaxNodes> Mesh2D::cell_nodes(int e) const {
+  std::array<Vec2, Cell::kMaxNodes> X;
+  const Cell& c = cells[static_cast<size_t>(e)];
+  for (int k = 0; k < c.size(); ++k) X[static_cast<size_t>(k)] = nodes[static_cast<size_t>(c[k])];
+  return X;
+}
+
 Vec2 Mesh2D::centroid(int e) const {
-  const auto& q = quads[e];
-  return 0.25 * (nodes[q[0]] + nodes[q[1]] + nodes[q[2]] + nodes[q[3]]);
+  // the mean of the nodes (a quadrilateral's: the sum times 0.25, as always computed)
+  const Cell& c = cells[static_cast<size_t>(e)];
+  Vec2 sum = Vec2::Zero();
+  for (int k : c) sum += nodes[static_cast<size_t>(k)];
+  return c.size() == 4 ? Vec2(0.25 * sum) : Vec2(sum / c.size());
 }
 
 static double default_tol(const Mesh2D& m, double tol) { return tol >= 0 ? tol : 1e-6 * m.size(); }
@@ -185,7 +204,7 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
   std::vector<int> node_line;
   std::map<long long, int> node_index;    // Gmsh tag -> node index
   std::map<long long, int> element_line;  // Gmsh element tag -> its line
-  std::vector<long long> quad_tag;        // per quadrilateral: its Gmsh element tag
+  std::vector<long long> cell_tag;        // per 2-D cell: its Gmsh element tag
   std::map<long long, std::string> phys_names[4];
   std::set<std::pair<int, long long>> entities;                // (dim, tag) declared in $Entities
   std::map<long long, std::vector<long long>> entity_phys[4];  // entity tag -> physical tags
@@ -368,27 +387,22 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
         const long long etag = rd.integer(bh[1], "the entity tag", 1);
         const long long etype = rd.integer(bh[2], "the element type", 1);
         const long long nb = rd.integer(bh[3], "the number of elements in the block", 0, kMaxCount);
+        // points and 2-node lines carry node sets; 2-D cells of every registered type
         int nn = 0, tdim = 0;
-        switch (etype) {
-          case 15:  // point
-            nn = 1;
-            tdim = 0;
-            break;
-          case 1:  // 2-node line
-            nn = 2;
-            tdim = 1;
-            break;
-          case 3:  // 4-node quadrilateral
-            nn = 4;
-            tdim = 2;
-            break;
-          case 2:
-            rd.fail(
-                "triangles are not supported (lsmbs uses 4-node quadrilaterals: recombine the mesh "
-                "in Gmsh)");
-          default:
-            rd.fail("unsupported element type " + std::to_string(etype) +
-                    " (expected points, 2-node lines, 4-node quads)");
+        CellType cell_type;
+        const ElementType* cell_kind = element_type_for_gmsh(static_cast<int>(etype), &cell_type);
+        if (etype == 15) {
+          nn = 1, tdim = 0;
+        } else if (etype == 1) {
+          nn = 2, tdim = 1;
+        } else if (cell_kind) {
+          nn = cell_kind->nodes, tdim = 2;
+        } else {
+          std::string known;
+          for (const auto& t : element_types())
+            known += std::string(", ") + std::to_string(t.gmsh_type) + " (" + t.name + ")";
+          rd.fail("unsupported element type " + std::to_string(etype) +
+                  " (expected 15 (points), 1 (2-node lines)" + known + ")");
         }
         if (edim != tdim)
           rd.fail("element type " + std::to_string(etype) + " has dimension " +
@@ -417,24 +431,27 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
           if (const auto [it, fresh] = element_line.emplace(tag, rd.line); !fresh)
             rd.fail("element tag " + std::to_string(tag) + " is defined twice (first on line " +
                     std::to_string(it->second) + ")");
-          std::array<int, 4> q{};
+          Cell q;
+          q.type = cell_type;
+          q.count = static_cast<std::uint8_t>(nn);
           for (int k = 0; k < nn; ++k) {
             const long long nt = rd.integer(el[static_cast<size_t>(1 + k)], "a node tag", 1);
             const auto it = node_index.find(nt);
             if (it == node_index.end())
               rd.fail("element " + std::to_string(tag) + " refers to unknown node " +
                       std::to_string(nt));
-            q[static_cast<size_t>(k)] = it->second;
+            q[k] = it->second;
             for (int j = 0; j < k; ++j)
-              if (etype == 3 && q[static_cast<size_t>(j)] == it->second)
-                rd.fail("quadrilateral " + std::to_string(tag) + " repeats node " +
-                        std::to_string(nt) + " (a quadrilateral has four distinct corners)");
-            if (etype != 3)
+              if (tdim == 2 && q[j] == it->second)
+                rd.fail(std::string(cell_kind->noun) + " " + std::to_string(tag) +
+                        " repeats node " + std::to_string(nt) + " (its " + std::to_string(nn) +
+                        " corners must be distinct)");
+            if (tdim < 2)
               for (const auto& g : groups) sets[g].insert(it->second);
           }
-          if (etype == 3) {
-            m.quads.push_back(q);
-            quad_tag.push_back(tag);
+          if (tdim == 2) {
+            m.cells.push_back(q);
+            cell_tag.push_back(tag);
           }
         }
       }
@@ -454,7 +471,8 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
     }
   }
   if (first) throw Error(path, "", "not a Gmsh .msh file ($MeshFormat missing)");
-  if (m.quads.empty()) throw Error(path, "", "the mesh contains no 4-node quadrilaterals");
+  if (m.cells.empty())
+    throw Error(path, "", "the mesh contains no 2-D cells (quadrilaterals or triangles)");
   // The mesh is read in the plane z = 0: a mesh drawn in another plane would be projected onto
   // it without a word (z within round-off of 0 is accepted).
   if (std::abs(max_z) > 1e-9 * m.size()) {
@@ -471,7 +489,7 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
   // around its own).
   {
     std::vector<char> used(m.nodes.size(), 0);
-    for (const auto& q : m.quads)
+    for (const auto& q : m.cells)
       for (int k : q) used[static_cast<size_t>(k)] = 1;
     Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (size_t i = 0; i < m.nodes.size(); ++i)
@@ -480,24 +498,24 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
         hi = hi.cwiseMax(m.nodes[i]);
       }
     const double tol = 1e-10 * (hi - lo).norm();
-    struct Cell {
+    struct GridCell {
       long long ix, iy;
       int node;
-      bool operator<(const Cell& o) const { return ix != o.ix ? ix < o.ix : iy < o.iy; }
+      bool operator<(const GridCell& o) const { return ix != o.ix ? ix < o.ix : iy < o.iy; }
     };
-    std::vector<Cell> cells;
+    std::vector<GridCell> grid;
     for (size_t i = 0; i < m.nodes.size(); ++i)
       if (used[i]) {
         const Vec2 r = tol > 0 ? Vec2((m.nodes[i] - lo) / tol) : Vec2::Zero();
-        cells.push_back({static_cast<long long>(std::floor(r.x())),
-                         static_cast<long long>(std::floor(r.y())), static_cast<int>(i)});
+        grid.push_back({static_cast<long long>(std::floor(r.x())),
+                        static_cast<long long>(std::floor(r.y())), static_cast<int>(i)});
       }
-    std::sort(cells.begin(), cells.end());
-    for (const Cell& c : cells)
+    std::sort(grid.begin(), grid.end());
+    for (const GridCell& c : grid)
       for (long long dx = -1; dx <= 1; ++dx)
         for (long long dy = -1; dy <= 1; ++dy) {
           const auto [b, e] =
-              std::equal_range(cells.begin(), cells.end(), Cell{c.ix + dx, c.iy + dy, 0});
+              std::equal_range(grid.begin(), grid.end(), GridCell{c.ix + dx, c.iy + dy, 0});
           for (auto o = b; o != e; ++o) {
             if (o->node <= c.node) continue;
             if ((m.nodes[static_cast<size_t>(o->node)] - m.nodes[static_cast<size_t>(c.node)])
@@ -510,40 +528,31 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
                         "nodes " + std::to_string(node_tag[i]) + " (line " +
                             std::to_string(node_line[i]) + ") and " + std::to_string(node_tag[j]) +
                             " coincide at " + where +
-                            ": the quadrilaterals on either side are not connected there (make "
+                            ": the cells on either side are not connected there (make "
                             "the geometry coherent in Gmsh, or remove duplicate nodes)");
           }
         }
   }
-  for (size_t e = 0; e < m.quads.size(); ++e) {  // orient counter-clockwise
-    auto& q = m.quads[e];
-    const Vec2 d1 = m.nodes[q[2]] - m.nodes[q[0]], d2 = m.nodes[q[3]] - m.nodes[q[1]];
-    if (d1.x() * d2.y() - d1.y() * d2.x() < 0) std::swap(q[1], q[3]);
-    // The element needs det J > 0 at its 2 × 2 Gauss points (QuadElement). A quadrilateral whose
-    // corners are not in order around it (a bow-tie) or that is degenerate fails here, named by
-    // its tag and line rather than by its index in the model.
-    const double g = 1 / std::sqrt(3.0);
-    for (const double xi : {-g, g})
-      for (const double eta : {-g, g}) {
-        const double dxi[4] = {-(1 - eta), 1 - eta, 1 + eta, -(1 + eta)};
-        const double deta[4] = {-(1 - xi), -(1 + xi), 1 + xi, 1 - xi};
-        Vec2 a = Vec2::Zero(), b = Vec2::Zero();
-        for (int k = 0; k < 4; ++k) {
-          a += 0.25 * dxi[k] * m.nodes[static_cast<size_t>(q[static_cast<size_t>(k)])];
-          b += 0.25 * deta[k] * m.nodes[static_cast<size_t>(q[static_cast<size_t>(k)])];
-        }
-        if (a.x() * b.y() - a.y() * b.x() > 0) continue;
-        throw Error(path, "line " + std::to_string(element_line.at(quad_tag[e])),
-                    "quadrilateral " + std::to_string(quad_tag[e]) +
-                        " is self-intersecting or degenerate (det J <= 0 at a Gauss point: its "
-                        "four corners are not in order around it, or it is flat or folded); list "
-                        "the corners in order around the element");
-      }
+  for (int e = 0; e < m.num_elements(); ++e) {  // orient counter-clockwise
+    Cell& q = m.cells[static_cast<size_t>(e)];
+    const ElementType& type = element_type(q.type);
+    if (type.shape->area(m.cell_nodes(e).data()) < 0)
+      std::reverse(q.begin() + 1, q.end());  // quadrilateral: swaps corners 1 and 3
+    // The element needs det J > 0 at its integration points. A cell whose corners are not in
+    // order around it (a bow-tie quadrilateral) or that is degenerate fails here, named by its
+    // tag and line rather than by its index in the model.
+    if (type.shape->min_det_J(m.cell_nodes(e).data()) > 0) continue;
+    const long long tag = cell_tag[static_cast<size_t>(e)];
+    throw Error(path, "line " + std::to_string(element_line.at(tag)),
+                std::string(type.noun) + " " + std::to_string(tag) +
+                    " is self-intersecting or degenerate (det J <= 0 at a Gauss point: its "
+                    "corners are not in order around it, or it is flat or folded); list "
+                    "the corners in order around the element");
   }
   // Nodes used by no quad (geometry points such as a bore centre) would carry neither mass
   // nor stiffness: drop them and renumber, keeping node sets consistent.
   std::vector<int> remap(m.nodes.size(), -1);
-  for (const auto& q : m.quads)
+  for (const auto& q : m.cells)
     for (int k : q) remap[k] = 0;
   std::vector<Vec2> kept;
   for (size_t i = 0; i < m.nodes.size(); ++i)
@@ -552,7 +561,7 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
       kept.push_back(m.nodes[i]);
     }
   m.nodes = std::move(kept);
-  for (auto& q : m.quads)
+  for (auto& q : m.cells)
     for (int& k : q) k = remap[k];
   for (auto& [name, s2] : sets)
     for (int k : s2)

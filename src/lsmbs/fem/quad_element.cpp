@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/plane_kernels.hpp"
 
 namespace lsmbs {
 namespace {
@@ -17,31 +19,6 @@ void shape(double xi, double eta, Eigen::Vector4d& N, Eigen::Matrix<double, 4, 2
     dN(i, 0) = 0.25 * kXi[i] * (1 + kEta[i] * eta);
     dN(i, 1) = 0.25 * kEta[i] * (1 + kXi[i] * xi);
   }
-}
-
-// Plane-stress constitutive matrix in Voigt form (E11, E22, 2E12).
-Eigen::Matrix3d plane_stress(double E, double nu, bool normal, bool shear) {
-  Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
-  const double c = E / (1 - nu * nu);
-  if (normal) {
-    D(0, 0) = D(1, 1) = c;
-    D(0, 1) = D(1, 0) = c * nu;
-  }
-  if (shear) D(2, 2) = c * (1 - nu) / 2;
-  return D;
-}
-
-// ∂D/∂ν of plane_stress: c' = dc/dν = 2Eν/(1 − ν²)², ∂(cν)/∂ν = c'ν + c, and the shear modulus
-// c(1 − ν)/2 = E/(2(1 + ν)) has derivative −E/(2(1 + ν)²).
-Eigen::Matrix3d plane_stress_dnu(double E, double nu, bool normal, bool shear) {
-  Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
-  const double c = E / (1 - nu * nu), dc = 2 * E * nu / ((1 - nu * nu) * (1 - nu * nu));
-  if (normal) {
-    D(0, 0) = D(1, 1) = dc;
-    D(0, 1) = D(1, 0) = dc * nu + c;
-  }
-  if (shear) D(2, 2) = -E / (2 * (1 + nu) * (1 + nu));
-  return D;
 }
 
 }  // namespace
@@ -69,6 +46,9 @@ QuadElement::QuadElement(const std::array<Vec2, 4>& X, QuadIntegration integrati
   }
   Eigen::Vector4d N;
   make(0, 0, 4.0, centre_, N);
+  unit_mass_dyn_ = unit_mass_;
+  shape_int_dyn_ = shape_int_;
+  centre_G_ = centre_.G;
   for (int c = 0; c < 4; ++c) {
     Eigen::Matrix<double, 4, 2> dN;
     shape(kXi[c], kEta[c], N, dN);
@@ -78,77 +58,36 @@ QuadElement::QuadElement(const std::array<Vec2, 4>& X, QuadIntegration integrati
   }
 }
 
-namespace {
-
-// Adds t·w·(Bᵀ D E, Bᵀ D B + geometric) at one integration point.
-template <class Vec8, class Mat8>
-void add_point(const Eigen::Matrix<double, 4, 2>& G, double tw, const Vec8& x,
-               const Eigen::Matrix3d& D, Vec8& f, Mat8* K) {
-  Mat2 F = Mat2::Zero();
-  for (int i = 0; i < 4; ++i) F += Vec2(x[2 * i], x[2 * i + 1]) * G.row(i);
-  const Mat2 C = F.transpose() * F;
-  const Eigen::Vector3d E(0.5 * (C(0, 0) - 1), 0.5 * (C(1, 1) - 1), C(0, 1));
-  const Eigen::Vector3d S = D * E;
-  Eigen::Matrix<double, 3, 8> B;
-  for (int j = 0; j < 4; ++j)
-    for (int a = 0; a < 2; ++a) {
-      B(0, 2 * j + a) = F(a, 0) * G(j, 0);
-      B(1, 2 * j + a) = F(a, 1) * G(j, 1);
-      B(2, 2 * j + a) = F(a, 0) * G(j, 1) + F(a, 1) * G(j, 0);
-    }
-  f.noalias() += tw * B.transpose() * S;
-  if (K) {
-    K->noalias() += tw * B.transpose() * D * B;
-    Mat2 Sm;
-    Sm << S[0], S[2], S[2], S[1];
-    const Eigen::Matrix4d Gs = G * Sm * G.transpose();
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) {
-        (*K)(2 * i, 2 * j) += tw * Gs(i, j);
-        (*K)(2 * i + 1, 2 * j + 1) += tw * Gs(i, j);
-      }
-  }
-}
-
-template <class Vec8>
-double point_energy(const Eigen::Matrix<double, 4, 2>& G, double tw, const Vec8& x,
-                    const Eigen::Matrix3d& D) {
-  Mat2 F = Mat2::Zero();
-  for (int i = 0; i < 4; ++i) F += Vec2(x[2 * i], x[2 * i + 1]) * G.row(i);
-  const Mat2 C = F.transpose() * F;
-  const Eigen::Vector3d E(0.5 * (C(0, 0) - 1), 0.5 * (C(1, 1) - 1), C(0, 1));
-  return 0.5 * tw * E.dot(D * E);
-}
-
-}  // namespace
-
 void QuadElement::internal_force(const Vec8& x, double E, double nu, double t, Vec8& f,
                                  Mat8* K) const {
   f.setZero();
   if (K) K->setZero();
   const bool sri = integration_ == QuadIntegration::kSelectiveShear;
-  const Eigen::Matrix3d D = plane_stress(E, nu, true, !sri);
-  for (const auto& p : gauss_) add_point(p.G, t * p.w, x, D, f, K);
-  if (sri) add_point(centre_.G, t * centre_.w, x, plane_stress(E, nu, false, true), f, K);
+  const Eigen::Matrix3d D = plane::plane_stress(E, nu, true, !sri);
+  for (const auto& p : gauss_) plane::add_point<4>(p.G, t * p.w, x, D, f, K);
+  if (sri)
+    plane::add_point<4>(centre_.G, t * centre_.w, x, plane::plane_stress(E, nu, false, true), f, K);
 }
 
 void QuadElement::internal_force_nu_derivative(const Vec8& x, double E, double nu, double t,
                                                Vec8& df) const {
   df.setZero();
   const bool sri = integration_ == QuadIntegration::kSelectiveShear;
-  const Eigen::Matrix3d D = plane_stress_dnu(E, nu, true, !sri);
-  for (const auto& p : gauss_) add_point<Vec8, Mat8>(p.G, t * p.w, x, D, df, nullptr);
+  const Eigen::Matrix3d D = plane::plane_stress_dnu(E, nu, true, !sri);
+  for (const auto& p : gauss_) plane::add_point<4, Vec8, Mat8>(p.G, t * p.w, x, D, df, nullptr);
   if (sri)
-    add_point<Vec8, Mat8>(centre_.G, t * centre_.w, x, plane_stress_dnu(E, nu, false, true), df,
-                          nullptr);
+    plane::add_point<4, Vec8, Mat8>(centre_.G, t * centre_.w, x,
+                                    plane::plane_stress_dnu(E, nu, false, true), df, nullptr);
 }
 
 double QuadElement::strain_energy(const Vec8& x, double E, double nu, double t) const {
   const bool sri = integration_ == QuadIntegration::kSelectiveShear;
-  const Eigen::Matrix3d D = plane_stress(E, nu, true, !sri);
+  const Eigen::Matrix3d D = plane::plane_stress(E, nu, true, !sri);
   double W = 0;
-  for (const auto& p : gauss_) W += point_energy(p.G, t * p.w, x, D);
-  if (sri) W += point_energy(centre_.G, t * centre_.w, x, plane_stress(E, nu, false, true));
+  for (const auto& p : gauss_) W += plane::point_energy<4>(p.G, t * p.w, x, D);
+  if (sri)
+    W += plane::point_energy<4>(centre_.G, t * centre_.w, x,
+                                plane::plane_stress(E, nu, false, true));
   return W;
 }
 
@@ -182,6 +121,106 @@ void QuadElement::centre_strain(const Vec8& x, Eigen::Vector3d& Ev, Mat2& F) con
   for (int i = 0; i < 4; ++i) F += Vec2(x[2 * i], x[2 * i + 1]) * centre_.G.row(i);
   const Mat2 C = F.transpose() * F;
   Ev = Eigen::Vector3d(0.5 * (C(0, 0) - 1), 0.5 * (C(1, 1) - 1), C(0, 1));
+}
+
+// ---- PlaneElement on interleaved coordinates: the fixed-size functions above, unchanged
+void QuadElement::internal_force(const double* x, double E, double nu, double t, double* f,
+                                 double* K) const {
+  Vec8 fv;
+  if (!K) {
+    internal_force(Eigen::Map<const Vec8>(x), E, nu, t, fv, nullptr);
+  } else {
+    Mat8 Kv;
+    internal_force(Eigen::Map<const Vec8>(x), E, nu, t, fv, &Kv);
+    Eigen::Map<Mat8>{K} = Kv;
+  }
+  Eigen::Map<Vec8>{f} = fv;
+}
+
+void QuadElement::internal_force_nu_derivative(const double* x, double E, double nu, double t,
+                                               double* df) const {
+  Vec8 d;
+  internal_force_nu_derivative(Eigen::Map<const Vec8>(x), E, nu, t, d);
+  Eigen::Map<Vec8>{df} = d;
+}
+
+double QuadElement::strain_energy(const double* x, double E, double nu, double t) const {
+  return strain_energy(Vec8(Eigen::Map<const Vec8>(x)), E, nu, t);
+}
+
+void QuadElement::centre_strain(const double* x, Eigen::Vector3d& Ev, Mat2& F) const {
+  centre_strain(Vec8(Eigen::Map<const Vec8>(x)), Ev, F);
+}
+
+double QuadElement::min_det_F(const double* x) const {
+  return min_det_F(Vec8(Eigen::Map<const Vec8>(x)));
+}
+
+double QuadElement::min_corner_det_F(const double* x) const {
+  return min_corner_det_F(Vec8(Eigen::Map<const Vec8>(x)));
+}
+
+// ---- the quadrilateral's shape
+double QuadShape::area(const Vec2* X) const {
+  const Vec2 d1 = X[2] - X[0], d2 = X[3] - X[1];
+  return 0.5 * (d1.x() * d2.y() - d1.y() * d2.x());
+}
+
+double QuadShape::min_det_J(const Vec2* X) const {
+  // det J at the 2 × 2 Gauss points, where the element integrates
+  const double g = 1 / std::sqrt(3.0);
+  double lo = std::numeric_limits<double>::infinity();
+  for (const double xi : {-g, g})
+    for (const double eta : {-g, g}) {
+      const Vec2 dxi = 0.25 * ((1 - eta) * (X[1] - X[0]) + (1 + eta) * (X[2] - X[3]));
+      const Vec2 deta = 0.25 * ((1 - xi) * (X[3] - X[0]) + (1 + xi) * (X[2] - X[1]));
+      lo = std::min(lo, dxi.x() * deta.y() - dxi.y() * deta.x());
+    }
+  return lo;
+}
+
+void QuadShape::samples(const Vec2* X, int n, std::vector<CellSample>& out) const {
+  // the midpoints of n × n sub-cells of the parent square, weighted by det J of the bilinear map
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double xi = -1 + (2 * i + 1.0) / n, eta = -1 + (2 * j + 1.0) / n;
+      const double N0 = 0.25 * (1 - xi) * (1 - eta), N1 = 0.25 * (1 + xi) * (1 - eta),
+                   N2 = 0.25 * (1 + xi) * (1 + eta), N3 = 0.25 * (1 - xi) * (1 + eta);
+      const Vec2 x = N0 * X[0] + N1 * X[1] + N2 * X[2] + N3 * X[3];
+      const Vec2 dxi = 0.25 * ((1 - eta) * (X[1] - X[0]) + (1 + eta) * (X[2] - X[3]));
+      const Vec2 deta = 0.25 * ((1 - xi) * (X[3] - X[0]) + (1 + xi) * (X[2] - X[1]));
+      out.push_back({x, (dxi.x() * deta.y() - dxi.y() * deta.x()) * (4.0 / (n * n))});
+    }
+}
+
+void QuadShape::contour(const Vec2* X, const double* f,
+                        std::vector<std::pair<Vec2, Vec2>>& out) const {
+  // marching squares: edge k joins nodes k and k + 1, crossed where f changes sign (linear
+  // along the edge)
+  Vec2 cross[4];
+  bool cut[4];
+  int ncut = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int l = (k + 1) % 4;
+    cut[k] = (f[k] > 0) != (f[l] > 0);
+    if (cut[k]) {
+      cross[k] = X[k] + f[k] / (f[k] - f[l]) * (X[l] - X[k]);
+      ++ncut;
+    }
+  }
+  if (ncut == 2) {
+    int a = -1, b = -1;
+    for (int k = 0; k < 4; ++k)
+      if (cut[k]) (a < 0 ? a : b) = k;
+    out.emplace_back(cross[a], cross[b]);
+  } else if (ncut == 4) {  // saddle: the centre's sign says which corners are cut off
+    const bool centre = (f[0] + f[1] + f[2] + f[3]) / 4 > 0;
+    if (centre == (f[0] > 0)) {
+      out.emplace_back(cross[0], cross[1]), out.emplace_back(cross[2], cross[3]);
+    } else {
+      out.emplace_back(cross[3], cross[0]), out.emplace_back(cross[1], cross[2]);
+    }
+  }
 }
 
 }  // namespace lsmbs

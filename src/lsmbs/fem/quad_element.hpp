@@ -12,8 +12,12 @@
 //    shear in bending (see docs/methods.md and the cantilever test).
 // Consistent mass M_IJ = ρ t ∫ N_I N_J dA (2×2 Gauss, exact: det J of a bilinear quad is linear).
 #include <array>
+#include <memory>
+#include <vector>
 
 #include "lsmbs/core/types.hpp"
+#include "lsmbs/fem/cell.hpp"
+#include "lsmbs/fem/plane_element.hpp"
 
 namespace lsmbs {
 
@@ -23,7 +27,7 @@ struct QuadMaterial {
   double E = 0, nu = 0, rho = 0, thickness = 0;
 };
 
-class QuadElement {
+class QuadElement final : public PlaneElement {
  public:
   using Vec8 = Eigen::Matrix<double, 8, 1>;
   using Mat8 = Eigen::Matrix<double, 8, 8>;
@@ -42,10 +46,10 @@ class QuadElement {
                                     Vec8& df) const;
   double strain_energy(const Vec8& x, double E, double nu, double thickness) const;
   /// ∫ N_I N_J dA (multiply by ρ t for the consistent mass of one direction).
-  const Mat4& unit_mass() const { return unit_mass_; }
+  const Mat4& unit_mass4() const { return unit_mass_; }
   /// ∫ N_I dA (for body loads and lumped quantities).
-  const Eigen::Vector4d& shape_integrals() const { return shape_int_; }
-  double area() const { return area_; }
+  const Eigen::Vector4d& shape_integrals4() const { return shape_int_; }
+  double area() const override { return area_; }
   /// Green–Lagrange strain (E11, E22, 2E12) and deformation gradient at the centre.
   void centre_strain(const Vec8& x, Eigen::Vector3d& E_voigt, Mat2& F) const;
   /// The smallest det F over the integration points (2×2 Gauss and the centre). det F ≤ 0 is an
@@ -56,7 +60,20 @@ class QuadElement {
   /// positive min_det_F is a folded (bow-tie) element, a state the integration points do not see.
   double min_corner_det_F(const Vec8& x) const;
   /// ∇_X N_I at the element centre (rows I), for stresses evaluated there.
-  const Eigen::Matrix<double, 4, 2>& centre_gradients() const { return centre_.G; }
+  Eigen::Ref<const Eigen::MatrixX2d> centre_gradients() const override { return centre_G_; }
+
+  // ---- PlaneElement: the functions above on interleaved coordinates
+  int num_nodes() const override { return 4; }
+  void internal_force(const double* x, double E, double nu, double t, double* f,
+                      double* K) const override;
+  void internal_force_nu_derivative(const double* x, double E, double nu, double t,
+                                    double* df) const override;
+  double strain_energy(const double* x, double E, double nu, double t) const override;
+  Eigen::Ref<const Eigen::MatrixXd> unit_mass() const override { return unit_mass_dyn_; }
+  Eigen::Ref<const Eigen::VectorXd> shape_integrals() const override { return shape_int_dyn_; }
+  void centre_strain(const double* x, Eigen::Vector3d& E, Mat2& F) const override;
+  double min_det_F(const double* x) const override;
+  double min_corner_det_F(const double* x) const override;
 
  private:
   struct Point {
@@ -70,6 +87,22 @@ class QuadElement {
   Mat4 unit_mass_ = Mat4::Zero();
   Eigen::Vector4d shape_int_ = Eigen::Vector4d::Zero();
   double area_ = 0;
+  // the same, in the interface's dynamic types
+  Eigen::MatrixXd unit_mass_dyn_;
+  Eigen::VectorXd shape_int_dyn_;
+  Eigen::MatrixX2d centre_G_;
+};
+
+/// The bilinear quadrilateral's shape: sub-cells of the parent square (midpoint rule), marching
+/// squares for contours (a saddle decided by the mean of the four nodal values).
+class QuadShape final : public CellShape {
+ public:
+  int num_nodes() const override { return 4; }
+  double area(const Vec2* X) const override;
+  double min_det_J(const Vec2* X) const override;
+  void samples(const Vec2* X, int n, std::vector<CellSample>& out) const override;
+  void contour(const Vec2* X, const double* phi,
+               std::vector<std::pair<Vec2, Vec2>>& out) const override;
 };
 
 }  // namespace lsmbs

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/element_types.hpp"
 
 namespace lsmbs {
 
@@ -30,9 +31,8 @@ DesignMap::DesignMap(const Mesh2D& mesh, LevelSet level_set, MappingOptions opt)
   radius_.resize(ne);
   std::vector<double> h(ne);
   for (int e = 0; e < ne; ++e) {
-    const auto& q = mesh.quads[e];
-    const Vec2 d1 = mesh.nodes[q[2]] - mesh.nodes[q[0]], d2 = mesh.nodes[q[3]] - mesh.nodes[q[1]];
-    area_[e] = 0.5 * (d1.x() * d2.y() - d1.y() * d2.x());
+    const Cell& q = mesh.cells[static_cast<size_t>(e)];
+    area_[e] = element_type(q.type).shape->area(mesh.cell_nodes(e).data());
     const Vec2 c = mesh.centroid(e);
     double r = 0;
     for (int k : q) r = std::max(r, (mesh.nodes[k] - c).norm());
@@ -79,8 +79,9 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
   const double cut_dist = kTailBands * eps_;
   const int n = opt_.subgrid;
   int cut = 0, band = 0;
+  std::vector<CellSample> samples;
   for (int e = 0; e < ne; ++e) {
-    const auto& q = mesh_->quads[e];
+    const Cell& q = mesh_->cells[static_cast<size_t>(e)];
     // classification
     const Vec2 c = mesh_->centroid(e);
     double dmin = std::abs(ls_.evaluate(c, vals, nullptr));
@@ -100,32 +101,25 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
     // on both sides of it
     bool inside = dc > 0, outside = dc <= 0;
     for (int k : q) (ls_.evaluate(mesh_->nodes[k], vals, nullptr) > 0 ? inside : outside) = true;
-    // sub-grid integration over the parent square, midpoint rule per sub-cell
-    const Vec2 X0 = mesh_->nodes[q[0]], X1 = mesh_->nodes[q[1]], X2 = mesh_->nodes[q[2]],
-               X3 = mesh_->nodes[q[3]];
+    // sub-cell integration over the cell, midpoint rule per sub-cell (CellShape::samples)
+    samples.clear();
+    element_type(q.type).shape->samples(mesh_->cell_nodes(e).data(), n, samples);
     double H = 0, W = 0;
     std::fill(acc.begin(), acc.end(), 0.0);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const double xi = -1 + (2 * i + 1.0) / n, eta = -1 + (2 * j + 1.0) / n;
-        const double N0 = 0.25 * (1 - xi) * (1 - eta), N1 = 0.25 * (1 + xi) * (1 - eta),
-                     N2 = 0.25 * (1 + xi) * (1 + eta), N3 = 0.25 * (1 - xi) * (1 + eta);
-        const Vec2 x = N0 * X0 + N1 * X1 + N2 * X2 + N3 * X3;
-        const Vec2 dxi = 0.25 * ((1 - eta) * (X1 - X0) + (1 + eta) * (X2 - X3));
-        const Vec2 deta = 0.25 * ((1 - xi) * (X3 - X0) + (1 + xi) * (X2 - X1));
-        const double w = (dxi.x() * deta.y() - dxi.y() * deta.x()) * (4.0 / (n * n));
-        const double D = ls_.evaluate(x, vals, dmu_dp ? grad.data() : nullptr);
-        (D > 0 ? inside : outside) = true;
-        const double z = D / eps_;
-        // logistic H*(D) and its derivative, written to stay finite for large |z|
-        const double ez = std::exp(-std::abs(z));
-        const double h = z >= 0 ? 1 / (1 + ez) : ez / (1 + ez);
-        const double dh = ez / ((1 + ez) * (1 + ez)) / eps_;
-        H += w * h;
-        W += w;
-        if (dmu_dp)
-          for (int k = 0; k < nv; ++k) acc[k] += w * dh * grad[k];
-      }
+    for (const CellSample& smp : samples) {
+      const double w = smp.w;
+      const double D = ls_.evaluate(smp.x, vals, dmu_dp ? grad.data() : nullptr);
+      (D > 0 ? inside : outside) = true;
+      const double z = D / eps_;
+      // logistic H*(D) and its derivative, written to stay finite for large |z|
+      const double ez = std::exp(-std::abs(z));
+      const double h = z >= 0 ? 1 / (1 + ez) : ez / (1 + ez);
+      const double dh = ez / ((1 + ez) * (1 + ez)) / eps_;
+      H += w * h;
+      W += w;
+      if (dmu_dp)
+        for (int k = 0; k < nv; ++k) acc[k] += w * dh * grad[k];
+    }
     cut += inside && outside;
     const double s = (1 - opt_.mu_min) / W;
     mu[e] = opt_.mu_min + s * H;

@@ -232,8 +232,10 @@ struct Loader {
                       nx, ny, nx * ny, kMaxRectangleElements);
         el.fail(msg);
       }
+      // quadrilaterals, or each split into two triangles (the 3-node element's structured mesh)
+      const std::string cells = m.one_of("cells", {"quad4", "tri3"}, "quad4");
       mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx),
-                               static_cast<int>(ny));
+                               static_cast<int>(ny), cells);
     } else {
       const std::string f = resolve(m.string("file"));
       try {
@@ -265,10 +267,8 @@ struct Loader {
     o.rho = mat.positive("rho");
     mat.finish();
     o.thickness = r.positive("thickness");
-    o.integration =
-        r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full"
-            ? QuadIntegration::kFull
-            : QuadIntegration::kSelectiveShear;
+    o.full_integration =
+        r.one_of("integration", {"selective-shear", "full"}, "selective-shear") == "full";
     // Node sets by selector (mesh frame), added to the mesh's own (rectangle sides, Gmsh groups).
     if (auto ns = r.optional_child("node_sets")) {
       if (!ns->is_object()) ns->fail("expected an object {name: selector}");

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/element_types.hpp"
 #include "lsmbs/io/png.hpp"
 
 namespace lsmbs {
@@ -142,11 +143,12 @@ void write_design_png(const std::string& path, const Mesh2D& mesh, const Vec& mu
   };
   cv.fill(x0, y0, x1, y1, kBackground);
 
-  // elements: every pixel whose centre lies in the (convex) quad
+  // elements: every pixel whose centre lies in the (convex) cell
   for (int e = 0; e < mesh.num_elements(); ++e) {
-    const auto& q = mesh.quads[e];
-    Vec2 P[4], bl = Vec2::Constant(1e300), bu = Vec2::Constant(-1e300);
-    for (int k = 0; k < 4; ++k) {
+    const Cell& q = mesh.cells[static_cast<size_t>(e)];
+    const int nk = q.size();
+    Vec2 P[Cell::kMaxNodes], bl = Vec2::Constant(1e300), bu = Vec2::Constant(-1e300);
+    for (int k = 0; k < nk; ++k) {
       P[k] = to_px(mesh.nodes[q[k]]);
       bl = bl.cwiseMin(P[k]), bu = bu.cwiseMax(P[k]);
     }
@@ -156,10 +158,10 @@ void write_design_png(const std::string& path, const Mesh2D& mesh, const Vec& mu
       for (int x = std::max(x0, static_cast<int>(bl.x()));
            x <= std::min(x1 - 1, static_cast<int>(bu.x())); ++x) {
         const Vec2 c(x + 0.5, y + 0.5);
-        bool in = true;  // same-side test of the centre against the four edges
+        bool in = true;  // same-side test of the centre against the edges
         double sgn = 0;
-        for (int k = 0; k < 4 && in; ++k) {
-          const Vec2 a = P[k], b = P[(k + 1) % 4];
+        for (int k = 0; k < nk && in; ++k) {
+          const Vec2 a = P[k], b = P[(k + 1) % nk];
           const double cr = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
           if (cr != 0) {
             if (sgn == 0)
@@ -172,38 +174,17 @@ void write_design_png(const std::string& path, const Mesh2D& mesh, const Vec& mu
       }
   }
 
-  // zero contours of the nodal level set: marching squares per quad (edge k joins nodes k, k+1)
+  // zero contours of the nodal level set, cell by cell (CellShape::contour: marching squares on
+  // quadrilaterals, marching triangles on triangles)
   if (phi.size()) {
-    for (const auto& q : mesh.quads) {
-      double f[4];
-      Vec2 X[4], cross[4];
-      bool cut[4];
-      int ncut = 0;
-      for (int k = 0; k < 4; ++k) f[k] = phi[q[k]], X[k] = mesh.nodes[q[k]];
-      for (int k = 0; k < 4; ++k) {
-        const int l = (k + 1) % 4;
-        cut[k] = (f[k] > 0) != (f[l] > 0);
-        if (cut[k]) {
-          cross[k] = X[k] + f[k] / (f[k] - f[l]) * (X[l] - X[k]);
-          ++ncut;
-        }
-      }
-      auto draw = [&](int a, int b) {
-        cv.segment(to_px(cross[a]), to_px(cross[b]), kContour, x0, y0, x1, y1);
-      };
-      if (ncut == 2) {
-        int a = -1, b = -1;
-        for (int k = 0; k < 4; ++k)
-          if (cut[k]) (a < 0 ? a : b) = k;
-        draw(a, b);
-      } else if (ncut == 4) {  // saddle: the centre's sign says which corners are cut off
-        const bool centre = (f[0] + f[1] + f[2] + f[3]) / 4 > 0;
-        if (centre == (f[0] > 0)) {
-          draw(0, 1), draw(2, 3);
-        } else {
-          draw(3, 0), draw(1, 2);
-        }
-      }
+    std::vector<std::pair<Vec2, Vec2>> segments;
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      const Cell& q = mesh.cells[static_cast<size_t>(e)];
+      double f[Cell::kMaxNodes];
+      for (int k = 0; k < q.size(); ++k) f[k] = phi[q[k]];
+      segments.clear();
+      element_type(q.type).shape->contour(mesh.cell_nodes(e).data(), f, segments);
+      for (const auto& [a, b] : segments) cv.segment(to_px(a), to_px(b), kContour, x0, y0, x1, y1);
     }
   }
   cv.frame(x0, y0, x1, y1);

@@ -15,6 +15,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/text.hpp"
 #include "lsmbs/core/version.hpp"
+#include "lsmbs/fem/element_types.hpp"
 
 namespace lsmbs {
 
@@ -156,7 +157,7 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
   const int nn = b.mesh.num_nodes(), ne = b.mesh.num_elements();
   VtuPiece v;
   for (int i = 0; i < nn; ++i) v.points.push_back(q.segment<2>(b.node_dof(i)));
-  for (const auto& c : b.mesh.quads) v.add_cell({c[0], c[1], c[2], c[3]}, 9);
+  for (const auto& c : b.mesh.cells) v.add_cell(c.begin(), c.end(), element_type(c.type).vtk_type);
   // Points are the deformed positions x (the PVD animates the motion as it is). Two vectors:
   // total_displacement x − X (X: the node at t = 0), and elastic_displacement x − (x̄ + R(θ)(X −
   // X̄)), the motion left after the rigid motion that fits the nodes best in least squares
@@ -185,12 +186,12 @@ void write_vtu(const std::string& path, const FlexibleBody& b, const Vec& q, con
   const Vec& mu = p.fields[b.field];
   VtuArray vm{"von_mises", 1, {}};
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
+  double x[kMaxLocalDofs];
   for (int e = 0; e < ne; ++e) {
-    QuadElement::Vec8 x;
-    for (int k = 0; k < 4; ++k) x.segment<2>(2 * k) = q.segment<2>(b.node_dof(b.mesh.quads[e][k]));
+    b.element_coordinates(e, q, x);
     Eigen::Vector3d Ev;
     Mat2 F;
-    b.elements[e].centre_strain(x, Ev, F);
+    b.elements[e]->centre_strain(x, Ev, F);
     const double E = mu[e] * E0, c = E / (1 - nu * nu);
     Mat2 S;
     S << c * (Ev[0] + nu * Ev[1]), c * (1 - nu) / 2 * Ev[2], c * (1 - nu) / 2 * Ev[2],
@@ -252,7 +253,7 @@ void write_rigid_vtu(const std::string& path, const RigidBody& b, const Vec& q) 
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi) {
   VtuPiece v;
   v.points = mesh.nodes;
-  for (const auto& c : mesh.quads) v.add_cell({c[0], c[1], c[2], c[3]}, 9);
+  for (const auto& c : mesh.cells) v.add_cell(c.begin(), c.end(), element_type(c.type).vtk_type);
   v.point_data = {{"phi", 1, std::vector<double>(phi.data(), phi.data() + phi.size())}};
   v.cell_data = {{"mu", 1, std::vector<double>(mu.data(), mu.data() + mu.size())}};
   v.write(path);

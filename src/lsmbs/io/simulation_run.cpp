@@ -248,8 +248,7 @@ SimulationResult run_simulation(const Case& cs, const RunOptions& ro) {
         const auto& mx = rec.stress_max_[sm->name()];
         if (mx.element < 0) continue;
         const FlexibleBody& b = sm->body();
-        Vec2 c = Vec2::Zero();
-        for (int k = 0; k < 4; ++k) c += 0.25 * b.mesh.nodes[b.mesh.quads[mx.element][k]];
+        const Vec2 c = b.mesh.centroid(mx.element);
         const auto& o = sm->options();
         st[sm->name()] = {
             {"body", b.name},

@@ -47,9 +47,18 @@ class ForceElement {
   virtual bool uses_parameter(int /*j*/) const { return false; }
   /// Adds ∂r/∂p_j (local) at fixed state: the exact partial derivative of the element's residual
   /// (eq. 7 without the constraint term) with respect to scalar parameter j. Nothing is added
-  /// when the element does not read p_j. Material fields μ_e are handled by the Model.
+  /// when the element does not read p_j.
   virtual void param_derivative(const LocalState& s, const ModelParams& p, int j,
                                 LocalVec& dr) const = 0;
+  /// The entry of a material field (μ_e of eq. 3) the element reads: field index and entry, or
+  /// {-1, -1} when it reads none.
+  struct MaterialEntry {
+    int field = -1, entry = -1;
+  };
+  virtual MaterialEntry material_entry() const { return {}; }
+  /// Adds ∂r/∂μ (local) for the entry material_entry() names, at fixed state.
+  virtual void field_derivative(const LocalState& /*s*/, const ModelParams& /*p*/,
+                                LocalVec& /*dr*/) const {}
   /// Whether ∂r/∂q̈ (the mass matrix) depends on q (rigid bodies with an offset centre of mass).
   virtual bool mass_depends_on_q() const { return false; }
   /// Whether r is linear in (q̇, q̈) at fixed q (then r(q̇ + δq̇, q̈ + δq̈) − r = M δq̈ + C δq̇

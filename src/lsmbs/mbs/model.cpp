@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/element_types.hpp"
 
 namespace lsmbs {
 
@@ -62,12 +63,9 @@ FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
   body->elements.clear();
   body->elements.reserve(body->mesh.num_elements());
   for (int e = 0; e < body->mesh.num_elements(); ++e) {
-    const auto& q = body->mesh.quads[e];
+    const ElementType& type = element_type(body->mesh.cells[static_cast<size_t>(e)].type);
     try {
-      body->elements.emplace_back(
-          std::array<Vec2, 4>{body->mesh.nodes[q[0]], body->mesh.nodes[q[1]],
-                              body->mesh.nodes[q[2]], body->mesh.nodes[q[3]]},
-          body->integration);
+      body->elements.push_back(type.make(body->mesh.cell_nodes(e).data(), body->element_options));
     } catch (const Error& err) {
       throw Error("flexible body '" + body->name + "', element " + std::to_string(e) + ": " +
                   err.what());
@@ -77,7 +75,7 @@ FlexibleBody& Model::add_flexible_body(FlexibleBody b) {
   flex_.push_back(std::move(body));
   FlexibleBody* fb = flex_.back().get();
   fb->first_force = static_cast<int>(forces_.size());
-  for (int e = 0; e < fb->mesh.num_elements(); ++e) add_force(std::make_unique<QuadForce>(fb, e));
+  for (int e = 0; e < fb->mesh.num_elements(); ++e) add_force(std::make_unique<PlaneForce>(fb, e));
   length_scale_ = std::max(length_scale_ == 1 ? 0.0 : length_scale_, fb->mesh.size());
   return *fb;
 }
@@ -453,11 +451,10 @@ double Model::strain_energy(const Vec& q, const ModelParams& p) const {
   for (const auto& b : flex_) {
     const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param],
                  E0 = p.scalars[b->E_param];
+    double x[kMaxLocalDofs];
     for (int e = 0; e < b->mesh.num_elements(); ++e) {
-      QuadElement::Vec8 x;
-      for (int i = 0; i < 4; ++i)
-        x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
-      W += b->elements[e].strain_energy(x, p.fields[b->field][e] * E0, nu, t);
+      b->element_coordinates(e, q, x);
+      W += b->elements[e]->strain_energy(x, p.fields[b->field][e] * E0, nu, t);
     }
   }
   return W;
@@ -469,16 +466,15 @@ Model::Inversion Model::most_compressed_element(const Vec& q, const ModelParams&
     const Vec& mu = p.fields[b->field];
     for (int e = 0; e < b->mesh.num_elements(); ++e) {
       if (!(mu[e] > kVoidMaterial)) continue;
-      QuadElement::Vec8 x;
-      for (int i = 0; i < 4; ++i)
-        x.segment<2>(2 * i) = q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
-      if (const double d = b->elements[e].min_det_F(x); !(d >= w.det_F)) {  // NaN counts too
+      double x[kMaxLocalDofs];
+      b->element_coordinates(e, q, x);
+      if (const double d = b->elements[e]->min_det_F(x); !(d >= w.det_F)) {  // NaN counts too
         w.det_F = d;
         w.mu = mu[e];
         w.body = b.get();
         w.element = e;
       }
-      if (const double d = b->elements[e].min_corner_det_F(x); !(d >= w.corner_det_F)) {
+      if (const double d = b->elements[e]->min_corner_det_F(x); !(d >= w.corner_det_F)) {
         w.corner_det_F = d;
         w.corner_mu = mu[e];
         w.corner_body = b.get();
@@ -621,8 +617,7 @@ void Model::mass_rate_product(const State& s, const ModelParams& p, const Vec& w
 std::vector<int> Model::forces_touched_by(const ParamDirection& dir) const {
   std::vector<char> mark(forces_.size(), 0);
   for (const auto& f : dir.fields)
-    for (const auto& b : flex_)
-      if (b->field == f.field) mark[b->first_force + f.element] = 1;
+    if (const int e = force_of_field_entry(f.field, f.element); e >= 0) mark[e] = 1;
   for (const auto& [j, v] : dir.scalars)
     for (size_t e = 0; e < forces_.size(); ++e)
       if (forces_[e]->uses_parameter(j)) mark[e] = 1;
@@ -632,37 +627,61 @@ std::vector<int> Model::forces_touched_by(const ParamDirection& dir) const {
   return out;
 }
 
+void Model::for_each_param_partial(
+    const State& s, const ModelParams& p, const ParamDirection& support,
+    const std::function<void(bool field, size_t k, std::span<const int> dofs, const LocalVec& dr)>&
+        fn) const {
+  LocalState ls;
+  ls.t = s.t;
+  LocalVec dr;
+  auto local = [&](const ForceElement& f) {
+    const auto d = f.dofs();
+    gather(s.q, d, ls.q);
+    gather(s.v, d, ls.v);
+    gather(s.a, d, ls.a);
+    dr.setZero(static_cast<Eigen::Index>(d.size()));
+    return d;
+  };
+  // material fields: the element that reads entry (field, element) adds its ∂r_e/∂μ_e
+  for (size_t k = 0; k < support.fields.size(); ++k) {
+    const auto& f = support.fields[k];
+    const int e = force_of_field_entry(f.field, f.element);
+    if (e < 0) continue;
+    const auto d = local(*forces_[e]);
+    forces_[e]->field_derivative(ls, p, dr);
+    fn(true, k, d, dr);
+  }
+  // scalar parameters: each element that reads p_j adds its exact ∂r_e/∂p_j
+  for (size_t k = 0; k < support.scalars.size(); ++k) {
+    const int j = support.scalars[k].first;
+    for (const auto& f : forces_) {
+      if (!f->uses_parameter(j)) continue;
+      const auto d = local(*f);
+      f->param_derivative(ls, p, j, dr);
+      fn(false, k, d, dr);
+    }
+  }
+}
+
+int Model::force_of_field_entry(int field, int entry) const {
+  for (const auto& b : flex_)
+    if (b->field == field) {
+      const int e = b->first_force + entry;
+      const auto m = forces_[static_cast<size_t>(e)]->material_entry();
+      return m.field == field && m.entry == entry ? e : -1;
+    }
+  return -1;
+}
+
 void Model::residual_param_derivative(const State& s, const ModelParams& p,
                                       const ParamDirection& dir, Vec& out) const {
   out.setZero(n());
-  LocalVec r;
-  // material fields: r_e linear in μ_e
-  for (const auto& f : dir.fields) {
-    const FlexibleBody* body = nullptr;
-    for (const auto& b : flex_)
-      if (b->field == f.field) body = b.get();
-    if (!body) continue;
-    const int e = body->first_force + f.element;
-    element_residual(e, s, p, r);
-    const double mu = p.fields[f.field][f.element];
-    const auto d = forces_[e]->dofs();
-    for (size_t i = 0; i < d.size(); ++i) out[d[i]] += f.value * r[i] / mu;
-  }
-  // scalar parameters: each element that reads p_j adds its exact ∂r_e/∂p_j
-  LocalState ls;
-  ls.t = s.t;
-  for (const auto& [j, dv] : dir.scalars) {
-    for (const auto& f : forces_) {
-      if (!f->uses_parameter(j)) continue;
-      const auto d = f->dofs();
-      gather(s.q, d, ls.q);
-      gather(s.v, d, ls.v);
-      gather(s.a, d, ls.a);
-      r.setZero(static_cast<Eigen::Index>(d.size()));
-      f->param_derivative(ls, p, j, r);
-      for (size_t i = 0; i < d.size(); ++i) out[d[i]] += dv * r[i];
-    }
-  }
+  for_each_param_partial(s, p, dir,
+                         [&](bool field, size_t k, std::span<const int> d, const LocalVec& dr) {
+                           const double w = field ? dir.fields[k].value : dir.scalars[k].second;
+                           for (size_t i = 0; i < d.size(); ++i)
+                             out[d[i]] += w * dr[static_cast<Eigen::Index>(i)];
+                         });
 }
 
 void Model::residual_param_contraction(const State& s, const ModelParams& p,
@@ -671,36 +690,12 @@ void Model::residual_param_contraction(const State& s, const ModelParams& p,
   const auto ncols = Y.cols();
   fields.setZero(static_cast<Eigen::Index>(support.fields.size()), ncols);
   scalars.setZero(static_cast<Eigen::Index>(support.scalars.size()), ncols);
-  LocalVec r;
-  for (size_t k = 0; k < support.fields.size(); ++k) {
-    const auto& f = support.fields[k];
-    const FlexibleBody* body = nullptr;
-    for (const auto& b : flex_)
-      if (b->field == f.field) body = b.get();
-    if (!body) continue;
-    const int e = body->first_force + f.element;
-    element_residual(e, s, p, r);
-    const double mu = p.fields[f.field][f.element];  // r_e linear in μ_e (eq. 3)
-    const auto d = forces_[e]->dofs();
-    for (size_t i = 0; i < d.size(); ++i)
-      fields.row(static_cast<Eigen::Index>(k)) += (r[i] / mu) * Y.row(d[i]);
-  }
-  LocalState ls;
-  ls.t = s.t;
-  for (size_t k = 0; k < support.scalars.size(); ++k) {
-    const int j = support.scalars[k].first;
-    for (const auto& f : forces_) {
-      if (!f->uses_parameter(j)) continue;
-      const auto d = f->dofs();
-      gather(s.q, d, ls.q);
-      gather(s.v, d, ls.v);
-      gather(s.a, d, ls.a);
-      r.setZero(static_cast<Eigen::Index>(d.size()));
-      f->param_derivative(ls, p, j, r);
-      for (size_t i = 0; i < d.size(); ++i)
-        scalars.row(static_cast<Eigen::Index>(k)) += r[i] * Y.row(d[i]);
-    }
-  }
+  for_each_param_partial(s, p, support,
+                         [&](bool field, size_t k, std::span<const int> d, const LocalVec& dr) {
+                           auto row = (field ? fields : scalars).row(static_cast<Eigen::Index>(k));
+                           for (size_t i = 0; i < d.size(); ++i)
+                             row += dr[static_cast<Eigen::Index>(i)] * Y.row(d[i]);
+                         });
 }
 
 std::vector<double> Model::time_kinks(double t0, double t1) const {

@@ -10,6 +10,7 @@
 // The unknown vector of the Newton iteration is [q; λ] (n = nq + nc); λ is the scaled
 // multiplier, the physical constraint force is kλ.
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -125,8 +126,9 @@ class Model {
                             Mat& out) const;
   /// ∂R/∂p along a parameter direction at fixed state (size n; the constraint rows are zero:
   /// constraints do not depend on design parameters). Only elements the direction touches are
-  /// evaluated. Exact: material fields through the linearity of an element's residual in μ_e
-  /// (eq. 3: ∂r_e/∂μ_e = r_e/μ_e), scalar parameters through ForceElement::param_derivative.
+  /// evaluated. Exact: material fields through ForceElement::field_derivative (for the planar
+  /// elements eq. 3 makes r_e linear in μ_e), scalar parameters through
+  /// ForceElement::param_derivative.
   void residual_param_derivative(const State& s, const ModelParams& p, const ParamDirection& d,
                                  Vec& out) const;
   /// The transposes of mass_damping_product: MtY = Mᵀ Y, CtY = Cᵀ Y (Y: nq × ncols), element
@@ -141,6 +143,16 @@ class Model {
   void residual_param_contraction(const State& s, const ModelParams& p,
                                   const ParamDirection& support, const Mat& Y, Mat& fields,
                                   Mat& scalars) const;
+  /// The force element that reads entry `entry` of material field `field`, or −1.
+  int force_of_field_entry(int field, int entry) const;
+  /// Each element's partial derivative of its residual with respect to each entry of `support`
+  /// (material-field entries first, then scalar parameters), at fixed state: fn(is_field, k,
+  /// the element's dofs, ∂r_e/∂(entry k)) — the one loop behind residual_param_derivative and
+  /// residual_param_contraction.
+  void for_each_param_partial(
+      const State& s, const ModelParams& p, const ParamDirection& support,
+      const std::function<void(bool field, size_t k, std::span<const int> dofs,
+                               const LocalVec& dr)>& fn) const;
   /// Residual contribution of one force element (local vector over its dofs()).
   void element_residual(int force, const State& s, const ModelParams& p, LocalVec& r) const;
   /// Ṁ w = Σ_e [∂(M_e(q) w_e)/∂q_e] q̇_e (size nq): the rate of the mass matrix along the motion
@@ -175,8 +187,8 @@ class Model {
   /// ∂(Φ_q q̇)/∂q (nc × nq): row i is (∂²Φ_i/∂q² q̇)ᵀ, full local pattern kept.
   SpMat velocity_constraint_jacobian(double t, const Vec& q, const Vec& v) const;
   /// The flexible element with the smallest det F at its integration points
-  /// (QuadElement::min_det_F) and the one with the smallest det F at a corner
-  /// (QuadElement::min_corner_det_F), among the elements with μ_e > kVoidMaterial: a void element
+  /// (PlaneElement::min_det_F) and the one with the smallest det F at a corner
+  /// (PlaneElement::min_corner_det_F), among the elements with μ_e > kVoidMaterial: a void element
   /// of a level-set hole (ersatz material) may be squeezed through itself without consequence for
   /// the structure. det_F = +inf and body = null for a model without such elements. det_F ≤ 0 is an
   /// inverted (reflected) element: a stress-free spurious state of the St Venant–Kirchhoff

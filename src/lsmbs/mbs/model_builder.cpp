@@ -267,7 +267,7 @@ void ModelBuilder::flexible_body(const std::string& name, Mesh2D mesh,
   b.nu_param = param(e, "nu", o.nu);
   b.rho_param = param(e, "rho", o.rho);
   b.thickness_param = param(e, "thickness", o.thickness);
-  b.integration = o.integration;
+  b.element_options.full_integration = o.full_integration;
   const FlexibleBody* added = nullptr;
   try {  // the element geometry is checked here (inverted or degenerate quadrilaterals)
     added = &m_->add_flexible_body(std::move(b));

@@ -7,7 +7,7 @@
 //  * a rigid body is three unknowns (x, y, θ of its reference point) and a RigidInertia element
 //    (mass m at the body-frame offset c, rotary inertia J_c about the centre of mass) with the
 //    parameters "<body>.mass" and "<body>.inertia";
-//  * a flexible body is the nodal positions of its placed mesh and one QuadForce per quad, with
+//  * a flexible body is the nodal positions of its placed mesh and one PlaneForce per cell, with
 //    the parameters "<body>.E", "<body>.nu", "<body>.rho" and "<body>.thickness" (eq. 3);
 //  * a revolute joint is a PointCoincidence, by default with the ground point at the initial
 //    position of point a; a rigid connection is one PointCoincidence per node of a node set
@@ -93,7 +93,9 @@ struct FlexibleBodyOptions {
   double nu = 0;         ///< Poisson's ratio in [0, 0.5)
   double rho = 0;        ///< density ρ0 > 0
   double thickness = 0;  ///< plane-stress thickness > 0
-  QuadIntegration integration = QuadIntegration::kSelectiveShear;
+  /// Every strain term at the full Gauss rule (a Q4 then locks in bending); default: the
+  /// element's own remedy (fem/plane_element.hpp, ElementOptions)
+  bool full_integration = false;
   Vec2 origin = Vec2::Zero();  ///< placement of the mesh frame at t = 0: x = origin + R(angle) X
   double angle = 0;
   /// Rigid velocity field at t = 0, v + ω × (x − origin); either given: the whole field is kept.

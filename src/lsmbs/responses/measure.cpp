@@ -282,15 +282,11 @@ void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelPa
   for (const auto& b : m.flexible_bodies()) {
     const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param],
                  E0 = p.scalars[b->E_param];
+    double x[kMaxLocalDofs], f[kMaxLocalDofs];
     for (int e = 0; e < b->mesh.num_elements(); ++e) {
-      QuadElement::Vec8 x, f;
-      for (int i = 0; i < 4; ++i)
-        x.segment<2>(2 * i) = s.q.segment<2>(b->node_dof(b->mesh.quads[e][i]));
-      b->elements[e].internal_force(x, p.fields[b->field][e] * E0, nu, t, f, nullptr);
-      for (int i = 0; i < 4; ++i) {
-        g.dq.emplace_back(b->node_dof(b->mesh.quads[e][i]), f[2 * i]);
-        g.dq.emplace_back(b->node_dof(b->mesh.quads[e][i]) + 1, f[2 * i + 1]);
-      }
+      const int nd = b->element_coordinates(e, s.q, x);
+      b->elements[e]->internal_force(x, p.fields[b->field][e] * E0, nu, t, f, nullptr);
+      for (int k = 0; k < nd; ++k) g.dq.emplace_back(b->element_dof(e, k), f[k]);
     }
   }
 }
@@ -336,62 +332,6 @@ void ConstraintForceMeasure::evaluate_scaled(const Model&, const State& s, const
 
 namespace lsmbs {
 namespace {
-// Cauchy von Mises stress at an element centre and its derivatives with respect to the 8 node
-// coordinates: σ = F S Fᵀ / J with S = D E (plane stress, E0 and ν), differentiated along
-// dF = e_i ⊗ ∇_X N_I for each coordinate (i, I):
-//   dE = ½(dFᵀF + FᵀdF), dS = D dE, dτ = dF S Fᵀ + F dS Fᵀ + F S dFᵀ, dJ = J tr(F⁻¹ dF),
-//   dσ = (dτ − σ dJ)/J, dσ_vm = ((2σ11 − σ22) dσ11 + (2σ22 − σ11) dσ22 + 6 σ12 dσ12)/(2σ_vm).
-struct CentreStress {
-  double vm = 0;
-  Eigen::Matrix<double, 8, 1> dvm = Eigen::Matrix<double, 8, 1>::Zero();
-};
-
-Mat2 pk2(const Mat2& F, double c, double nu) {  // S = D E, c = E0/(1 − ν²)
-  const Mat2 E = 0.5 * (F.transpose() * F - Mat2::Identity());
-  Mat2 S;
-  S << c * (E(0, 0) + nu * E(1, 1)), c * (1 - nu) * E(0, 1), c * (1 - nu) * E(0, 1),
-      c * (E(1, 1) + nu * E(0, 0));
-  return S;
-}
-
-CentreStress centre_stress(const Eigen::Matrix<double, 4, 2>& G, const double* x, double E0,
-                           double nu, bool derivatives) {
-  Mat2 F = Mat2::Zero();
-  for (int I = 0; I < 4; ++I) F += Vec2(x[2 * I], x[2 * I + 1]) * G.row(I);
-  const double c = E0 / (1 - nu * nu), J = F.determinant();
-  const Mat2 S = pk2(F, c, nu);
-  const Mat2 sig = F * S * F.transpose() / J;
-  CentreStress r;
-  const double s11 = sig(0, 0), s22 = sig(1, 1), s12 = sig(0, 1);
-  r.vm = std::sqrt(std::max(0.0, s11 * s11 - s11 * s22 + s22 * s22 + 3 * s12 * s12));
-  if (!derivatives || r.vm == 0) return r;  // subgradient 0 at zero stress
-  const Mat2 Finv = F.inverse();
-  for (int k = 0; k < 8; ++k) {
-    Mat2 dF = Mat2::Zero();
-    dF.row(k % 2) = G.row(k / 2);
-    const Mat2 dE = 0.5 * (dF.transpose() * F + F.transpose() * dF);
-    Mat2 dS;
-    dS << c * (dE(0, 0) + nu * dE(1, 1)), c * (1 - nu) * dE(0, 1), c * (1 - nu) * dE(0, 1),
-        c * (dE(1, 1) + nu * dE(0, 0));
-    const Mat2 dtau = dF * S * F.transpose() + F * dS * F.transpose() + F * S * dF.transpose();
-    const double dJ = J * (Finv * dF).trace();
-    const Mat2 dsig = (dtau - sig * dJ) / J;
-    r.dvm[k] =
-        ((2 * s11 - s22) * dsig(0, 0) + (2 * s22 - s11) * dsig(1, 1) + 6 * s12 * dsig(0, 1)) /
-        (2 * r.vm);
-  }
-  return r;
-}
-
-void element_coordinates(const FlexibleBody& b, int e, const Vec& q, double* x) {
-  const auto& quad = b.mesh.quads[e];
-  for (int k = 0; k < 4; ++k) {
-    const int d = b.node_dof(quad[k]);
-    x[2 * k] = q[d];
-    x[2 * k + 1] = q[d + 1];
-  }
-}
-
 double relaxed(double mu, double q) { return mu > 0 ? std::pow(mu, q) : 0.0; }
 }  // namespace
 
@@ -402,11 +342,10 @@ void StressMeasure::element_stresses(const State& s, const ModelParams& p,
   const Vec& mu = p.fields[b.field];
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
   out.resize(ne);
-  double x[8];
+  double x[kMaxLocalDofs];
   for (int e = 0; e < ne; ++e) {
-    element_coordinates(b, e, s.q, x);
-    out[e] = relaxed(mu[e], o_.relaxation) *
-             centre_stress(b.elements[e].centre_gradients(), x, E0, nu, false).vm;
+    b.element_coordinates(e, s.q, x);
+    out[e] = relaxed(mu[e], o_.relaxation) * b.elements[e]->centre_stress(x, E0, nu, false).vm;
   }
 }
 
@@ -463,14 +402,14 @@ void StressMeasure::gradient(const Model&, const State& s, const ModelParams& p,
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
   const int nn = b.mesh.num_nodes();
   dq.setZero(2 * nn);
-  double x[8];
+  double x[kMaxLocalDofs];
   for (int e = 0; e < static_cast<int>(se.size()); ++e) {
     if (w[e] == 0) continue;
-    element_coordinates(b, e, s.q, x);
-    const CentreStress cs = centre_stress(b.elements[e].centre_gradients(), x, E0, nu, true);
+    const int nd = b.element_coordinates(e, s.q, x);
+    const PointStress cs = b.elements[e]->centre_stress(x, E0, nu, true);
     const double f = w[e] * relaxed(mu[e], o_.relaxation);
-    const auto& quad = b.mesh.quads[e];
-    for (int k = 0; k < 8; ++k) dq[2 * quad[k / 2] + k % 2] += f * cs.dvm[k];
+    const Cell& cell = b.mesh.cells[static_cast<size_t>(e)];
+    for (int k = 0; k < nd; ++k) dq[2 * cell[k / 2] + k % 2] += f * cs.dvm[k];
   }
   for (int i = 0; i < 2 * nn; ++i)
     if (dq[i] != 0) g.dq.emplace_back(b.dof0 + i, dq[i]);

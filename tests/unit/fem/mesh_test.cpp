@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/element_types.hpp"
 
 using namespace lsmbs;
 
@@ -90,18 +91,28 @@ $EndElements
   for (int n : m.node_sets.at("left")) EXPECT_EQ(m.nodes[n].x(), 0.0);
 }
 
-TEST(Mesh2D, GmshTrianglesAreRejectedWithTheFileName) {
+TEST(Mesh2D, GmshTrianglesAreReadAndOtherCellTypesRejectedWithTheFileName) {
   const std::string msh =
       "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 3\n2 1 0 3\n1\n2\n3\n0 0 0\n1 0 0\n0 1 "
       "0\n$EndNodes\n"
-      "$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n";
-  const std::string p = write_temp("tri.msh", msh);
+      "$Elements\n1 1 1 1\n2 1 2 1\n1 1 3 2\n$EndElements\n";
+  // a clockwise triangle is read counter-clockwise: the right triangle of area 1/2
+  const Mesh2D m = Mesh2D::read_gmsh(write_temp("tri.msh", msh));
+  ASSERT_EQ(m.num_elements(), 1);
+  EXPECT_EQ(element_type(m.cells[0].type).nodes, 3);
+  EXPECT_DOUBLE_EQ(element_type(m.cells[0].type).shape->area(m.cell_nodes(0).data()), 0.5);
+  // a 6-node triangle (Gmsh type 9) is not a registered type
+  std::string six = msh;
+  six.replace(six.find("2 1 2 1\n1 1 3 2\n"), 16, "2 1 9 1\n1 1 3 2 1 2 3\n");
+  const std::string p = write_temp("tri6.msh", six);
   try {
     Mesh2D::read_gmsh(p);
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("tri.msh"), std::string::npos);
-    EXPECT_NE(std::string(e.what()).find("triangles are not supported"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("tri6.msh"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unsupported element type 9"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("2 (tri3)"), std::string::npos) << e.what();
   }
 }
 
@@ -191,13 +202,12 @@ TEST(Mesh2D, GmshReaderRefusesWhatItWouldMisread) {
   };
   const Bad bad[] = {
       {replaced(kTwoQuads, "3 2 3 6 5\n", "3 2 3 6 6\n"),
-       "bad.msh: line 41: quadrilateral 3 repeats node 6 (a quadrilateral has four distinct "
-       "corners)"},
+       "bad.msh: line 41: quadrilateral 3 repeats node 6 (its 4 corners must be distinct)"},
       {replaced(kTwoQuads, "3 2 3 6 5\n", "3 2 3 5 6\n"),
        "bad.msh: line 41: quadrilateral 3 is self-intersecting or degenerate (det J <= 0 at a "
        "Gauss point"},
       {crack_entities,
-       "bad.msh: line 37: nodes 2 (line 31) and 8 coincide at (1, 0): the quadrilaterals on "
+       "bad.msh: line 37: nodes 2 (line 31) and 8 coincide at (1, 0): the cells on "
        "either side are not connected there"},
       {replaced(kTwoQuads, "2\n3\n5\n6\n", "2\n2\n5\n6\n"),
        "bad.msh: line 31: node tag 2 is defined twice (first on line 30)"},

@@ -33,7 +33,11 @@ json every_element_case() {
      "mesh": {"type": "rectangle", "origin": [0, -0.01], "size": [0.1, 0.02], "elements": [4, 2]},
      "placement": {"origin": [0.3, 0.1], "angle": 0.4},
      "material": {"E": 1e7, "nu": 0.3, "rho": 1000}, "thickness": 0.005},
-    {"name": "rod", "type": "rigid", "position": [0.3, 0.1], "angle": 0.4, "mass": 0, "inertia": 0}
+    {"name": "rod", "type": "rigid", "position": [0.3, 0.1], "angle": 0.4, "mass": 0, "inertia": 0},
+    {"name": "tri_plate", "type": "flexible",
+     "mesh": {"type": "rectangle", "origin": [0, -0.01], "size": [0.08, 0.02], "elements": [3, 2], "cells": "tri3"},
+     "placement": {"origin": [0.5, 0.2], "angle": -0.3},
+     "material": {"E": 2e7, "nu": 0.25, "rho": 1200}, "thickness": 0.004}
   ],
   "joints": [
     {"name": "j_ground", "type": "revolute", "a": {"body": "crank", "at": [0, 0]}, "b": "ground"},
@@ -58,6 +62,8 @@ json every_element_case() {
      "fx": {"type": "table", "points": [[0, 0], [0.5, 2], [1, -1]]}, "fy": {"type": "constant", "value": 0.5}},
     {"name": "spring_body_node", "type": "spring_damper", "a": {"body": "crank", "at": [0.02, 0]}, "b": {"body": "plate", "nearest": [0, 0]},
      "stiffness": 1e3, "damping": 5, "free_length": 0.05},
+    {"name": "spring_tri", "type": "spring_damper", "a": {"body": "slider", "at": [0.0, 0.01]}, "b": {"body": "tri_plate", "nearest": [0.08, 0.01]},
+     "stiffness": 800, "damping": 3, "free_length": 0.1},
     {"name": "spring_bodies", "type": "spring_damper", "a": {"body": "floater", "at": [0.0, 0.01]}, "b": {"body": "link", "at": [0.05, 0.0]},
      "stiffness": 500, "damping": 2},
     {"name": "gas", "type": "pressure", "point": {"body": "slider", "at": [0.01, 0]}, "direction": [-1, 0], "area": 1e-3,
@@ -123,7 +129,7 @@ struct Fixture : ::testing::Test {
 
 TEST_F(Fixture, ModelContainsEveryElementType) {
   EXPECT_EQ(m.rigid_bodies().size(), 5u);
-  EXPECT_EQ(m.flexible_bodies().size(), 1u);
+  EXPECT_EQ(m.flexible_bodies().size(), 2u);  // quadrilaterals and triangles
   EXPECT_GT(m.nc(), 20);
   int torques = 0, rotational = 0;
   for (const auto& f : m.forces()) {
@@ -260,7 +266,7 @@ TEST_F(Fixture, VelocityConstraintJacobianIsTheDerivativeOfTheJacobianTimesTheVe
 
 TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
   // T = Σ_rigid ½ m |v_G|² + ½ J_G ω² (v_G = ẋ + ω R′(θ) c of the centre of mass at offset c from
-  // the reference point), + Σ_point masses ½ m |v_P|², + the plate ½ ρ t ∫ |v(X)|² dA with v the
+  // the reference point), + Σ_point masses ½ m |v_P|², + each plate's ½ ρ t ∫ |v(X)|² dA with v the
   // bilinear interpolation of the nodal velocities, integrated by 3 × 3 Gauss on each quad (exact:
   // |v|² det J is of degree ≤ 3 in each of ξ, η). Masses and offsets are those of the JSON above.
   double T = 0;
@@ -292,7 +298,7 @@ TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
   const double rho_t = 1000 * 0.005, g = std::sqrt(0.6), gp[3] = {-g, 0, g},
                gw[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
   const double xi_n[4] = {-1, 1, 1, -1}, eta_n[4] = {-1, -1, 1, 1};  // counter-clockwise corners
-  for (const auto& quad : plate.mesh.quads)
+  for (const auto& quad : plate.mesh.cells)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
         Vec2 v = Vec2::Zero(), dX_dxi = Vec2::Zero(), dX_deta = Vec2::Zero();
@@ -305,6 +311,21 @@ TEST_F(Fixture, KineticEnergyEqualsTheClosedFormOfEveryBodyAndPointMass) {
         const double detJ = dX_dxi.x() * dX_deta.y() - dX_dxi.y() * dX_deta.x();
         T += 0.5 * rho_t * gw[a] * gw[b] * detJ * v.squaredNorm();
       }
+  // the triangle plate: v linear on each triangle, ∫ N_I N_J dA = A (1 + δ_IJ) / 12, so
+  // ∫ |v|² dA = A/12 (Σ |v_I|² + |Σ v_I|²)
+  const FlexibleBody& tri = *m.find_flexible("tri_plate");
+  for (const auto& cell : tri.mesh.cells) {
+    const Vec2 X0 = tri.mesh.nodes[cell[0]], d1 = tri.mesh.nodes[cell[1]] - X0,
+               d2 = tri.mesh.nodes[cell[2]] - X0;
+    const double A = 0.5 * std::abs(d1.x() * d2.y() - d1.y() * d2.x());
+    Vec2 sum = Vec2::Zero();
+    double sq = 0;
+    for (int I = 0; I < 3; ++I) {
+      const Vec2 v = s.v.segment<2>(tri.node_dof(cell[I]));
+      sum += v, sq += v.squaredNorm();
+    }
+    T += 0.5 * 1200 * 0.004 * A / 12 * (sq + sum.squaredNorm());
+  }
   const double Tm = m.kinetic_energy(s, m.params());
   std::printf("kinetic energy: model %.15e, closed form %.15e (%.1e)\n", Tm, T,
               std::abs(Tm / T - 1));
@@ -386,14 +407,17 @@ TEST_F(Fixture, ParameterDerivativesMatchCentralDifferencesOfTheResidualForEvery
 }
 
 TEST_F(Fixture, ParameterDerivativeAlongMaterialFieldsAndScalarsMatchesCentralDifferences) {
-  // A direction that moves μ_e of every plate element and two scalar parameters at once:
+  // A direction that moves μ_e of every element of both plates (quadrilaterals, triangles) and
+  // two scalar parameters at once:
   // ∂R/∂p·d against central differences of R along d. R is linear in each μ_e (eq. 3) and in
   // k, c of a spring, so the difference is exact up to round-off: ε ‖R‖ / h with h = 1e-3.
-  const FlexibleBody& b = *m.find_flexible("plate");
   std::mt19937 g(13);
   std::uniform_real_distribution<double> u(-1, 1);
   ParamDirection d;
-  for (int e = 0; e < b.mesh.num_elements(); ++e) d.fields.push_back({b.field, e, u(g)});
+  for (const char* plate : {"plate", "tri_plate"}) {
+    const FlexibleBody& b = *m.find_flexible(plate);
+    for (int e = 0; e < b.mesh.num_elements(); ++e) d.fields.push_back({b.field, e, u(g)});
+  }
   d.scalars.emplace_back(m.parameter_index("spring_bodies.stiffness"), 300.0);
   d.scalars.emplace_back(m.parameter_index("spring_body_node.damping"), -2.0);
   Vec exact;
@@ -629,29 +653,31 @@ TEST_F(Fixture, FlexibleParameterDerivativesFollowFromLinearity) {
   // ∝ t): ∂r/∂E0 = (r(E0) − r(E0 = 0))/E0 and likewise for ρ0; ∂r/∂t = r/t. ν is checked by the
   // central differences above. The references carry the round-off of r_e: for ρ0 the inertia
   // part is about 1e-3 of ‖r_e‖ (the internal force dominates) at this state, a floor of ~1e3 ε.
-  const FlexibleBody& b = *m.find_flexible("plate");
   double worst = 0;
-  for (int el = 0; el < b.mesh.num_elements(); ++el) {
-    const int e = b.first_force + el;
-    auto r_with = [&](const std::string& name, double v) {
-      ModelParams p = m.params();
-      p.scalars[m.parameter_index(name)] = v;
-      LocalVec r;
-      m.element_residual(e, s, p, r);
-      return r;
-    };
-    for (const char* nm : {"plate.E", "plate.rho"}) {
-      const double v0 = m.params().scalars[m.parameter_index(nm)];
-      const LocalVec ref = (r_with(nm, v0) - r_with(nm, 0.0)) / v0;
-      const double err = rel(element_derivative(m, s, e, nm).dr, ref);
-      EXPECT_LT(err, 1e-10) << nm << ", element " << el;
+  for (const std::string plate : {"plate", "tri_plate"}) {
+    const FlexibleBody& b = *m.find_flexible(plate);
+    for (int el = 0; el < b.mesh.num_elements(); ++el) {
+      const int e = b.first_force + el;
+      auto r_with = [&](const std::string& name, double v) {
+        ModelParams p = m.params();
+        p.scalars[m.parameter_index(name)] = v;
+        LocalVec r;
+        m.element_residual(e, s, p, r);
+        return r;
+      };
+      for (const std::string nm : {plate + ".E", plate + ".rho"}) {
+        const double v0 = m.params().scalars[m.parameter_index(nm)];
+        const LocalVec ref = (r_with(nm, v0) - r_with(nm, 0.0)) / v0;
+        const double err = rel(element_derivative(m, s, e, nm).dr, ref);
+        EXPECT_LT(err, 1e-10) << nm << ", element " << el;
+        worst = std::max(worst, err);
+      }
+      const std::string th = plate + ".thickness";
+      const double t0 = m.params().scalars[m.parameter_index(th)];
+      const double err = rel(element_derivative(m, s, e, th).dr, r_with(th, t0) / t0);
+      EXPECT_LT(err, 1e-12) << th << ", element " << el;
       worst = std::max(worst, err);
     }
-    const double t0 = m.params().scalars[m.parameter_index("plate.thickness")];
-    const double err =
-        rel(element_derivative(m, s, e, "plate.thickness").dr, r_with("plate.thickness", t0) / t0);
-    EXPECT_LT(err, 1e-12) << "thickness, element " << el;
-    worst = std::max(worst, err);
   }
   std::printf("flexible ∂r/∂E0, ∂r/∂ρ0, ∂r/∂t vs linearity: worst %.2e\n", worst);
 }
