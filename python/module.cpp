@@ -26,6 +26,7 @@
 #include "lsmbs/fem/element_types.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/io/optimize_run.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/output_folder.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -746,65 +747,32 @@ PYBIND11_MODULE(_lsmbs, m) {
         return claimed(cs->model.get(), out_dir, overwrite, resume, [&](OutputClaim&) {
           return located(*cs, [&] {
             spec.sensitivity.progress = run.progress();
-            DesignProblem prob(*cs, spec);
-            // the check at the initial design of a new run, as `lsmbs optimize` runs it
-            nlohmann::json check_record;
-            if (check && !resume) {
-              const auto checked =
-                  run([&] { return check_problem_gradients(prob, cs->design->initial(), co); });
-              if (checked) {
-                check_record = gradient_check_json(*checked, co);
-                const std::string verdict = checked->verdict(co);
-                const std::string what =
-                    checked->ok ? "response '" + checked->worst_response +
-                                      "': the gradient disagrees with central differences by " +
-                                      exact(checked->worst) + " (relative)"
-                                : checked->message;
-                if (verdict == "fail") {
-                  py::object exc = py::reinterpret_borrow<py::object>(g_check_failed)(
-                      "gradient check at the initial design failed: " + what + " (above " +
-                      exact(co.fail) + "; check=False skips the check)");
-                  exc.attr("gradient_check") = json_to_python(check_record);
-                  PyErr_SetObject(g_check_failed, exc.ptr());
-                  throw py::error_already_set();
-                }
-                if (verdict == "warn")
-                  PyErr_WarnEx(PyExc_RuntimeWarning,
-                               ("gradient check at the initial design: " + what).c_str(), 1);
-              }
-            }
-            OptimizeOptions o;
+            // the job of `lsmbs optimize` (run_optimize): the check at the initial design of a
+            // new run, the optimization, its checkpoint, pictures and summary.json
+            OptimizeRunOptions o;
             o.out_dir = out_dir;
+            o.command = "lsmbs.optimize (Python)";
             o.resume = resume;
-            // a resumed run must see the same problem: the file, its overrides, and what Python
-            // changed since (simulation options, model parameters); the command line's hash
-            o.input_sha256 = resume_hash(*cs);
-            const OptimizeResult r = run([&] { return optimize(prob, o); });
-            if (!out_dir.empty()) {  // every output folder carries a summary.json
-              nlohmann::json S = case_provenance("lsmbs.optimize (Python)", *cs);
-              S["case_name"] = cs->name;
-              S["overrides"] = cs->overrides;
-              S["status"] = run_status_name(r.status());
-              S["report"] = r.report();
-              S["options"] = {{"optimization", spec.to_json()},
-                              {"generalized_alpha", nlohmann::json(cs->simulation)}};
-              nlohmann::json pf = nlohmann::json::object();
-              for (int i = 0; i < cs->design->size(); ++i)
-                pf[cs->design->variables[static_cast<size_t>(i)].name] = r.p[i];
-              S["final"] = {{"design", pf},
-                            {"objective", r.final.objective},
-                            {"max_violation", r.final.max_violation}};
-              S["nlopt_status"] = r.nlopt_status;
-              S["stop_reason"] = r.stop_reason;
-              S["converged"] = r.converged;
-              S["kkt"] = r.kkt ? r.kkt->to_json() : nlohmann::json(nullptr);
-              S["warnings"] = r.warnings;
-              S["evaluations"] = r.evaluations;
-              S["gradient_check"] = check_record;
-              S["files"] = {"summary.json", "checkpoint.json", "history.csv"};
-              write_json_atomic(out_dir + "/summary.json", S);
+            if (check) o.check = co;
+            const OptimizeRun job = run([&] { return run_optimize(*cs, spec, o); });
+            const nlohmann::json check_record =
+                job.checked ? gradient_check_json(*job.checked, co) : nlohmann::json(nullptr);
+            if (job.stage == OptimizeRun::Stage::kCheckFailed) {
+              py::object exc = py::reinterpret_borrow<py::object>(g_check_failed)(
+                  "gradient check at the initial design failed: " + job.check_message + " (above " +
+                  exact(co.fail) + "; check=False skips the check)");
+              exc.attr("gradient_check") = json_to_python(check_record);
+              PyErr_SetObject(g_check_failed, exc.ptr());
+              throw py::error_already_set();
             }
-            for (const auto& w : r.warnings)  // as `lsmbs optimize` prints them on stderr
+            if (job.stage == OptimizeRun::Stage::kInterruptedInCheck)
+              throw Error(job.summary["failure"].get<std::string>());
+            if (job.check_verdict == "warn")
+              PyErr_WarnEx(PyExc_RuntimeWarning,
+                           ("gradient check at the initial design: " + job.check_message).c_str(),
+                           1);
+            const OptimizeResult& r = job.result;
+            for (const auto& w : job.warnings)  // as `lsmbs optimize` prints them on stderr
               PyErr_WarnEx(PyExc_RuntimeWarning, ("lsmbs.optimize: " + w).c_str(), 1);
             py::list history;
             for (const auto& e : r.history) history.append(evaluation_dict(e));
@@ -814,8 +782,9 @@ PYBIND11_MODULE(_lsmbs, m) {
                 py::arg("history") = history, py::arg("converged") = r.converged,
                 py::arg("nlopt_status") = r.nlopt_status, py::arg("stop_reason") = r.stop_reason,
                 py::arg("kkt") = r.kkt ? json_to_python(r.kkt->to_json()) : py::object(py::none()),
-                py::arg("warnings") = r.warnings, py::arg("evaluations") = r.evaluations,
-                py::arg("gradient_check") = json_to_python(check_record));
+                py::arg("warnings") = job.warnings, py::arg("evaluations") = r.evaluations,
+                py::arg("gradient_check") = json_to_python(check_record),
+                py::arg("summary") = json_to_python(job.summary));
           });
         });
       },

@@ -97,7 +97,17 @@ def test_a_resume_started_in_one_interface_ends_in_the_other_on_the_same_design(
     assert S["final"]["design"] == whole["final"]["design"], (S["final"], whole["final"])
     assert S["final"]["objective"] == whole["final"]["objective"]
     # Python first, then the command line replays it
-    lsmbs.optimize(lsmbs.load_case(case), out_dir=str(tmp_path / "py"), check=False)
+    r = lsmbs.optimize(lsmbs.load_case(case), out_dir=str(tmp_path / "py"), check=False)
+    # one job: Python's folder holds what the command line's does, summary.json the same keys
+    # and numbers (apart from the command that ran it)
+    P = json.loads((tmp_path / "py" / "summary.json").read_text())
+    assert r["summary"]["final"] == P["final"]
+    assert set(P) == set(whole), set(P) ^ set(whole)
+    assert sorted(P["files"]) == sorted(whole["files"])
+    for f in P["files"]:
+        assert (tmp_path / "py" / f).is_file(), f
+    for key in ("initial", "final", "responses", "stop_reason", "converged", "kkt", "status"):
+        assert P[key] == whole[key], key
     S = run_cli("optimize", case, "--resume", "--no-check", "-o", tmp_path / "py")
     assert S["counts"]["simulations_this_run"] == 0
     assert S["final"]["design"] == whole["final"]["design"]

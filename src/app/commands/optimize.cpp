@@ -28,6 +28,7 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/io/optimize_run.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
 #include "lsmbs/io/sha256.hpp"
@@ -38,24 +39,6 @@
 namespace lsmbs::app {
 
 namespace {
-
-// Convergence picture: the objective and (with constraints) the largest relative constraint
-// violation per evaluation, in panels over the evaluation number (history.csv has the numbers).
-bool plot_history(const std::string& out, const lsmbs::OptimizeResult& res, bool constrained) {
-  std::vector<std::vector<double>> rows;
-  for (size_t k = 0; k < res.history.size(); ++k)
-    rows.push_back({double(k + 1), res.history[k].objective, res.history[k].max_violation});
-  lsmbs::PanelPlotSpec ps;
-  ps.png = out + "/convergence.png";
-  ps.title = "convergence";
-  ps.xlabel = "evaluation";
-  ps.points = true;
-  ps.panel_height = 180;
-  ps.panels.push_back({"objective", {{2, "objective"}}});
-  if (constrained)
-    ps.panels.push_back({"max. relative violation", {{3, "max constraint violation"}}});
-  return lsmbs::plot_panels(ps, rows);
-}
 
 // Multi-start (--starts N): N feasible initial designs drawn uniformly within the bounds
 // (std::mt19937_64 seeded with --seed; a candidate is kept when its evaluation is feasible:
@@ -391,8 +374,6 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, lsmbs::Case& cs,
 
 namespace {
 
-constexpr const char* kInitialCheckPhase = "gradient check at the initial design";
-
 // The folder holds a run interrupted before its first evaluation (during the initial gradient
 // check): no checkpoint to resume from.
 bool interrupted_before_first_evaluation(const std::string& out) {
@@ -400,7 +381,7 @@ bool interrupted_before_first_evaluation(const std::string& out) {
   if (std::filesystem::exists(out + "/checkpoint.json", ec)) return false;
   try {
     const auto S = nlohmann::json::parse(std::ifstream(out + "/summary.json"));
-    return S.value("interrupted_phase", "") == kInitialCheckPhase;
+    return S.value("interrupted_phase", "") == lsmbs::kInitialCheckPhase;
   } catch (const std::exception&) {
     return false;
   }
@@ -410,6 +391,29 @@ bool interrupted_before_first_evaluation(const std::string& out) {
 
 // On a terminal: a table row per evaluation and a progress line of the running simulation; not on
 // a terminal: the final summary only (history.csv has every evaluation), unless --verbose.
+// The outcome on the terminal: objective, violation, KKT verdict, stop reason, the design.
+void print_outcome(const lsmbs::OptimizeRun& run, const lsmbs::Design& d, const std::string& out) {
+  const lsmbs::OptimizeResult& res = run.result;
+  const double first_objective = res.history.empty() ? NAN : res.history.front().objective;
+  std::printf("lsmbs optimize: %s after %ld evaluations (%ld simulations in this run), %.1f s\n",
+              res.nlopt_status.c_str(), res.evaluations, res.simulations, res.wall_seconds);
+  std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first_objective,
+              res.final.objective, res.final.max_violation);
+  if (const auto& kkt = res.kkt)
+    std::printf(
+        "  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; "
+        "stationarity %.2e, bound-sign violation %.2e: %s (kkt_tolerance %.2g)\n",
+        kkt->active_constraints, kkt->free_variables, kkt->at_lower, kkt->at_upper,
+        kkt->stationarity, kkt->bound_sign_violation,
+        kkt->satisfied() ? "satisfied" : "not satisfied", kkt->tolerance);
+  std::printf("  stopped on '%s': %s\n", res.stop_reason.c_str(),
+              res.converged ? "converged" : "not converged");
+  for (int i = 0; i < d.size(); ++i)
+    std::printf("  %-10s %.6g -> %.6g\n", d.variables[static_cast<size_t>(i)].name.c_str(),
+                run.initial[i], res.p[i]);
+  std::printf("  results in %s\n", out.c_str());
+}
+
 int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const std::string& case_file = c.case_file;
   const std::string& out = c.out;
@@ -456,177 +460,54 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const bool table = interactive || (verbose && !quiet);
   ProgressLine line(interactive);
   spec.sensitivity.progress = line.callback();
-  lsmbs::DesignProblem prob(cs, spec);
   claim_output(c, *cs.model);
   std::filesystem::create_directories(out);
-  if (a.starts >= 1) return multistart(c, a, cs, prob);
+  if (a.starts >= 1) {
+    lsmbs::DesignProblem prob(cs, spec);
+    return multistart(c, a, cs, prob);
+  }
   const auto& d = *cs.design;
-  lsmbs::OptimizeOptions o;
-  // a resumed run must see the same case (the one hash Python uses too)
-  o.input_sha256 = lsmbs::resume_hash(cs);
+  lsmbs::OptimizeRunOptions o;
   o.out_dir = out;
+  o.command = cmdline;
   o.resume = resume;
   o.stop_after = stop_after;
-  if (table) {
-    std::printf("lsmbs optimize: %d variables, %d constraints, optimizer %s, sensitivities %s\n",
-                d.size(), prob.num_constraints(), spec.optimizer.c_str(),
-                lsmbs::SensitivityOptions::name(spec.sensitivity.method));
-    std::printf("%6s %16s %14s %10s\n", "eval", "objective", "max violation", "time [s]");
-  }
+  if (check) o.check = *check;
+  if (table)
+    o.on_start = [&](int constraints) {
+      std::printf("lsmbs optimize: %d variables, %d constraints, optimizer %s, sensitivities %s\n",
+                  d.size(), constraints, spec.optimizer.c_str(),
+                  lsmbs::SensitivityOptions::name(spec.sensitivity.method));
+      std::printf("%6s %16s %14s %10s\n", "eval", "objective", "max violation", "time [s]");
+    };
   o.on_evaluation = [&](int k, const lsmbs::Evaluation& e) {
     line.clear();
     if (table)
       std::printf("%6d %16.9g %14.4e %10.2f\n", k, e.objective, e.max_violation, e.wall_seconds);
     std::fflush(stdout);
   };
-  // Gradient check at the initial design (not on resume: the first run did it)
-  std::optional<lsmbs::GradientCheckResult> checked;
-  if (check && !resume) {
-    checked = lsmbs::check_problem_gradients(prob, d.initial(), *check);
-    if (lsmbs::interrupted()) {
-      line.clear();
-      nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
-      S["overrides"] = cs.overrides;
-      S["case_name"] = cs.name;
-      S["status"] = "interrupted";
-      S["failure"] = "interrupted by signal " + std::to_string(lsmbs::interrupted()) +
-                     " during the gradient check at the initial design: nothing was optimized";
-      S["interrupted_phase"] = kInitialCheckPhase;
-      S["resumable"] = true;
-      S["files"] = lsmbs::file_list({"summary.json"});
-      lsmbs::write_json_atomic(out + "/summary.json", S);
-      std::fprintf(stderr, "lsmbs optimize: %s; --resume starts it again\n",
-                   S["failure"].get<std::string>().c_str());
-      return 130;
-    }
-    if (checked) {
-      line.clear();
-      const std::string verdict = checked->verdict(*check);
-      if (verdict != "pass") {
-        const std::string what =
-            checked->ok ? "response '" + checked->worst_response +
-                              "': the gradient disagrees with central differences by " +
-                              std::to_string(checked->worst) + " (relative)"
-                        : checked->message;
-        if (verdict == "fail") {
-          nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
-          S["overrides"] = cs.overrides;
-          S["case_name"] = cs.name;
-          S["status"] = "refused";
-          S["failure"] = "gradient check at the initial design failed: " + what;
-          S["options"] = {{"optimization", spec.to_json()},
-                          {"generalized_alpha", nlohmann::json(cs.simulation)}};
-          S["gradient_check"] = lsmbs::gradient_check_json(*checked, *check);
-          S["units"] = lsmbs::units_json(cs);
-          S["files"] = lsmbs::file_list({"summary.json"});
-          lsmbs::write_json_atomic(out + "/summary.json", S);
-          std::fprintf(
-              stderr,
-              "lsmbs optimize: refused: gradient check at the initial design failed: %s (above %g; "
-              "--no-check skips the check)\n",
-              what.c_str(), check->fail);
-          return 1;
-        }
-        if (!quiet)
-          std::fprintf(stderr,
-                       "lsmbs optimize: warning: gradient check at the initial design: %s\n",
-                       what.c_str());
-      }
-    }
-  }
-  // an interrupt stops the evaluation in progress at its next step; that evaluation is dropped, and
-  // the checkpoint keeps every one before it (--resume evaluates it again)
-  lsmbs::install_interrupt_handlers();
-  const auto res = lsmbs::optimize(prob, o);
+  const lsmbs::OptimizeRun run = lsmbs::run_optimize(cs, spec, o);
   line.clear();
-  // final design pictures and summary
-  lsmbs::GeometryRunOptions go;
-  go.out_dir = out + "/final_design";
-  const auto geo = lsmbs::run_geometry(cs, res.p, go);
-  const bool plotted = plot_history(out, res, prob.num_constraints() > 0);
-  nlohmann::json S = lsmbs::case_provenance(cmdline, cs);
-  S["overrides"] = cs.overrides;
-  S["case_name"] = cs.name;
-  S["status"] = !res.failure.empty() ? "partial"
-                : res.interrupted    ? "interrupted"
-                : res.final.ok       ? "complete"
-                                     : "partial";
-  if (!res.failure.empty()) S["failure"] = res.failure;
-  S["options"] = {{"optimization", spec.to_json()},
-                  {"generalized_alpha", nlohmann::json(cs.simulation)}};
-  nlohmann::json p0 = nlohmann::json::object(), pf = nlohmann::json::object();
-  const lsmbs::Vec init = d.initial();
-  for (int i = 0; i < d.size(); ++i)
-    p0[d.variables[i].name] = init[i], pf[d.variables[i].name] = res.p[i];
-  // an interrupt during the first evaluation leaves no evaluation at all
-  const lsmbs::Evaluation first = res.history.empty() ? lsmbs::Evaluation{} : res.history.front();
-  const double first_objective = res.history.empty() ? NAN : first.objective;
-  S["initial"] = {{"design", p0},
-                  {"objective", first_objective},
-                  {"max_violation", res.history.empty() ? NAN : first.max_violation},
-                  {"constraints_max",
-                   first.constraints.empty()
-                       ? NAN
-                       : *std::max_element(first.constraints.begin(), first.constraints.end())}};
-  S["final"] = {{"design", pf},
-                {"objective", res.final.objective},
-                {"max_violation", res.final.max_violation},
-                {"constraints_max", res.final.constraints.empty()
-                                        ? NAN
-                                        : *std::max_element(res.final.constraints.begin(),
-                                                            res.final.constraints.end())}};
-  S["responses"] = {{spec.objective, res.final.objective}};
-  S["nlopt"] = {{"code", res.nlopt_code}, {"status", res.nlopt_status}};
-  S["stop_reason"] = res.stop_reason;
-  S["converged"] = res.converged;
-  // an infeasible final design, one that is not a KKT point, a max aggregate whose step moved:
-  // said, not only flagged in summary.json
-  nlohmann::json warnings = res.warnings;
-  // coincident features: the gradients at such a design are one-sided (Design::coincident_features)
-  if (auto w = d.coincident_features(init); !w.empty()) warnings.push_back("initial design: " + w);
-  if (auto w = d.features_outside(init); !w.empty()) warnings.push_back("initial design: " + w);
-  if (auto w = d.idle_variables(); !w.empty()) warnings.push_back(w);
-  if (!cs.initial_state_note.empty()) warnings.push_back(cs.initial_state_note);
-  if (auto w = d.coincident_features(res.p); !w.empty()) warnings.push_back("final design: " + w);
-  S["warnings"] = warnings;
-  // no KKT report of a failed evaluation: its gradients were never computed
-  S["kkt"] = res.kkt ? res.kkt->to_json() : nlohmann::json(nullptr);
-  S["gradient_check"] =
-      checked ? lsmbs::gradient_check_json(*checked, *check) : nlohmann::json(nullptr);
-  S["counts"] = {{"evaluations", res.evaluations},
-                 {"simulations_this_run", res.simulations},
-                 {"cache_hits", prob.cache_hits()}};
-  S["wall_seconds"] = res.wall_seconds;
-  S["final_design_mass"] = geo["bodies"];
-  S["units"] = lsmbs::units_json(cs);
-  std::vector<std::string> files = {"history.csv", "summary.json"};
-  std::error_code ec;
-  // none when the first evaluation was interrupted (resumed runs: the earlier run's, rewritten)
-  if (std::filesystem::exists(out + "/checkpoint.json", ec)) files.push_back("checkpoint.json");
-  if (plotted) files.push_back("convergence.png");
-  for (const auto& f : geo["files"]) files.push_back("final_design/" + f.get<std::string>());
-  S["files"] = lsmbs::file_list(std::move(files));
-  lsmbs::write_json_atomic(out + "/summary.json", S);
-  if (!quiet) {
-    std::printf("lsmbs optimize: %s after %ld evaluations (%ld simulations in this run), %.1f s\n",
-                res.nlopt_status.c_str(), res.evaluations, res.simulations, res.wall_seconds);
-    std::printf("  objective %.9g -> %.9g, max constraint violation %.3e\n", first_objective,
-                res.final.objective, res.final.max_violation);
-    if (const auto& kkt = res.kkt)
-      std::printf(
-          "  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; "
-          "stationarity %.2e, bound-sign violation %.2e: %s (kkt_tolerance %.2g)\n",
-          kkt->active_constraints, kkt->free_variables, kkt->at_lower, kkt->at_upper,
-          kkt->stationarity, kkt->bound_sign_violation,
-          kkt->satisfied() ? "satisfied" : "not satisfied", kkt->tolerance);
-    std::printf("  stopped on '%s': %s\n", res.stop_reason.c_str(),
-                res.converged ? "converged" : "not converged");
-    for (int i = 0; i < d.size(); ++i)
-      std::printf("  %-10s %.6g -> %.6g\n", d.variables[i].name.c_str(), init[i], res.p[i]);
-    std::printf("  results in %s\n", out.c_str());
+  using Stage = lsmbs::OptimizeRun::Stage;
+  if (run.stage == Stage::kInterruptedInCheck) {
+    std::fprintf(stderr, "lsmbs optimize: %s; --resume starts it again\n",
+                 run.summary["failure"].get<std::string>().c_str());
+    return 130;
   }
-  for (const auto& w : warnings)
-    std::fprintf(stderr, "lsmbs optimize: warning: %s\n", w.get<std::string>().c_str());
+  if (run.stage == Stage::kCheckFailed) {
+    std::fprintf(stderr,
+                 "lsmbs optimize: refused: gradient check at the initial design failed: %s (above "
+                 "%g; --no-check skips the check)\n",
+                 run.check_message.c_str(), check->fail);
+    return 1;
+  }
+  if (run.check_verdict == "warn" && !quiet)
+    std::fprintf(stderr, "lsmbs optimize: warning: gradient check at the initial design: %s\n",
+                 run.check_message.c_str());
+  const lsmbs::OptimizeResult& res = run.result;
+  if (!quiet) print_outcome(run, d, out);
+  for (const auto& w : run.warnings)
+    std::fprintf(stderr, "lsmbs optimize: warning: %s\n", w.c_str());
   if (!res.failure.empty()) {
     std::fprintf(stderr,
                  "lsmbs optimize: numerical failure: %s (results up to it kept; status partial)\n",

@@ -1,0 +1,185 @@
+#include "lsmbs/io/optimize_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/core/json_file.hpp"
+#include "lsmbs/io/geometry_run.hpp"
+#include "lsmbs/io/output.hpp"
+#include "lsmbs/io/plot.hpp"
+#include "lsmbs/optimization/problem.hpp"
+#include "lsmbs/records/json.hpp"
+
+namespace lsmbs {
+namespace {
+
+// Convergence picture: the objective and (with constraints) the largest relative constraint
+// violation per evaluation, in panels over the evaluation number (history.csv has the numbers).
+bool plot_history(const std::string& out, const OptimizeResult& res, bool constrained) {
+  std::vector<std::vector<double>> rows;
+  for (size_t k = 0; k < res.history.size(); ++k)
+    rows.push_back({double(k + 1), res.history[k].objective, res.history[k].max_violation});
+  PanelPlotSpec ps;
+  ps.png = out + "/convergence.png";
+  ps.title = "convergence";
+  ps.xlabel = "evaluation";
+  ps.points = true;
+  ps.panel_height = 180;
+  ps.panels.push_back({"objective", {{2, "objective"}}});
+  if (constrained)
+    ps.panels.push_back({"max. relative violation", {{3, "max constraint violation"}}});
+  return plot_panels(ps, rows);
+}
+
+nlohmann::json design_json(const Design& d, const Vec& p) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int i = 0; i < d.size(); ++i) j[d.variables[static_cast<size_t>(i)].name] = p[i];
+  return j;
+}
+
+double largest(const std::vector<double>& v) {
+  return v.empty() ? NAN : *std::max_element(v.begin(), v.end());
+}
+
+// What every summary.json of the job holds before its outcome.
+nlohmann::json provenance(const Case& cs, const OptimizationSpec& spec,
+                          const OptimizeRunOptions& o) {
+  nlohmann::json S = case_provenance(o.command, cs);
+  S["overrides"] = cs.overrides;
+  S["case_name"] = cs.name;
+  S["options"] = {{"optimization", spec.to_json()},
+                  {"generalized_alpha", nlohmann::json(cs.simulation)},
+                  {"resume", o.resume}};
+  return S;
+}
+
+// The gradient check at the initial design. False when the run must not go on (refused or
+// interrupted), with run.summary saying why.
+bool initial_check(DesignProblem& prob, const Case& cs, const OptimizationSpec& spec,
+                   const OptimizeRunOptions& o, OptimizeRun& run) {
+  const GradientCheckOptions& co = *o.check;
+  run.checked = check_problem_gradients(prob, run.initial, co);
+  if (interrupted()) {
+    run.stage = OptimizeRun::Stage::kInterruptedInCheck;
+    run.checked.reset();
+    run.summary = provenance(cs, spec, o);
+    run.summary["status"] = "interrupted";
+    run.summary["failure"] = "interrupted by signal " + std::to_string(interrupted()) +
+                             " during the gradient check at the initial design: nothing was "
+                             "optimized";
+    run.summary["interrupted_phase"] = kInitialCheckPhase;
+    run.summary["resumable"] = true;
+    return false;
+  }
+  if (!run.checked) return true;  // nothing to check (no variable moves a response)
+  const GradientCheckResult& c = *run.checked;
+  run.check_verdict = c.verdict(co);
+  run.check_message = c.ok ? "response '" + c.worst_response +
+                                 "': the gradient disagrees with central differences by " +
+                                 std::to_string(c.worst) + " (relative)"
+                           : c.message;
+  if (run.check_verdict != "fail") return true;
+  run.stage = OptimizeRun::Stage::kCheckFailed;
+  run.summary = provenance(cs, spec, o);
+  run.summary["status"] = "refused";
+  run.summary["failure"] = "gradient check at the initial design failed: " + run.check_message;
+  run.summary["gradient_check"] = gradient_check_json(c, co);
+  run.summary["units"] = units_json(cs);
+  return false;
+}
+
+void write_summary(const std::string& out, nlohmann::json& S, std::vector<std::string> files) {
+  if (out.empty()) return;
+  S["files"] = file_list(std::move(files));
+  write_json_atomic(out + "/summary.json", S);
+}
+
+}  // namespace
+
+OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeRunOptions& o) {
+  const Design& d = *cs.design;
+  OptimizeRun run;
+  run.initial = d.initial();
+  DesignProblem prob(cs, spec);
+  if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
+  if (o.on_start) o.on_start(prob.num_constraints());
+  if (o.check && !o.resume && !initial_check(prob, cs, spec, o, run)) {
+    write_summary(o.out_dir, run.summary, {"summary.json"});
+    return run;
+  }
+  OptimizeOptions oo;
+  oo.out_dir = o.out_dir;
+  oo.resume = o.resume;
+  oo.stop_after = o.stop_after;
+  oo.on_evaluation = o.on_evaluation;
+  oo.input_sha256 = resume_hash(cs);  // a resumed run must see the same problem
+  // an interrupt stops the evaluation in progress at its next step; that evaluation is dropped,
+  // and the checkpoint keeps every one before it (--resume evaluates it again)
+  run.result = optimize(prob, oo);
+  const OptimizeResult& res = run.result;
+
+  // what the user should know, the optimizer's first, then the design's
+  run.warnings = res.warnings;
+  if (auto w = d.coincident_features(run.initial); !w.empty())
+    run.warnings.push_back("initial design: " + w);
+  if (auto w = d.features_outside(run.initial); !w.empty())
+    run.warnings.push_back("initial design: " + w);
+  if (auto w = d.idle_variables(); !w.empty()) run.warnings.push_back(w);
+  if (!cs.initial_state_note.empty()) run.warnings.push_back(cs.initial_state_note);
+  if (auto w = d.coincident_features(res.p); !w.empty())
+    run.warnings.push_back("final design: " + w);
+
+  nlohmann::json& S = run.summary = provenance(cs, spec, o);
+  // a numerical failure, or a final evaluation that failed, leaves a partial result
+  S["status"] = !res.failure.empty() ? "partial"
+                : res.interrupted    ? "interrupted"
+                : res.final.ok       ? "complete"
+                                     : "partial";
+  S["report"] = res.report();
+  if (!res.failure.empty()) S["failure"] = res.failure;
+  // an interrupt during the first evaluation leaves no evaluation at all
+  const Evaluation first = res.history.empty() ? Evaluation{} : res.history.front();
+  S["initial"] = {{"design", design_json(d, run.initial)},
+                  {"objective", res.history.empty() ? NAN : first.objective},
+                  {"max_violation", res.history.empty() ? NAN : first.max_violation},
+                  {"constraints_max", largest(first.constraints)}};
+  S["final"] = {{"design", design_json(d, res.p)},
+                {"objective", res.final.objective},
+                {"max_violation", res.final.max_violation},
+                {"constraints_max", largest(res.final.constraints)}};
+  S["responses"] = {{spec.objective, res.final.objective}};
+  S["nlopt"] = {{"code", res.nlopt_code}, {"status", res.nlopt_status}};
+  S["stop_reason"] = res.stop_reason;
+  S["converged"] = res.converged;
+  S["warnings"] = run.warnings;
+  // no KKT report of a failed evaluation: its gradients were never computed
+  S["kkt"] = res.kkt ? res.kkt->to_json() : nlohmann::json(nullptr);
+  S["gradient_check"] =
+      run.checked ? gradient_check_json(*run.checked, *o.check) : nlohmann::json(nullptr);
+  S["counts"] = {{"evaluations", res.evaluations},
+                 {"simulations_this_run", res.simulations},
+                 {"cache_hits", prob.cache_hits()}};
+  S["wall_seconds"] = res.wall_seconds;
+  S["units"] = units_json(cs);
+  if (o.out_dir.empty()) return run;
+
+  // final design pictures and the convergence plot
+  GeometryRunOptions go;
+  go.out_dir = o.out_dir + "/final_design";
+  const auto geo = run_geometry(cs, res.p, go);
+  S["final_design_mass"] = geo["bodies"];
+  std::vector<std::string> files = {"history.csv", "summary.json"};
+  std::error_code ec;
+  // none when the first evaluation was interrupted (resumed runs: the earlier run's, rewritten)
+  if (std::filesystem::exists(o.out_dir + "/checkpoint.json", ec))
+    files.push_back("checkpoint.json");
+  if (plot_history(o.out_dir, res, prob.num_constraints() > 0))
+    files.push_back("convergence.png");
+  for (const auto& f : geo["files"]) files.push_back("final_design/" + f.get<std::string>());
+  write_summary(o.out_dir, S, std::move(files));
+  return run;
+}
+
+}  // namespace lsmbs
