@@ -127,19 +127,23 @@ def _point(p, what, allow_ground_word=False):
 
 
 # ---------------------------------------------------------------- meshes
-def rectangle(origin, size, elements, node_sets=None):
-    """A structured quad mesh of the rectangle [origin, origin + size], elements = (nx, ny); node
-    sets 'left', 'right', 'bottom' and 'top' are predefined, `node_sets` adds selectors
+def rectangle(origin, size, elements, node_sets=None, cells="quad4"):
+    """A structured mesh of the rectangle [origin, origin + size], elements = (nx, ny): nx × ny
+    quadrilaterals (cells="quad4") or each split into two triangles (cells="tri3"); node sets
+    'left', 'right', 'bottom' and 'top' are predefined, `node_sets` adds selectors
     ({'tip': {'line_x': 0.8}}, docs/case-format.md)."""
     nx, ny = elements
     m = {"type": "rectangle", "origin": _vec2(origin, "rectangle: origin"),
          "size": _vec2(size, "rectangle: size"),
          "elements": [_integer(nx, "rectangle: elements[0]"), _integer(ny, "rectangle: elements[1]")]}
+    if cells != "quad4":
+        m["cells"] = cells  # checked by the loader, with the other values
     return _Mesh(m, node_sets)
 
 
 def gmsh(file, scale=1.0, node_sets=None):
-    """A Gmsh 4.x ASCII quad mesh; physical groups of dimension 0 and 1 become node sets."""
+    """A Gmsh 4.x ASCII mesh of quadrilaterals and/or 3-node triangles; physical groups of
+    dimension 0 and 1 become node sets."""
     m = {"type": "gmsh", "file": os.fspath(file), "scale": _number(scale, "gmsh: scale")}
     return _Mesh(m, node_sets)
 

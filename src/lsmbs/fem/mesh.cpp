@@ -16,6 +16,12 @@
 
 namespace lsmbs {
 
+namespace {
+// A cell whose area is below this fraction of its longest edge squared is refused (aspect ratio
+// about 1e9; Mesh2D::read_gmsh).
+constexpr double kMinFlatness = 1e-9;
+}  // namespace
+
 Mesh2D Mesh2D::rectangle(double x0, double y0, double lx, double ly, int nx, int ny,
                          const std::string& cells) {
   if (nx < 1 || ny < 1 || !(lx > 0) || !(ly > 0))
@@ -541,13 +547,31 @@ Mesh2D Mesh2D::read_gmsh(const std::string& path) {
     // The element needs det J > 0 at its integration points. A cell whose corners are not in
     // order around it (a bow-tie quadrilateral) or that is degenerate fails here, named by its
     // tag and line rather than by its index in the model.
-    if (type.shape->min_det_J(m.cell_nodes(e).data()) > 0) continue;
+    const auto X = m.cell_nodes(e);
     const long long tag = cell_tag[static_cast<size_t>(e)];
-    throw Error(path, "line " + std::to_string(element_line.at(tag)),
-                std::string(type.noun) + " " + std::to_string(tag) +
-                    " is self-intersecting or degenerate (det J <= 0 at a Gauss point: its "
-                    "corners are not in order around it, or it is flat or folded); list "
-                    "the corners in order around the element");
+    if (!(type.shape->min_det_J(X.data()) > 0))
+      throw Error(path, "line " + std::to_string(element_line.at(tag)),
+                  std::string(type.noun) + " " + std::to_string(tag) +
+                      " is self-intersecting or degenerate (det J <= 0 at a Gauss point: its "
+                      "corners are not in order around it, or it is flat or folded); list "
+                      "the corners in order around the element");
+    // A sliver far below the round-off of its neighbours' stiffness: its stiffness (∝ its
+    // aspect ratio) swamps every force near it, and no solver result there means anything.
+    double longest = 0;
+    for (int k = 0; k < type.nodes; ++k)
+      longest = std::max(
+          longest,
+          (X[static_cast<size_t>((k + 1) % type.nodes)] - X[static_cast<size_t>(k)]).norm());
+    const double flatness = type.shape->area(X.data()) / (longest * longest);
+    if (flatness < kMinFlatness) {
+      char f[32];
+      std::snprintf(f, sizeof f, "%.3g", flatness);
+      throw Error(path, "line " + std::to_string(element_line.at(tag)),
+                  std::string(type.noun) + " " + std::to_string(tag) +
+                      " is nearly flat: its area is " + f +
+                      " times its longest edge squared (below 1e-9; a stiffness that swamps "
+                      "every force near it in round-off); remove the sliver in Gmsh");
+    }
   }
   // Nodes used by no quad (geometry points such as a bore centre) would carry neither mass
   // nor stiffness: drop them and renumber, keeping node sets consistent.

@@ -88,24 +88,11 @@ double GeneralizedAlpha::automatic_scaling(const Model& model, const ModelParams
   return cnt ? sum / cnt : 1.0;
 }
 
-namespace {
-
-// Column of the first NaN or Inf among the values of a matrix on `pat`, or −1.
-int first_non_finite_column(const CscPattern& pat, const std::vector<double>& vals) {
-  for (int col = 0; col < pat.n; ++col)
-    for (int at = pat.col_ptr[col]; at < pat.col_ptr[col + 1]; ++at)
-      if (!std::isfinite(vals[at])) return col;
-  return -1;
-}
-
 // Round-off floor of each residual row (positions only). A position known to ε·x_j (x_j =
 // max(|q_j|, L)) perturbs row i by about Σ_j |S_ij| ε x_j through the iteration matrix (β′M, K_t,
 // ζΦ_qᵀΦ_q: this is where the h⁻² of β′ and ζ enters, row by row rather than as one global
 // bound); the sum of the row's force terms s_i adds its own ε s_i. No Newton iteration gets the
 // row below this, and the test never asks it to.
-// Newton corrections up to this multiple of tol_q·L that stop halving are round-off (accepted).
-constexpr double kRoundOffIncrement = 100;
-
 void row_round_off_floor(const CscPattern& pat, const std::vector<double>& vals, const Vec& q,
                          double L, int nq, Vec& floor) {
   constexpr double kFactor = 16 * 2.2204460492503131e-16;
@@ -119,6 +106,19 @@ void row_round_off_floor(const CscPattern& pat, const std::vector<double>& vals,
   }
   floor *= kFactor;
 }
+
+namespace {
+
+// Column of the first NaN or Inf among the values of a matrix on `pat`, or −1.
+int first_non_finite_column(const CscPattern& pat, const std::vector<double>& vals) {
+  for (int col = 0; col < pat.n; ++col)
+    for (int at = pat.col_ptr[col]; at < pat.col_ptr[col + 1]; ++at)
+      if (!std::isfinite(vals[at])) return col;
+  return -1;
+}
+
+// Newton corrections up to this multiple of tol_q·L that stop halving are round-off (accepted).
+constexpr double kRoundOffIncrement = 100;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

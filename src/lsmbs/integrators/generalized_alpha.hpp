@@ -139,4 +139,10 @@ class GeneralizedAlpha {
   StepObserverOptions served_;
 };
 
+/// Round-off floor f_i of each position row of the residual, from the iteration matrix S on
+/// `pat` (values `vals`) at positions q: f_i = 16 ε Σ_j |S_ij| max(|q_j|, L). No Newton iteration
+/// gets row i below it (docs/methods.md, "Convergence test"); the static solver uses it too.
+void row_round_off_floor(const CscPattern& pat, const std::vector<double>& vals, const Vec& q,
+                         double L, int nq, Vec& floor);
+
 }  // namespace lsmbs

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <string>
 
+#include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
 
 namespace lsmbs {
@@ -43,20 +44,27 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
         sum += std::abs(vals[i]), ++cnt;
     k = cnt ? sum / cnt : 1.0;
   }
-  Vec R, r_abs, dx;
+  Vec R, r_abs, dx, row_floor;
   auto norm = [&](const Vec& r) {
     return std::max(r.head(nq).lpNorm<Eigen::Infinity>(),
                     nc ? r.tail(nc).lpNorm<Eigen::Infinity>() : 0.0);
   };
-  // Round-off floor of the constraint terms, as in the dynamic Newton iteration.
-  const double floor = std::max(1e-12, 100 * 2.2e-16 * k * model.length_scale());
+  // The test of the dynamic Newton iteration, row by row (docs/methods.md, "Convergence test"):
+  // |r_i| ≤ tol_r s_i + f_i, s_i the sum of the absolute force terms of row i, f_i its round-off
+  // floor through the stiffness at the current iterate. One global scale (the largest s_i) let a
+  // stiff element's rows hide the applied load elsewhere.
+  auto rows_converged = [&] {
+    for (int i = 0; i < nq; ++i)
+      if (!(std::abs(R[i]) <= o.tol_r * r_abs[i] + row_floor[i])) return false;
+    return true;
+  };
   for (res.iterations = 0; res.iterations <= o.max_iter; ++res.iterations) {
     model.residual(s, p, k, 0.0, R, &r_abs);
-    const double scale = r_abs.size() ? r_abs.maxCoeff() : 0.0;
     res.residual_norm = R.head(nq).lpNorm<Eigen::Infinity>();
+    model.iteration_matrix(s, p, cK, k, 0.0, vals);
+    row_round_off_floor(model.pattern(), vals, s.q, model.length_scale(), nq, row_floor);
     const double pn = nc ? R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
-    if (res.residual_norm <= std::max(o.tol_r * scale, floor) &&
-        pn <= o.tol_phi * model.length_scale()) {
+    if (rows_converged() && pn <= o.tol_phi * model.length_scale()) {
       // a reflected element is stress-free: a spurious equilibrium, not the structure's
       if (const auto inv = model.most_compressed_element(s.q, p); inv.inverted()) {
         res.message = "static Newton converged to a state with an inverted element, " +
@@ -69,7 +77,6 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
       return res;
     }
     if (res.iterations == o.max_iter) break;
-    model.iteration_matrix(s, p, cK, k, 0.0, vals);
     if (auto st = lu.factor(vals); !st.ok()) {
       res.message = "singular stiffness matrix: " + model.describe_unknown(lu.singular_column()) +
                     " is not held by any constraint";

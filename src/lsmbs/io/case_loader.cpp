@@ -237,6 +237,9 @@ struct Loader {
       mesh = Mesh2D::rectangle(o.x(), o.y(), sz.x(), sz.y(), static_cast<int>(nx),
                                static_cast<int>(ny), cells);
     } else {
+      if (m.has("cells"))
+        m.fail("cells",
+               "applies to rectangle meshes; a Gmsh file's cells are the elements it lists");
       const std::string f = resolve(m.string("file"));
       try {
         mesh = Mesh2D::read_gmsh(f);

@@ -175,8 +175,7 @@ OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeR
   // none when the first evaluation was interrupted (resumed runs: the earlier run's, rewritten)
   if (std::filesystem::exists(o.out_dir + "/checkpoint.json", ec))
     files.push_back("checkpoint.json");
-  if (plot_history(o.out_dir, res, prob.num_constraints() > 0))
-    files.push_back("convergence.png");
+  if (plot_history(o.out_dir, res, prob.num_constraints() > 0)) files.push_back("convergence.png");
   for (const auto& f : geo["files"]) files.push_back("final_design/" + f.get<std::string>());
   write_summary(o.out_dir, S, std::move(files));
   return run;

@@ -598,3 +598,19 @@ TEST(LoaderErrors, CheckpointDoublesAreExactlySixteenHexDigits) {
     EXPECT_THROW((void)evaluation_from_json(d), std::exception) << "'" << bad << "'";
   }
 }
+
+TEST(LoaderErrors, CellsBelongToRectangleMeshes) {
+  json j = base();
+  j["bodies"].push_back({{"name", "plate"},
+                         {"type", "flexible"},
+                         {"mesh", {{"type", "gmsh"}, {"file", "plate.msh"}, {"cells", "tri3"}}},
+                         {"material", {{"E", 1e9}, {"nu", 0.3}, {"rho", 1000}}},
+                         {"thickness", 0.01}});
+  expect_error(j, "/bodies/1/mesh/cells", "applies to rectangle meshes");
+  j["bodies"][1]["mesh"] = {{"type", "rectangle"},
+                            {"origin", {0, 0}},
+                            {"size", {1, 0.1}},
+                            {"elements", {4, 1}},
+                            {"cells", "tri6"}};
+  expect_error(j, "/bodies/1/mesh/cells", "expected one of");
+}
