@@ -29,12 +29,12 @@ json flexible_case() {
     {"name": "plate", "type": "flexible",
      "mesh": {"type": "rectangle", "origin": [0, -0.01], "size": [0.12, 0.02], "elements": [3, 1]},
      "material": {"E": 2e7, "nu": 0.3, "rho": 1200}, "thickness": 0.004},
-    {"name": "crank", "type": "rigid", "position": [0.1, 0], "angle": 0.3, "mass": 1.5, "inertia": 2e-3,
+    {"name": "crank", "type": "rigid", "position": [0.10089327021748787, 0.004089595866773209], "angle": 0.3, "mass": 1.5, "inertia": 2e-3,
      "com": [0.04, 0.02]}
   ],
   "joints": [
     {"name": "pin_ground", "type": "revolute", "a": {"body": "plate", "nearest": [0, 0]}, "b": "ground"},
-    {"name": "pin_crank", "type": "revolute", "a": {"body": "plate", "nearest": [0.12, 0]},
+    {"name": "pin_crank", "type": "revolute", "a": {"body": "plate", "nearest": [0.12, 0.01]},
      "b": {"body": "crank", "at": [0.02, 0]}},
     {"name": "drive", "type": "rotation_driver", "body": "crank",
      "law": {"type": "ramp", "from": 0.3, "speed": 20, "ramp_time": 0.1}}
