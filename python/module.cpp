@@ -767,20 +767,18 @@ PYBIND11_MODULE(_lsmbs, m) {
             }
             if (job.stage == OptimizeRun::Stage::kInterruptedInCheck)
               throw Error(job.summary["failure"].get<std::string>());
-            if (job.check_verdict == "warn")
-              PyErr_WarnEx(PyExc_RuntimeWarning,
-                           ("gradient check at the initial design: " + job.check_message).c_str(),
-                           1);
             const OptimizeResult& r = job.result;
             for (const auto& w : job.warnings)  // as `lsmbs optimize` prints them on stderr
               PyErr_WarnEx(PyExc_RuntimeWarning, ("lsmbs.optimize: " + w).c_str(), 1);
             py::list history;
             for (const auto& e : r.history) history.append(evaluation_dict(e));
             return py::dict(
-                py::arg("status") = run_status_name(r.status()), py::arg("report") = r.report(),
-                py::arg("p") = array(r.p), py::arg("final") = evaluation_dict(r.final),
-                py::arg("history") = history, py::arg("converged") = r.converged,
-                py::arg("nlopt_status") = r.nlopt_status, py::arg("stop_reason") = r.stop_reason,
+                // the status summary.json records: complete, interrupted or partial
+                py::arg("status") = job.summary["status"].get<std::string>(),
+                py::arg("report") = r.report(), py::arg("p") = array(r.p),
+                py::arg("final") = evaluation_dict(r.final), py::arg("history") = history,
+                py::arg("converged") = r.converged, py::arg("nlopt_status") = r.nlopt_status,
+                py::arg("stop_reason") = r.stop_reason,
                 py::arg("kkt") = r.kkt ? json_to_python(r.kkt->to_json()) : py::object(py::none()),
                 py::arg("warnings") = job.warnings, py::arg("evaluations") = r.evaluations,
                 py::arg("gradient_check") = json_to_python(check_record),

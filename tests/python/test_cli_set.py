@@ -111,3 +111,27 @@ def test_a_resume_started_in_one_interface_ends_in_the_other_on_the_same_design(
     S = run_cli("optimize", case, "--resume", "--no-check", "-o", tmp_path / "py")
     assert S["counts"]["simulations_this_run"] == 0
     assert S["final"]["design"] == whole["final"]["design"]
+
+
+def test_python_optimize_resumes_a_run_interrupted_in_its_check_and_lists_check_warnings(
+        tmp_path, spring_doc, write_case):
+    """A folder whose run was interrupted during the gradient check at the initial design (no
+    checkpoint; summary.json names the phase, as `lsmbs optimize` writes it on SIGINT) is started
+    anew by resume=True in Python as on the command line; a check above check_warn is in the
+    returned warnings and summary.json's; the dict's status is summary.json's."""
+    import lsmbs
+    spring_doc["optimization"] = {"objective": "mean_piston_x", "constraints": [],
+                                  "stop": {"max_evaluations": 3}}
+    case = write_case(spring_doc)
+    out = tmp_path / "opt"
+    out.mkdir()
+    (out / "summary.json").write_text(json.dumps({
+        "status": "interrupted", "resumable": True,
+        "interrupted_phase": "gradient check at the initial design", "files": ["summary.json"]}))
+    r = lsmbs.optimize(lsmbs.load_case(case), out_dir=str(out), resume=True, check_warn=1e-300,
+                       check_fail=1.0)
+    assert r["status"] == r["summary"]["status"] == "complete"
+    assert r["gradient_check"]["verdict"] == "warn"
+    assert any(w.startswith("gradient check at the initial design") for w in r["warnings"])
+    S = json.loads((out / "summary.json").read_text())
+    assert S["warnings"] == r["warnings"] and (out / "checkpoint.json").is_file()

@@ -376,17 +376,6 @@ namespace {
 
 // The folder holds a run interrupted before its first evaluation (during the initial gradient
 // check): no checkpoint to resume from.
-bool interrupted_before_first_evaluation(const std::string& out) {
-  std::error_code ec;
-  if (std::filesystem::exists(out + "/checkpoint.json", ec)) return false;
-  try {
-    const auto S = nlohmann::json::parse(std::ifstream(out + "/summary.json"));
-    return S.value("interrupted_phase", "") == lsmbs::kInitialCheckPhase;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 }  // namespace
 
 // On a terminal: a table row per evaluation and a progress line of the running simulation; not on
@@ -420,7 +409,7 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
   const std::string& cmdline = c.command_line;
   const bool quiet = c.quiet, verbose = c.verbose;
   // a run interrupted during its initial gradient check has no checkpoint: --resume starts it anew
-  const bool resume = a.resume && !interrupted_before_first_evaluation(out);
+  const bool resume = a.resume && !lsmbs::interrupted_in_initial_check(out);
   const std::string& optimizer = a.optimizer;
   const lsmbs::GradientCheckOptions* check = a.check ? &a.check_options : nullptr;
   if (check) check_gradient_check_options(*check);
@@ -501,9 +490,6 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a) {
                  run.check_message.c_str(), check->fail);
     return 1;
   }
-  if (run.check_verdict == "warn" && !quiet)
-    std::fprintf(stderr, "lsmbs optimize: warning: gradient check at the initial design: %s\n",
-                 run.check_message.c_str());
   const lsmbs::OptimizeResult& res = run.result;
   if (!quiet) print_outcome(run, d, out);
   for (const auto& w : run.warnings)

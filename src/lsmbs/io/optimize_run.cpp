@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/json_file.hpp"
@@ -76,9 +78,11 @@ bool initial_check(DesignProblem& prob, const Case& cs, const OptimizationSpec& 
   if (!run.checked) return true;  // nothing to check (no variable moves a response)
   const GradientCheckResult& c = *run.checked;
   run.check_verdict = c.verdict(co);
+  char worst[32];
+  std::snprintf(worst, sizeof worst, "%.3g", c.worst);
   run.check_message = c.ok ? "response '" + c.worst_response +
-                                 "': the gradient disagrees with central differences by " +
-                                 std::to_string(c.worst) + " (relative)"
+                                 "': the gradient disagrees with central differences by " + worst +
+                                 " (relative)"
                            : c.message;
   if (run.check_verdict != "fail") return true;
   run.stage = OptimizeRun::Stage::kCheckFailed;
@@ -98,6 +102,17 @@ void write_summary(const std::string& out, nlohmann::json& S, std::vector<std::s
 
 }  // namespace
 
+bool interrupted_in_initial_check(const std::string& out_dir) {
+  std::error_code ec;
+  if (out_dir.empty() || std::filesystem::exists(out_dir + "/checkpoint.json", ec)) return false;
+  try {
+    const auto S = nlohmann::json::parse(std::ifstream(out_dir + "/summary.json"));
+    return S.value("interrupted_phase", "") == kInitialCheckPhase;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeRunOptions& o) {
   const Design& d = *cs.design;
   OptimizeRun run;
@@ -105,13 +120,16 @@ OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeR
   DesignProblem prob(cs, spec);
   if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
   if (o.on_start) o.on_start(prob.num_constraints());
-  if (o.check && !o.resume && !initial_check(prob, cs, spec, o, run)) {
+  // a run interrupted during its gradient check has no checkpoint: resuming starts it anew
+  OptimizeRunOptions opt = o;
+  opt.resume = o.resume && !interrupted_in_initial_check(o.out_dir);
+  if (opt.check && !opt.resume && !initial_check(prob, cs, spec, opt, run)) {
     write_summary(o.out_dir, run.summary, {"summary.json"});
     return run;
   }
   OptimizeOptions oo;
   oo.out_dir = o.out_dir;
-  oo.resume = o.resume;
+  oo.resume = opt.resume;
   oo.stop_after = o.stop_after;
   oo.on_evaluation = o.on_evaluation;
   oo.input_sha256 = resume_hash(cs);  // a resumed run must see the same problem
@@ -122,6 +140,8 @@ OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeR
 
   // what the user should know, the optimizer's first, then the design's
   run.warnings = res.warnings;
+  if (run.check_verdict == "warn")
+    run.warnings.push_back("gradient check at the initial design: " + run.check_message);
   if (auto w = d.coincident_features(run.initial); !w.empty())
     run.warnings.push_back("initial design: " + w);
   if (auto w = d.features_outside(run.initial); !w.empty())
@@ -131,7 +151,7 @@ OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeR
   if (auto w = d.coincident_features(res.p); !w.empty())
     run.warnings.push_back("final design: " + w);
 
-  nlohmann::json& S = run.summary = provenance(cs, spec, o);
+  nlohmann::json& S = run.summary = provenance(cs, spec, opt);
   // a numerical failure, or a final evaluation that failed, leaves a partial result
   S["status"] = !res.failure.empty() ? "partial"
                 : res.interrupted    ? "interrupted"

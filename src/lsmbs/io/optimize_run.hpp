@@ -53,6 +53,10 @@ struct OptimizeRun {
   nlohmann::json summary;  ///< summary.json's content (also when nothing is written)
 };
 
+/// Whether out_dir holds a run interrupted during its gradient check (no checkpoint, summary.json's
+/// interrupted_phase kInitialCheckPhase): resuming it starts it anew.
+bool interrupted_in_initial_check(const std::string& out_dir);
+
 /// Runs the optimization of cs's design with spec (its sensitivity progress callback included).
 /// Throws lsmbs::Error for an option or a checkpoint that does not fit.
 OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeRunOptions& o);
