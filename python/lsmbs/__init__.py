@@ -61,6 +61,58 @@ from ._lsmbs import (  # noqa: F401,E402
     verify,
 )
 
+
+
+def sweep(case, axes=None, lhs=None, samples=0, seed=1, gradients=False, method="direct-analytic",
+          jobs=2, out_dir="", resume=False, overwrite=False, progress=None):
+    """The responses (and, with gradients=True, their gradients with respect to the design
+    variables) at the points of a grid or a Latin hypercube, as `lsmbs sweep` (docs/python.md);
+    a pandas DataFrame, one row per point: `point`, `status`, a column per axis, per response
+    (and per gradient, "d(response)/d(variable)"), `wall_seconds`, `message`.
+
+    axes: {name: (lower, upper, points)} for a grid (the last axis fastest), or
+    lhs: {name: (lower, upper)} with samples=N for a Latin hypercube (seed). A name is a design
+    variable, a model parameter ('spring.stiffness') or a JSON pointer ('/simulation/h')."""
+    import pandas
+    if (axes is None) == (lhs is None):
+        raise TypeError("sweep: give axes={name: (lower, upper, points)} or lhs={name: (lower, upper)}")
+    if lhs is not None and samples < 1:
+        raise ValueError("sweep: lhs= needs samples=N (the number of points)")
+    spec = []
+    for name, v in (axes or lhs).items():
+        v = tuple(v)
+        if axes is not None:
+            if len(v) != 3:
+                raise TypeError(f"sweep: axes[{name!r}]: expected (lower, upper, points)")
+            spec.append((str(name), float(v[0]), float(v[1]), int(v[2])))
+        else:
+            if len(v) != 2:
+                raise TypeError(f"sweep: lhs[{name!r}]: expected (lower, upper)")
+            spec.append((str(name), float(v[0]), float(v[1]), 0))
+    import os
+    out_dir = os.fspath(out_dir)
+    r = _lsmbs._sweep(case, spec, samples if lhs is not None else 0, seed, gradients, method, jobs,
+                      out_dir, resume, overwrite, progress)
+    if out_dir:  # every finished point, this run's and an earlier one's (resume), as written
+        frame = pandas.read_csv(os.path.join(out_dir, "sweep.csv"),
+                                keep_default_na=False, na_values=["nan"])
+        frame["message"] = frame["message"].astype(str)
+        frame.attrs["summary"] = r["summary"]
+        return frame
+    n = len(r["status"])
+    data = {"point": list(range(n)), "status": r["status"]}
+    for j, (name, *_unused) in enumerate(spec):
+        data[name] = [r["points"][k][j] for k in range(n)]
+    values = [c for c in r["columns"] if c not in data and c not in ("wall_seconds", "message")]
+    for i, c in enumerate(values):
+        data[c] = [row[i] if i < len(row) else float("nan") for row in r["rows"]]
+    data["wall_seconds"] = r["wall"]
+    data["message"] = r["message"]
+    frame = pandas.DataFrame(data, columns=r["columns"])
+    frame.attrs["summary"] = r["summary"]
+    return frame
+
+
 METHODS = ("semi-analytical", "semi-analytical-central", "direct-analytic", "adjoint",
            "adjoint-semi-analytical", "fd-forward", "fd-central", "idas", "idas-adjoint")
 from .builder import (  # noqa: E402,F401

@@ -233,32 +233,6 @@ def _param(v, what):
     return _number(v, what)
 
 
-def ellipse(name, cx, cy, a, b, d=1.0, angle=None, hole=True):
-    """Eq. (41): semi-axes a·d and b·d; each parameter a number, a Variable or a variable name."""
-    f = {"name": _name(name, "ellipse: name"), "type": "ellipse", "hole": bool(hole)}
-    for k, v in (("cx", cx), ("cy", cy), ("a", a), ("b", b), ("d", d), ("angle", angle)):
-        if v is not None:
-            f[k] = _param(v, f"ellipse '{name}': {k}")
-    return f
-
-
-def super_ellipse(name, cx, cy, a, b, xi=5.0, eta=5.0, angle=None, hole=True):
-    """Eq. (43) with exponents xi and eta."""
-    f = {"name": _name(name, "super_ellipse: name"), "type": "super_ellipse", "hole": bool(hole)}
-    for k, v in (("cx", cx), ("cy", cy), ("a", a), ("b", b), ("xi", xi), ("eta", eta),
-                 ("angle", angle)):
-        if v is not None:
-            f[k] = _param(v, f"super_ellipse '{name}': {k}")
-    return f
-
-
-def circle(name, cx, cy, r, hole=True):
-    f = {"name": _name(name, "circle: name"), "type": "circle", "hole": bool(hole)}
-    for k, v in (("cx", cx), ("cy", cy), ("r", r)):
-        f[k] = _param(v, f"circle '{name}': {k}")
-    return f
-
-
 # ---------------------------------------------------------------- the builder
 class ModelBuilder:
     """Builds a case in Python (see the module's documentation)."""
@@ -339,109 +313,10 @@ class ModelBuilder:
             e["angular_velocity"] = _number(angular_velocity, call + ": angular_velocity")
         return self._add("bodies", e, call, body=True)
 
-    # ------------------------------------------------------------ joints and drivers
-    def revolute(self, name, a, b=None):
-        """p_a = p_b; b defaults to the ground point at a's initial position."""
-        call = f"revolute({name!r})"
-        e = {"name": _name(name, "revolute: name"), "type": "revolute",
-             "a": _point(a, call + ": a")}
-        if b is not None:
-            e["b"] = _point(b, call + ": b", allow_ground_word=True)
-        return self._add("joints", e, call)
-
-    def prismatic(self, name, a, direction, *, through=None, lock_rotation=None):
-        call = f"prismatic({name!r})"
-        e = {"name": _name(name, "prismatic: name"), "type": "prismatic",
-             "a": _point(a, call + ": a"), "direction": _vec2(direction, call + ": direction")}
-        if through is not None:
-            e["through"] = _vec2(through, call + ": through")
-        if lock_rotation is not None:
-            e["lock_rotation"] = bool(lock_rotation)
-        return self._add("joints", e, call)
-
-    def rigid_connection(self, name, rigid, flexible, node_set):
-        """Every node of `node_set` of the flexible body keeps its offset in the rigid body."""
-        call = f"rigid_connection({name!r})"
-        return self._add("joints", {
-            "name": _name(name, "rigid_connection: name"), "type": "rigid_connection",
-            "rigid": _name(rigid, call + ": rigid"), "flexible": _name(flexible, call + ": flexible"),
-            "node_set": _name(node_set, call + ": node_set")}, call)
-
-    def clamp(self, name, flexible, node_set):
-        call = f"clamp({name!r})"
-        return self._add("joints", {
-            "name": _name(name, "clamp: name"), "type": "clamp",
-            "flexible": _name(flexible, call + ": flexible"),
-            "node_set": _name(node_set, call + ": node_set")}, call)
-
-    def rotation_driver(self, name, body, law, relative_to=None):
-        """θ_body − θ_relative_to − s(t) = 0 (relative_to: a rigid body, default the ground)."""
-        call = f"rotation_driver({name!r})"
-        e = {"name": _name(name, "rotation_driver: name"), "type": "rotation_driver",
-             "body": _name(body, call + ": body"), "law": _plain(law, call + ": law")}
-        if relative_to is not None:
-            e["relative_to"] = _name(relative_to, call + ": relative_to")
-        return self._add("joints", e, call)
-
-    def translation_driver(self, name, point, direction, law, through=None):
-        call = f"translation_driver({name!r})"
-        e = {"name": _name(name, "translation_driver: name"), "type": "translation_driver",
-             "point": _point(point, call + ": point"),
-             "direction": _vec2(direction, call + ": direction"), "law": _plain(law, call + ": law")}
-        if through is not None:
-            e["through"] = _vec2(through, call + ": through")
-        return self._add("joints", e, call)
-
-    # ------------------------------------------------------------ forces
-    def point_mass(self, name, point, mass):
-        call = f"point_mass({name!r})"
-        return self._add("forces", {"name": _name(name, "point_mass: name"), "type": "point_mass",
-                                    "point": _point(point, call + ": point"),
-                                    "mass": _number(mass, call + ": mass")}, call)
-
-    def point_force(self, name, point, force=None, *, fx=None, fy=None, scale=None):
-        """A constant force (Fx, Fy), or time laws fx and fy, times `scale`."""
-        call = f"point_force({name!r})"
-        e = {"name": _name(name, "point_force: name"), "type": "point_force",
-             "point": _point(point, call + ": point")}
-        if force is not None:
-            e["force"] = _vec2(force, call + ": force")
-        return self._add("forces", self._options(e, call, fx=fx, fy=fy, scale=scale), call)
-
-    def spring_damper(self, name, a, b, *, stiffness, damping=None, free_length=None):
-        call = f"spring_damper({name!r})"
-        e = {"name": _name(name, "spring_damper: name"), "type": "spring_damper",
-             "a": _point(a, call + ": a"), "b": _point(b, call + ": b", allow_ground_word=True),
-             "stiffness": _number(stiffness, call + ": stiffness")}
-        return self._add("forces", self._options(e, call, damping=damping, free_length=free_length),
-                         call)
-
-    def torque(self, name, body, torque=None, *, law=None, scale=None):
-        """The moment scale · T on a rigid body's angle: a constant `torque` or a time `law`."""
-        call = f"torque({name!r})"
-        e = {"name": _name(name, "torque: name"), "type": "torque",
-             "body": _name(body, call + ": body")}
-        return self._add("forces", self._options(e, call, torque=torque, law=law, scale=scale),
-                         call)
-
-    def rotational_spring_damper(self, name, a, b="ground", *, stiffness, damping=None,
-                                 free_angle=None):
-        call = f"rotational_spring_damper({name!r})"
-        e = {"name": _name(name, "rotational_spring_damper: name"),
-             "type": "rotational_spring_damper", "a": _name(a, call + ": a"),
-             "b": _name(b, call + ": b"), "stiffness": _number(stiffness, call + ": stiffness")}
-        return self._add("forces", self._options(e, call, damping=damping, free_angle=free_angle),
-                         call)
-
-    def pressure(self, name, point, direction, area, table, argument=None, time_offset=None):
-        """Pressure P(s) × area along a fixed direction; s the time or {'angle_of': body, …}."""
-        call = f"pressure({name!r})"
-        e = {"name": _name(name, "pressure: name"), "type": "pressure",
-             "point": _point(point, call + ": point"),
-             "direction": _vec2(direction, call + ": direction"),
-             "area": _number(area, call + ": area"), "table": _plain(table, call + ": table")}
-        return self._add("forces", self._options(e, call, argument=argument,
-                                                 time_offset=time_offset), call)
+    # ------------------------------------------------------------ joints, drivers and forces
+    # revolute, prismatic, rigid_connection, clamp, rotation_driver, translation_driver,
+    # point_mass, point_force, spring_damper, torque, rotational_spring_damper, pressure: made
+    # from the table of model kinds below the class (_kind_method), one method per kind.
 
     # ------------------------------------------------------------ simulation and output
     def simulation(self, t_end, h, **options):
@@ -462,6 +337,16 @@ class ModelBuilder:
         docs/case-format.md)."""
         call = f"measure({name!r})"
         e = {"name": _name(name, "measure: name"), "type": _name(type, call + ": type")}
+        kind = _KINDS.get(("measures", type))
+        if kind is not None:  # an unknown type: the loader names the types at build()
+            known = [k["name"] for k in kind["keys"]]
+            for k in keys:
+                if k not in known:
+                    raise TypeError(f"{call}: a '{type}' measure has no key {k!r}; its keys: "
+                                    f"{', '.join(known) or 'none'}")
+            for k in kind["keys"]:
+                if k["required"] and k["name"] not in keys:
+                    raise TypeError(f"{call}: a '{type}' measure needs {k['name']}= ({k['doc']})")
         for k, v in keys.items():
             e[k] = dict(v) if isinstance(v, _Point) else _plain(v, f"{call}: {k}")
         out = self._doc.setdefault("output", {})
@@ -538,6 +423,45 @@ class ModelBuilder:
         self._calls[f"/design/parameters/{len(ps)}"] = call
         ps.append(entry)
 
+    # ------------------------------------------------------------ service conditions
+    def condition(self, name, set=None):
+        """A service condition: the model with the values of `set` changed, {JSON pointer: value}
+        (docs/case-format.md, "conditions"). An array entry may be named in the pointer:
+        {"/forces/payload/mass": 5.0, "/joints/drive/law": trapezoid(...), "/simulation/t_end": 3}.
+        Its responses are named "<condition>.<response>"; a mass is evaluated once."""
+        call = f"condition({name!r})"
+        if not isinstance(name, str) or not name or "." in name:
+            raise TypeError(f"{call}: expected a non-empty name without '.'")
+        entry = {"name": name, "set": {}}
+        for k, v in (set or {}).items():
+            if not isinstance(k, str) or not k.startswith("/"):
+                raise TypeError(f"{call}: set: expected JSON pointers ('/simulation/t_end'), got {k!r}")
+            entry["set"][k] = _plain(v, f"{call}: set[{k!r}]")
+        cs = self._doc.setdefault("conditions", [])
+        if any(c["name"] == name for c in cs):
+            raise _error(self, f"/conditions/{len(cs)}/name", f"{call}: duplicate condition '{name}'")
+        self._calls[f"/conditions/{len(cs)}"] = call
+        cs.append(entry)
+        return name
+
+    def combined(self, name, of, aggregate, *, weights=None, ks=None):
+        """A response combined from others: aggregate 'sum' (weights), 'ks' (parameter ks: a
+        smooth upper envelope within ln(n)/ks of the max) or 'max' (exact; as a constraint, one
+        per term). `of`: a list of response names, or one name for that response of every
+        condition."""
+        call = f"combined({name!r})"
+        e = {"name": _name(name, call + ": name"), "aggregate": _name(aggregate, call + ": aggregate"),
+             "of": _name(of, call + ": of") if isinstance(of, str)
+             else [_name(x, f"{call}: of") for x in of]}
+        if weights is not None:
+            e["weights"] = [_number(w, call + ": weights") for w in weights]
+        if ks is not None:
+            e["ks"] = _number(ks, call + ": ks")
+        cs = self._doc.setdefault("combined", [])
+        self._calls[f"/combined/{len(cs)}"] = call
+        cs.append(e)
+        return name
+
     # ------------------------------------------------------------ optimization
     def optimization(self, objective, constraints=(), **options):
         """The design problem: minimize `objective` (a response) subject to constraints, each
@@ -601,6 +525,117 @@ class ModelBuilder:
             return _lsmbs._load_case_text(self.text(), label, base)
         except _lsmbs.Error as e:
             raise _located(self, e) from None
+
+
+# ---------------------------------------------------------------- from the table of model kinds
+# The joints, forces, measures and features of the case format, with their keys, come from the
+# library's table (src/lsmbs/io/model_kinds.cpp), the one the case-file loader reads them with: a
+# kind added there is a method here, with the same names and the same documentation.
+import inspect  # noqa: E402
+
+_KINDS = {(k["section"], k["type"]): k for k in _lsmbs.model_kinds()}
+
+
+def _convert(key, value, what):
+    t = key["type"]
+    if t in ("number", "non-negative number", "positive number"):
+        return _number(value, what)
+    if t == "integer":
+        return _integer(value, what)
+    if t == "boolean":
+        return bool(value)
+    if t == "name":
+        return _name(value, what)
+    if t == "[x, y]":
+        return _vec2(value, what)
+    if t == "point":
+        return _point(value, what)
+    if t == 'point or "ground"':
+        return _point(value, what, allow_ground_word=True)
+    if t == "feature parameter":
+        return _param(value, what)
+    return _plain(value, what)  # a time law, a table, an object the kind reads itself
+
+
+def _signature(kind, first):
+    """first: the leading parameters (self and name for a method); then the positional keys in
+    the table's order, then the keyword-only ones."""
+    ps = list(first)
+    for k in kind["keys"]:
+        if not k["positional"]:
+            continue
+        default = inspect.Parameter.empty if k["required"] and k["python_default"] is None \
+            else k["python_default"]
+        ps.append(inspect.Parameter(k["name"], inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                    default=default))
+    for k in kind["keys"]:
+        if not k["positional"]:
+            default = inspect.Parameter.empty if k["required"] else None
+            ps.append(inspect.Parameter(k["name"], inspect.Parameter.KEYWORD_ONLY, default=default))
+    return inspect.Signature(ps)
+
+
+def _docstring(kind):
+    lines = [kind["doc"][0].upper() + kind["doc"][1:] + ".", ""]
+    for k in kind["keys"]:
+        need = "required" if k["required"] else "optional"
+        lines.append(f"    {k['name']} ({k['type']}, {need}): {k['doc']}")
+    lines += ["", "docs/case-format.md has the case format's own words for each key."]
+    return "\n".join(lines)
+
+
+def _kind_method(kind):
+    section, type_ = kind["section"], kind["type"]
+    sig = _signature(kind, [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                            inspect.Parameter("name", inspect.Parameter.POSITIONAL_OR_KEYWORD)])
+
+    def method(self, *args, **kwargs):
+        bound = sig.bind(self, *args, **kwargs)
+        bound.apply_defaults()
+        name = bound.arguments["name"]
+        call = f"{type_}({name!r})"
+        e = {"name": _name(name, f"{type_}: name"), "type": type_}
+        for k in kind["keys"]:
+            v = bound.arguments.get(k["name"])
+            if v is not None:
+                e[k["name"]] = _convert(k, v, f"{call}: {k['name']}")
+        return self._add(section, e, call)
+
+    method.__name__ = method.__qualname__ = type_
+    method.__signature__ = sig
+    method.__doc__ = _docstring(kind)
+    return method
+
+
+def _feature_function(kind):
+    type_ = kind["type"]
+    sig = _signature(kind, [inspect.Parameter("name", inspect.Parameter.POSITIONAL_OR_KEYWORD)])
+
+    def feature(*args, **kwargs):
+        bound = sig.bind(*args, **kwargs)
+        bound.apply_defaults()
+        name = bound.arguments["name"]
+        f = {"name": _name(name, f"{type_}: name"), "type": type_}
+        if not bound.arguments.get("non_design"):  # a non-design feature is solid: no "hole"
+            f["hole"] = bool(bound.arguments.get("hole"))
+        for k in kind["keys"]:
+            v = bound.arguments.get(k["name"])
+            if v is not None and k["name"] not in f and k["name"] != "hole":
+                f[k["name"]] = _convert(k, v, f"{type_} '{name}': {k['name']}")
+        return f
+
+    feature.__name__ = feature.__qualname__ = type_
+    feature.__signature__ = sig
+    feature.__doc__ = _docstring(kind) + "\n\nEach parameter: a number, a Variable or a variable name."
+    return feature
+
+
+for (_section, _type), _kind in _KINDS.items():
+    if _section in ("joints", "forces"):
+        setattr(ModelBuilder, _type, _kind_method(_kind))
+    elif _section == "features":
+        globals()[_type] = _feature_function(_kind)
+
 
 
 def _error(builder, path, message):

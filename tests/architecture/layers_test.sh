@@ -14,8 +14,9 @@ declare -A below=(
   [sensitivity]="core linalg fem geometry mbs design responses integrators"
   [records]="core linalg fem geometry mbs design responses integrators sensitivity"
   [optimization]="core linalg fem geometry mbs design responses integrators sensitivity records"
-  [io]="core linalg fem geometry mbs design responses integrators sensitivity records optimization")
-modules="core linalg fem geometry mbs design responses integrators sensitivity records optimization io"
+  [io]="core linalg fem geometry mbs design responses integrators sensitivity records optimization"
+  [runs]="core linalg fem geometry mbs design responses integrators sensitivity records optimization io")
+modules="core linalg fem geometry mbs design responses integrators sensitivity records optimization io runs"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0 checked=0

@@ -5,7 +5,7 @@
 
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/case.hpp"
-#include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/runs/simulate.hpp"
 
 int main(int argc, char** argv) {
   if (argc < 2) return 2;

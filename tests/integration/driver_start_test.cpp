@@ -10,7 +10,7 @@
 #include <string>
 
 #include "lsmbs/core/error.hpp"
-#include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/runs/simulate.hpp"
 #include "support/test_models.hpp"
 
 namespace lsmbs {

@@ -25,8 +25,8 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/initial_state_file.hpp"
 #include "lsmbs/io/sha256.hpp"
-#include "lsmbs/io/simulation_run.hpp"
-#include "lsmbs/io/static_run.hpp"
+#include "lsmbs/runs/simulate.hpp"
+#include "lsmbs/runs/static.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 

@@ -12,8 +12,8 @@
 #include <string>
 
 #include "lsmbs/io/optimization_spec.hpp"
-#include "lsmbs/io/simulation_run.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
+#include "lsmbs/runs/simulate.hpp"
 #include "support/test_models.hpp"
 
 namespace lsmbs {

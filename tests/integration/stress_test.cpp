@@ -18,8 +18,8 @@
 #include <random>
 
 #include "lsmbs/core/error.hpp"
-#include "lsmbs/io/simulation_run.hpp"
 #include "lsmbs/responses/measure.hpp"
+#include "lsmbs/runs/simulate.hpp"
 #include "support/gradients.hpp"
 #include "support/test_models.hpp"
 

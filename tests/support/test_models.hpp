@@ -7,7 +7,7 @@
 #include <string>
 
 #include "lsmbs/io/case.hpp"
-#include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/runs/simulate.hpp"
 
 namespace lsmbs::test {
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Gradient corpus: the direct sensitivity methods at default options on random mechanisms.
 
-    run_corpus.py --lsmbs BIN --seeds A-B [--jobs 1] [--out DIR] [--matrix M] [--no-idas] [--require-idas] [--keep]
+    run_corpus.py --lsmbs BIN --seeds A-B [--jobs 1] [--out DIR] [--resume] [--matrix M] [--no-idas] [--require-idas] [--keep]
+    mpirun -np K python3 run_corpus.py --lsmbs BIN --seeds A-B --out DIR [--resume] ...
 
 For each seed, gen_mechanisms.py generates a case; the gradients of every response are computed
 with ``direct-analytic``, ``semi-analytical`` and ``semi-analytical-central`` at their default
@@ -29,6 +30,14 @@ are skipped. A response whose reference error estimate exceeds the method's thre
 Output (``--out``, default a temporary folder that is removed unless --keep): ``results.json``
 (everything), ``errors.csv`` (one row per seed, response, method and reference) and
 ``summary.json``; the summary is printed. Exit code 1 if any case fails, 0 otherwise.
+
+Each seed's record is written to ``DIR/seeds/seed_NNNN.json`` as soon as the seed finishes;
+``--resume`` keeps those and runs the others only (a killed campaign loses the seeds that were
+running). Under ``mpirun``/``srun`` (the launcher's rank and size in the environment) every rank
+takes the next seed nobody has taken (an exclusive file in ``DIR/claims/<job>/``, on the folder
+the ranks share): one seed per rank at a time, the next one as it finishes. Rank 0 waits for every
+seed and writes the merged files. The lsmbs runs each rank starts are plain processes (the
+launcher's variables are removed from their environment). ``--jobs`` seeds at once per rank.
 """
 import argparse
 import concurrent.futures
@@ -62,8 +71,28 @@ IDAS_FAIL_FACTOR = 100.0          # ... and failed beyond IDAS_FAIL_FACTOR x
 IDAS_FLOOR = 1e-6
 
 
+def launcher():
+    """(rank, size, job key) of an MPI launch (OpenMPI's mpirun, PMI/PMIx, Slurm's srun), or
+    (0, 1, None) when not launched as several processes."""
+    env = os.environ
+    for r, n in (("OMPI_COMM_WORLD_RANK", "OMPI_COMM_WORLD_SIZE"), ("PMIX_RANK", "PMIX_SIZE"),
+                 ("PMI_RANK", "PMI_SIZE"), ("SLURM_PROCID", "SLURM_NTASKS")):
+        if r in env and n in env and int(env[n]) > 1:
+            # a key of this launch, the same on every rank (OpenMPI: a random 128-bit key per job)
+            job = "-".join(env.get(k, "") for k in ("OMPI_MCA_orte_precondition_transports",
+                                                      "PMIX_NAMESPACE", "SLURM_JOB_ID", "SLURM_STEP_ID"))
+            return int(env[r]), int(env[n]), job.strip("-") or "job"
+    return 0, 1, None
+
+
+# the environment of the lsmbs processes: without the launcher's variables, so that an lsmbs built
+# with MPI runs as the plain process it is, not as a rank of this job
+CHILD_ENV = {k: v for k, v in os.environ.items()
+             if not k.startswith(("OMPI_", "PMIX_", "PMI_", "SLURM_"))}
+
+
 def run(cmd):
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=CHILD_ENV)
     return p.returncode, (p.stderr.strip() or p.stdout.strip())
 
 
@@ -290,6 +319,81 @@ def run_seed(seed, a):
     return rec
 
 
+def seed_file(a, seed):
+    return os.path.join(a.out, "seeds", "seed_%04d.json" % seed)
+
+
+def write_atomic(path, data):
+    tmp = "%s.%d.tmp" % (path, os.getpid())
+    with open(tmp, "w") as f:
+        json.dump(data, f, indent=1)
+    os.replace(tmp, path)
+
+
+def say_seed(r, a):
+    if a.quiet:
+        return
+    worst = max([e["error"] for x in r.get("responses", {}).values()
+                 for m, e in x.get("errors", {}).items() if m == "direct-analytic"] or [float("nan")])
+    print("seed %4d %-13s %-16s direct-analytic worst %.2e%s" % (
+        r["seed"], r.get("family", "?"), r.get("status"), worst,
+        ("  " + "; ".join(r["failures"][:2])) if r.get("failures") else ""), flush=True)
+
+
+def run_seeds(seeds, a, rank, size, job):
+    """Every seed's record, each written as it finishes (rank 0: every seed's, once all ranks
+    have written theirs; another rank: None once no seed is left to take)."""
+    os.makedirs(os.path.join(a.out, "seeds"), exist_ok=True)
+    earlier = {}
+    for s in seeds:
+        if os.path.exists(seed_file(a, s)):
+            with open(seed_file(a, s)) as f:
+                r = json.load(f)
+            if r.get("job") != job or job is None:
+                earlier[s] = r
+    if earlier and not a.resume:
+        print("run_corpus: --out %s holds the results of an earlier run (seeds %s...): --resume to "
+              "keep them, or another --out" % (a.out, ", ".join(str(s) for s in sorted(earlier)[:5])),
+              file=sys.stderr)
+        sys.exit(2)
+    todo = [s for s in seeds if s not in earlier]
+    claims = os.path.join(a.out, "claims", job) if job else None
+    if claims:
+        os.makedirs(claims, exist_ok=True)
+
+    def take(s):  # this rank runs seed s, unless another rank took it
+        if not claims:
+            return True
+        try:
+            os.close(os.open(os.path.join(claims, "seed_%04d" % s), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            return True
+        except FileExistsError:
+            return False
+
+    def work(s):
+        if not take(s):
+            return None
+        r = run_seed(s, a)
+        r["job"], r["rank"] = job, rank
+        write_atomic(seed_file(a, s), r)
+        return r
+
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        for r in ex.map(work, todo):
+            if r is not None:
+                say_seed(r, a)
+    if rank != 0:
+        return None
+    recs = {}
+    for s in seeds:  # rank 0: the other ranks' seeds, as they finish them
+        while not os.path.exists(seed_file(a, s)):
+            time.sleep(0.2)
+        with open(seed_file(a, s)) as f:
+            recs[s] = json.load(f)
+        recs[s]["finished_before"] = s in earlier
+    return recs
+
+
 def finish(rec, a, d):
     if not a.keep:
         for x in os.listdir(d):
@@ -426,6 +530,8 @@ def main(argv=None):
     ap.add_argument("--require-idas", action="store_true",
                     help="an IDAS run that fails fails the case (default: reported only)")
     ap.add_argument("--keep", action="store_true", help="keep every lsmbs output folder")
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the seeds already written in OUT/seeds/ and run the others")
     ap.add_argument("--with-new-loads", action="store_true", help="generate torque / rotational spring loads")
     ap.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     a = ap.parse_args(argv)
@@ -440,20 +546,17 @@ def main(argv=None):
         a.out = tempfile.mkdtemp(prefix="lsmbs_corpus_")
     os.makedirs(a.out, exist_ok=True)
     seeds = parse_seeds(a.seeds)
-    recs = {}
-    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        futs = {ex.submit(run_seed, s, a): s for s in seeds}
-        for f in concurrent.futures.as_completed(futs):
-            r = f.result()
-            recs[r["seed"]] = r
-            if not a.quiet:
-                worst = max([e["error"] for x in r.get("responses", {}).values()
-                             for m, e in x.get("errors", {}).items() if m == "direct-analytic"] or [float("nan")])
-                print("seed %4d %-13s %-16s direct-analytic worst %.2e%s" % (
-                    r["seed"], r.get("family", "?"), r.get("status"), worst,
-                    ("  " + "; ".join(r["failures"][:2])) if r.get("failures") else ""), flush=True)
+    rank, size, job = launcher()
+    if size > 1 and temp:
+        ap.error("under mpirun every rank writes into one folder: give --out (on a file system "
+                 "the ranks share)")
+    recs = run_seeds(seeds, a, rank, size, job)
+    if recs is None:  # a rank other than 0: its seeds are written; rank 0 merges
+        return 0
     recs = [recs[s] for s in seeds]
     s = summarize(recs, a)
+    s["seeds_finished_before"] = sum(1 for r in recs if r.get("finished_before"))
+    s["ranks"] = size
     with open(os.path.join(a.out, "results.json"), "w") as f:
         json.dump({"summary": s, "cases": recs}, f, indent=1)
     with open(os.path.join(a.out, "errors.csv"), "w", newline="") as f:

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "lsmbs/io/bench_run.hpp"
 #include "lsmbs/io/output_folder.hpp"
-#include "lsmbs/io/verify_run.hpp"
+#include "lsmbs/runs/bench.hpp"
+#include "lsmbs/runs/verify.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 
 namespace lsmbs::app {
@@ -68,6 +68,15 @@ struct OptimizeArgs {
   GradientCheckOptions check_options;
 };
 
+struct SweepArgs {
+  std::vector<std::string> axes;  ///< --axis name=lower:upper[:points]
+  int lhs = 0;                    ///< --lhs N: a Latin hypercube of N points (0: the grid)
+  unsigned long seed = 1;
+  bool gradients = false;
+  std::string method = "direct-analytic";
+  int jobs = 2;
+};
+
 struct VerifyArgs {
   VerifyOptions options;
 };
@@ -86,5 +95,6 @@ int optimize_command(const CommonArgs& c, const OptimizeArgs& a);
 void check_verify_options(const VerifyOptions& vo);
 int verify_command(const CommonArgs& c, VerifyArgs a);
 int bench_command(const CommonArgs& c, BenchArgs a);
+int sweep_command(const CommonArgs& c, const SweepArgs& a);
 
 }  // namespace lsmbs::app

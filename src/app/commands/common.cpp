@@ -16,7 +16,7 @@
 #include "lsmbs/core/text.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/sha256.hpp"
-#include "lsmbs/io/simulation_run.hpp"
+#include "lsmbs/runs/simulate.hpp"
 
 namespace lsmbs::app {
 

@@ -1,11 +1,12 @@
 // lsmbs geometry: the level-set design mapped on the mesh (μ_e VTU and PNG, mass and its gradient).
+#include "lsmbs/runs/geometry.hpp"
+
 #include <cstdio>
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/case.hpp"
-#include "lsmbs/io/geometry_run.hpp"
 
 namespace lsmbs::app {
 

@@ -1,4 +1,6 @@
 // lsmbs simulate: generalized-α (Algorithm 1) or IDAS on the GGL form; history, VTU, summary.
+#include "lsmbs/runs/simulate.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,7 +12,6 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/io/case.hpp"
-#include "lsmbs/io/simulation_run.hpp"
 
 namespace lsmbs::app {
 

@@ -1,4 +1,6 @@
 // lsmbs static: the static equilibrium of a case at one time (measures, responses, VTU, summary).
+#include "lsmbs/runs/static.hpp"
+
 #include <cstdio>
 
 #include "app/commands/commands.hpp"
@@ -7,7 +9,6 @@
 #include "lsmbs/core/text.hpp"
 #include "lsmbs/integrators/static_solver.hpp"
 #include "lsmbs/io/case.hpp"
-#include "lsmbs/io/static_run.hpp"
 
 namespace lsmbs::app {
 

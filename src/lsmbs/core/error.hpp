@@ -30,17 +30,31 @@ class Error : public std::runtime_error {
 
 /// Invalid use of the library, named by what is wrong rather than by where it came from: the
 /// `subject` is a name such as "design", "responses", "optimization.objective" or
-/// "simulation.newton". The library below io/ knows no files; the JSON front end maps the subject
-/// to the case file and its JSON path (io/case.hpp, `locate`).
+/// "simulation.newton"; a check of one entity of the model (a body, joint or force, by its name)
+/// also names the `entity` and, optionally, its `field` ("velocity"). The library below io/ knows
+/// no files; the JSON front end maps the subject, or the entity, to the case file and its JSON
+/// path (io/case.hpp, `locate`).
 class SetupError : public Error {
  public:
-  SetupError(const std::string& subject, const std::string& what)
-      : Error(subject + ": " + what), subject_(subject), what_(what) {}
+  SetupError(const std::string& subject, const std::string& what, std::string entity = {},
+             std::string field = {})
+      : Error(format(subject, entity, field) + ": " + what),
+        subject_(subject),
+        what_(what),
+        entity_(std::move(entity)),
+        field_(std::move(field)) {}
   const std::string& subject() const { return subject_; }
   const std::string& reason() const { return what_; }
+  const std::string& entity() const { return entity_; }  ///< a body, joint or force; or empty
+  const std::string& field() const { return field_; }    ///< of the entity's entry; or empty
 
  private:
-  std::string subject_, what_;
+  static std::string format(const std::string& subject, const std::string& entity,
+                            const std::string& field) {
+    if (entity.empty()) return subject;
+    return subject + " '" + entity + "'" + (field.empty() ? "" : "/" + field);
+  }
+  std::string subject_, what_, entity_, field_;
 };
 
 /// An invalid model built in code (mbs/model_builder.hpp): it names the entity ("joint 'pivot'")

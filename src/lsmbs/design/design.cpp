@@ -1,8 +1,11 @@
 #include "lsmbs/design/design.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstdio>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 
 namespace lsmbs {
 
@@ -31,17 +34,21 @@ Vec Design::upper() const {
 }
 
 int Design::add_variable(const std::string& name, double initial, double lower, double upper) {
+  // the field at fault is the error's: name, upper or initial
   if (variable_index(name) >= 0)
-    throw SetupError("design.variables", "duplicate design variable '" + name + "'");
-  if (upper > lower) {  // within round-off of a bound: that bound (kBoundTolerance)
-    const double tol = kBoundTolerance * (upper - lower);
-    if (std::abs(initial - lower) <= tol) initial = lower;
-    if (std::abs(initial - upper) <= tol) initial = upper;
+    throw SetupError("design.variables", "duplicate design variable '" + name + "'", name, "name");
+  if (!(upper > lower))
+    throw SetupError("design.variables", "expected upper > lower", name, "upper");
+  // within round-off of a bound (kBoundTolerance of the range): that bound
+  const double tol = kBoundTolerance * (upper - lower);
+  if (std::abs(initial - lower) <= tol) initial = lower;
+  if (std::abs(initial - upper) <= tol) initial = upper;
+  if (!(initial >= lower && initial <= upper)) {
+    char b[160];
+    std::snprintf(b, sizeof b, "initial value %.17g is outside its bounds [%.17g, %.17g]", initial,
+                  lower, upper);
+    throw SetupError("design.variables", b, name, "initial");
   }
-  if (!(upper > lower) || !(initial >= lower && initial <= upper))
-    throw SetupError(
-        "design.variables",
-        "variable '" + name + "': expected lower < upper and lower <= initial <= upper");
   variables.push_back({name, initial, lower, upper});
   return size() - 1;
 }
@@ -65,13 +72,115 @@ void Design::add_geometry(const FlexibleBody& body, std::vector<Feature> feature
   bodies.push_back(std::move(bd));
 }
 
-void Design::bind(int parameter, const std::string& variable, double scale, double offset) {
+void Design::bind(int parameter, const std::string& variable, double scale, double offset,
+                  const std::string& name) {
   const int k = variable_index(variable);
   if (k < 0) throw SetupError("design.parameters", "unknown design variable '" + variable + "'");
   if (parameter < 0)
     throw SetupError("design.parameters",
                      "unknown model parameter (index " + std::to_string(parameter) + ")");
+  const std::string shown = name.empty() ? "#" + std::to_string(parameter) : name;
+  for (const auto& o : bindings)
+    if (o.parameter == parameter)
+      throw SetupError("design.parameters", "parameter '" + shown + "' is bound twice", "",
+                       "parameter");
+  // the parameter stays admissible over the variable's bounds (it is affine in it)
+  const DesignVariable& dv = variables[static_cast<size_t>(k)];
+  if (!name.empty())
+    for (const double x : {dv.lower, dv.upper}) {
+      const double value = offset + scale * x;
+      if (auto msg = ModelBuilder::check_parameter_value(name, value); !msg.empty()) {
+        char b[200];
+        std::snprintf(b, sizeof b,
+                      "parameter '%s' = %g at %s = %g (a bound of the variable): ", name.c_str(),
+                      value, variable.c_str(), x);
+        throw SetupError("design.parameters", b + msg);
+      }
+    }
   bindings.push_back({parameter, k, offset, scale});
+}
+
+namespace {
+
+// A feature's parameters at the extremes of the design bounds: each is affine in its variable,
+// so its least and largest values are at the bounds.
+void parameter_range(const Design& d, const Feature& f, std::vector<double>& lo,
+                     std::vector<double>& hi) {
+  lo.clear(), hi.clear();
+  for (const auto& b : f.params()) {
+    const double a = b.variable < 0 ? b.offset : b.offset + b.scale * d.variables[b.variable].lower;
+    const double c = b.variable < 0 ? b.offset : b.offset + b.scale * d.variables[b.variable].upper;
+    lo.push_back(std::min(a, c));
+    hi.push_back(std::max(a, c));
+  }
+}
+
+}  // namespace
+
+void Design::add_geometry(const FlexibleBody& body, GeometrySpec spec) {
+  for (const auto& b : bodies)
+    if (b.body == &body)
+      throw SetupError("design.geometry", "body '" + body.name + "' has two geometries");
+  const int nd = static_cast<int>(spec.features.size());
+  std::vector<Feature> feats = std::move(spec.features);
+  for (auto& f : spec.non_design) feats.push_back(std::move(f));
+  // The shape lies within a disc about (cx, cy): r (circle), d·max(a, b) (ellipse, eq. 41),
+  // |(a, b)| (super-ellipse, eq. 43: inside the box |u| <= a, |v| <= b); its centre within the
+  // box of the centre's bounds.
+  std::vector<double> reach;
+  std::vector<std::array<Vec2, 2>> centres;
+  std::vector<double> lo, hi;
+  for (const Feature& f : feats) {
+    parameter_range(*this, f, lo, hi);
+    for (const auto* th : {&lo, &hi})
+      if (auto msg = f.check(*th); !msg.empty())
+        throw SetupError(
+            "design.geometry",
+            "feature '" + f.name() + "' is degenerate within the design bounds: " + msg, f.name());
+    reach.push_back(f.type() == Feature::Type::kCircle    ? hi[2]
+                    : f.type() == Feature::Type::kEllipse ? hi[4] * std::max(hi[2], hi[3])
+                                                          : std::hypot(hi[2], hi[3]));
+    centres.push_back({Vec2(lo[0], lo[1]), Vec2(hi[0], hi[1])});
+  }
+  LevelSetNode root = spec.region ? *spec.region : LevelSetNode::all_of(nd);
+  if (feats.size() > static_cast<size_t>(nd)) {  // (region) OR every non-design feature (§2.2)
+    LevelSetNode any;
+    any.op = LevelSetNode::Op::kOr;
+    if (!root.children.empty() || root.op == LevelSetNode::Op::kFeature)
+      any.children.push_back(std::move(root));
+    for (int i = nd; i < static_cast<int>(feats.size()); ++i) {
+      LevelSetNode leaf;
+      leaf.feature = i;
+      any.children.push_back(leaf);
+    }
+    root = std::move(any);
+  }
+  BodyDesign bd;
+  bd.body = &body;
+  bd.map = std::make_unique<DesignMap>(
+      body.mesh, LevelSet(std::move(feats), std::move(root), size()), spec.options);
+  // A feature wholly outside its body changes nothing. One that no design variable moves never
+  // will (a ring or hole drawn in another frame or unit): refused. One that a variable moves may
+  // come in during an optimization: the runs warn (features_outside). One that the variables move
+  // but that no values within their bounds bring in (its shape's disc never reaches an element)
+  // never will either: refused as well.
+  for (int k : bd.map->features_outside_mesh(initial())) {
+    const auto& ls = bd.map->level_set();
+    const size_t kk = static_cast<size_t>(k);
+    const bool moved = !ls.feature_variables(k).empty();
+    if (moved && bd.map->disc_can_reach_mesh(centres[kk][0], centres[kk][1], reach[kk])) continue;
+    const Feature& f = ls.features()[kk];
+    throw SetupError(
+        "design.geometry",
+        std::string(k >= nd ? "non-design feature '" : "feature '") + f.name() +
+            "' lies wholly outside body '" + body.name + "' (it overlaps no element), and " +
+            (moved ? "no values of its design variables within their bounds bring it in"
+                   : "no design variable moves it") +
+            ": it has no effect; check its centre and size against the mesh, in the "
+            "body's frame",
+        f.name());
+  }
+  bodies.push_back(std::move(bd));
 }
 
 int Design::variable_index(const std::string& name) const {

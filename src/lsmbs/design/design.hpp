@@ -4,6 +4,7 @@
 // material field) and, through affine bindings, named scalar model parameters (a spring's
 // stiffness, a mass, …). apply(p) writes both into ModelParams.
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,18 @@ struct DesignVariable {
 struct BodyDesign {
   const FlexibleBody* body = nullptr;
   std::unique_ptr<DesignMap> map;
+};
+
+/// The level-set geometry of one flexible body (docs/case-format.md, "design"): design features
+/// (holes, or solids), non-design features (solid inside, OR-ed with the region: material kept
+/// there whatever the design does), and the region that combines the design features.
+struct GeometrySpec {
+  std::vector<Feature> features;    ///< the design features
+  std::vector<Feature> non_design;  ///< solid inside, OR-ed with the region
+  /// The Boolean combination of `features` (leaves index into it); none: material where every
+  /// design feature is positive (the paper's intersection of holes, eq. 4).
+  std::optional<LevelSetNode> region;
+  MappingOptions options;
 };
 
 /// model parameter = offset + scale · p_variable
@@ -47,8 +60,19 @@ class Design final : public Parameterization {
   /// Level-set features on a flexible body: material where every feature is positive (the
   /// paper's intersection of holes, eq. 4), mapped to μ_e on the body's mesh.
   void add_geometry(const FlexibleBody& body, std::vector<Feature> features, MappingOptions o = {});
+  /// A body's geometry as a case file gives it. Refused (SetupError "design.geometry", naming the
+  /// feature as its entity): a body with two geometries; a feature degenerate somewhere within
+  /// the design bounds (its parameters are affine in the variables: checked at the bounds); a
+  /// feature wholly outside its body that no design variable moves, or that no values within the
+  /// bounds bring in. Add the variables first.
+  void add_geometry(const FlexibleBody& body, GeometrySpec spec);
   /// model parameter `parameter` (Model::parameter_index) = offset + scale · p_variable.
-  void bind(int parameter, const std::string& variable, double scale = 1, double offset = 0);
+  /// Refused (SetupError "design.parameters"): an unknown variable or parameter, a parameter bound
+  /// twice, or one that leaves its admissible range (ModelBuilder::check_parameter_value) at a
+  /// bound of the variable (it is affine in it). `name` is the parameter's name, for the check and
+  /// the messages.
+  void bind(int parameter, const std::string& variable, double scale = 1, double offset = 0,
+            const std::string& name = "");
 
   int size() const override { return static_cast<int>(variables.size()); }
   Vec initial() const;

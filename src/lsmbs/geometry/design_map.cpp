@@ -70,7 +70,7 @@ bool DesignMap::disc_can_reach_mesh(const Vec2& lo, const Vec2& hi, double radiu
   return false;
 }
 
-void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
+void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts) const {
   const int ne = num_elements(), nv = ls_.num_variables();
   const auto vals = ls_.values(p);
   mu.resize(ne);
@@ -140,8 +140,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp) const {
     dmu_dp->resize(ne, nv);
     dmu_dp->setFromTriplets(kept.begin(), kept.end());
   }
-  last_cut_ = cut;
-  last_band_ = band;
+  if (counts) *counts = MapCounts{cut, band};
 }
 
 }  // namespace lsmbs

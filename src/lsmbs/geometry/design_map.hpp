@@ -1,5 +1,4 @@
 #pragma once
-#include <atomic>
 // DesignMap — the level set of one flexible body mapped onto its fixed mesh as element volume
 // fractions (§2.3, eqs. 3–5):
 //   μ_e = μ_min + (1 − μ_min) (1/V_e) ∫_e H*(D(x)) dV,   H*(D) = 1 / (1 + exp(−D/ε))   (eq. 5)
@@ -19,6 +18,15 @@
 
 namespace lsmbs {
 
+/// What a mapping met (diagnostics of run_geometry and verify).
+struct MapCounts {
+  /// Elements a boundary crosses: their corners, centre and sub-cell centres lie on both sides.
+  int cut = 0;
+  /// Elements integrated on the sub-grid: those within their circumradius + 30 ε of a boundary,
+  /// the cut ones included (the cost of the mapping).
+  int band = 0;
+};
+
 struct MappingOptions {
   double mu_min = 1e-3;
   int subgrid = 8;    ///< sub-cells per element edge in cut elements
@@ -37,8 +45,9 @@ class DesignMap {
   int num_elements() const { return static_cast<int>(area_.size()); }
   const std::vector<double>& element_areas() const { return area_; }
 
-  /// μ (size n_e) and, if requested, ∂μ/∂p (n_e × n_v, sparse).
-  void map(const Vec& p, Vec& mu, SpMat* dmu_dp = nullptr) const;
+  /// μ (size n_e) and, if requested, ∂μ/∂p (n_e × n_v, sparse) and the counts of the mapping.
+  /// A pure function of p: mappings at different p may run at once.
+  void map(const Vec& p, Vec& mu, SpMat* dmu_dp = nullptr, MapCounts* counts = nullptr) const;
   /// Features (indices into level_set().features()) that lie wholly outside the mesh at p:
   /// every element's centre is farther from the feature's shape than the element's circumradius,
   /// so the feature overlaps no element (a hole drawn off the part, or in another frame or unit;
@@ -50,12 +59,6 @@ class DesignMap {
   /// [lo, hi] can overlap an element (the test of features_outside_mesh, taken over every such
   /// shape): false means no value of the design variables within their bounds brings it in.
   bool disc_can_reach_mesh(const Vec2& lo, const Vec2& hi, double radius) const;
-  /// Elements a boundary crosses at the last map() call: their corners, centre and sub-cell
-  /// centres lie on both sides of it (diagnostics).
-  int last_cut_count() const { return last_cut_.load(); }
-  /// Elements integrated on the sub-grid at the last map() call: those within their circumradius
-  /// + 30 ε of a boundary, the cut ones included (diagnostics: the cost of the mapping).
-  int last_band_count() const { return last_band_.load(); }
 
  private:
   const Mesh2D* mesh_;
@@ -63,8 +66,6 @@ class DesignMap {
   MappingOptions opt_;
   double eps_ = 0;
   std::vector<double> area_, radius_;
-  mutable std::atomic<int> last_cut_{0};  ///< diagnostic; atomic: map() may run on two threads
-  mutable std::atomic<int> last_band_{0};
 };
 
 }  // namespace lsmbs

@@ -12,9 +12,12 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/initial_state_file.hpp"
 #include "lsmbs/io/json_reader.hpp"
+#include "lsmbs/io/model_kinds.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/sha256.hpp"
 #include "lsmbs/mbs/model_builder.hpp"
+#include "lsmbs/records/json.hpp"
+#include "lsmbs/sensitivity/conditions.hpp"
 
 // The JSON loader: JSON → ModelBuilder calls (mbs/model_builder.hpp owns what a body, joint or
 // force means), plus the sections that are the case file's own (simulation options, output
@@ -27,11 +30,19 @@ namespace lsmbs {
 
 Error locate(const std::string& case_file, const SetupError& e) {
   // subjects are dotted names of the case's sections; responses and measures sit under /output
+  if (e.subject().empty()) return Error(case_file, "", e.reason());
   std::string path = "/" + e.subject();
   for (auto& ch : path)
     if (ch == '.') ch = '/';
   if (path.rfind("/responses", 0) == 0 || path.rfind("/measures", 0) == 0) path = "/output" + path;
   return Error(case_file, path, e.reason());
+}
+
+Error locate(const Case& cs, const SetupError& e) {
+  if (!e.entity().empty())
+    if (const auto at = cs.paths.find(e.entity()); at != cs.paths.end())
+      return Error(cs.file, at->second + (e.field().empty() ? "" : "/" + e.field()), e.reason());
+  return locate(cs.file, e);
 }
 
 namespace {
@@ -77,11 +88,11 @@ decltype(auto) at_key(const JsonReader& r, const std::string& key, F&& call) {
   }
 }
 
-struct Loader {
+struct Loader : KindReader {
   Loader(Case& c, std::string dir) : cs(c), base_dir(std::move(dir)) {}
   Case& cs;
   std::string base_dir;
-  ModelBuilder builder;
+  ModelBuilder builder_;
   std::map<std::string, std::string> paths;  ///< JSON path of each body, joint and force by name
 
   std::string resolve(const std::string& f) {
@@ -93,12 +104,12 @@ struct Loader {
 
   // A named entry (body, joint or force): its name is checked as soon as it is read.
   void entry(const JsonReader& r, const std::string& name, bool body) {
-    at_entry(r, [&] { builder.check_name(name, body); });
+    at_entry(r, [&] { builder_.check_name(name, body); });
     paths.emplace(name, r.path());
   }
 
   // ---------------------------------------------------------------- time laws
-  std::shared_ptr<const TimeLaw> law(const JsonReader& r) {
+  std::shared_ptr<const TimeLaw> law(const JsonReader& r) override {
     const std::string type = r.one_of("type", {"trapezoid", "ramp", "table", "constant"});
     std::shared_ptr<const TimeLaw> out;
     try {
@@ -122,7 +133,7 @@ struct Loader {
     return out;
   }
 
-  Table1D table(const JsonReader& r) {
+  Table1D table(const JsonReader& r) override {
     const auto interp = r.one_of("interpolation", {"cubic", "linear"}, "cubic") == "cubic"
                             ? Table1D::Interp::kCubic
                             : Table1D::Interp::kLinear;
@@ -157,7 +168,7 @@ struct Loader {
   // Which keys a point object may have depends on its body: "at" / "at_global" on a rigid body,
   // "node" / "nearest" on a flexible one. The builder resolves the point (unknown body, node
   // index out of range) while the object is read.
-  Point point(const JsonReader& r) {
+  Point point(const JsonReader& r) override {
     if (r.is_string()) {
       if (r.as_string() == "ground")
         r.fail("a ground point needs coordinates: {\"ground\": [x, y]}");
@@ -173,7 +184,7 @@ struct Loader {
     }
     const std::string body = r.string("body");
     Point p = Point::at(body);  // an unknown body: the builder names it below
-    switch (builder.body_kind(body)) {
+    switch (builder_.body_kind(body)) {
       case ModelBuilder::BodyKind::kRigid:
         if (r.has("at_global"))
           p = Point::at_global(body, r.vec2("at_global"));
@@ -193,7 +204,7 @@ struct Loader {
       case ModelBuilder::BodyKind::kNone:
         break;
     }
-    at_entry(r, [&] { return builder.resolve(p); });
+    at_entry(r, [&] { return builder_.resolve(p); });
     r.finish();
     return p;
   }
@@ -209,7 +220,7 @@ struct Loader {
     if (r.has("velocity")) o.velocity = r.vec2("velocity");
     if (r.has("angular_velocity")) o.angular_velocity = r.number("angular_velocity");
     r.finish();
-    at_entry(r, [&] { builder.rigid_body(name, o); });
+    at_entry(r, [&] { builder_.rigid_body(name, o); });
   }
 
   void flexible_body(const JsonReader& r, const std::string& name) {
@@ -311,7 +322,7 @@ struct Loader {
     if (r.has("angular_velocity")) o.angular_velocity = r.number("angular_velocity");
     r.finish();
     try {  // the builder checks the element geometry (inverted or degenerate quadrilaterals)
-      builder.flexible_body(name, std::move(mesh), o);
+      builder_.flexible_body(name, std::move(mesh), o);
     } catch (const ModelError& e) {
       if (e.field() == "mesh")
         r.fail("mesh", e.message() + " (check the mesh's coordinates: origin, size, scale)");
@@ -319,233 +330,41 @@ struct Loader {
     }
   }
 
-  // ---------------------------------------------------------------- joints and drivers
-  void joint(const JsonReader& r, int index) {
-    const std::string type = r.one_of("type", {"revolute", "prismatic", "rigid_connection", "clamp",
-                                               "rotation_driver", "translation_driver"});
-    const std::string name = r.string("name", type + "_" + std::to_string(index));
-    entry(r, name, false);
-    if (type == "revolute") {
-      const Point a = point(r.child("a"));
-      std::optional<Point> b;  // none: the builder's default, ground at a's initial position
-      if (r.has("b")) {
-        const JsonReader rb = r.child("b");
-        if (!(rb.is_string() && rb.as_string() == "ground")) b = point(rb);
-      }
-      at_entry(r, [&] { builder.revolute(name, a, b); });
-    } else if (type == "prismatic") {
-      const Point a = point(r.child("a"));
-      const Vec2 u = r.vec2("direction");
-      PrismaticOptions o;
-      if (r.has("through")) o.through = r.vec2("through");
-      o.lock_rotation = r.boolean("lock_rotation", true);
-      at_entry(r, [&] { builder.prismatic(name, a, u, o); });
-    } else if (type == "rigid_connection") {
-      const std::string rigid = r.string("rigid"), flexible = r.string("flexible"),
-                        set = r.string("node_set");
-      at_entry(r, [&] { builder.rigid_connection(name, rigid, flexible, set); });
-    } else if (type == "clamp") {
-      const std::string flexible = r.string("flexible"), set = r.string("node_set");
-      at_entry(r, [&] { builder.clamp(name, flexible, set); });
-    } else if (type == "rotation_driver") {
-      const std::string body = r.string("body");
-      const std::string rel = r.string("relative_to", "ground");
-      auto l = law(r.child("law"));
-      at_entry(r, [&] { builder.rotation_driver(name, body, l, rel); });
-    } else {  // translation_driver
-      const Point a = point(r.child("point"));
-      const Vec2 u = r.vec2("direction");
-      std::optional<Vec2> through;
-      if (r.has("through")) through = r.vec2("through");
-      auto l = law(r.child("law"));
-      at_entry(r, [&] { builder.translation_driver(name, a, u, l, through); });
+  // ---------------------------------------------------------------- joints, forces, measures
+  // An entry of a section of the table of model kinds (io/model_kinds.hpp): its type, its name
+  // (checked as soon as it is read), then what its kind reads. An unnamed joint or force gets
+  // "<type>_<index>".
+  void kind_entry(const JsonReader& r, const std::string& section, int index) {
+    const std::string type = r.one_of("type", kind_types(section));
+    const ModelKind& kind = *find_kind(section, type);
+    std::string name;
+    if (section == "measures") {
+      name = r.string("name");
+      // constraint_force measures are placeholders (null) until the model is built: their names
+      // are pending
+      for (const auto& m : cs.measures)
+        if (m && m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
+      for (const auto& pending : pending_forces)
+        if (pending.first == name) r.fail("name", "duplicate measure name '" + name + "'");
+    } else {
+      name = r.string("name", type + "_" + std::to_string(index));
+      entry(r, name, false);
     }
+    kind.read(*this, r, name);
     r.finish();
   }
 
-  // ---------------------------------------------------------------- forces
-  void force(const JsonReader& r, int index) {
-    const std::string type = r.one_of("type", {"point_force", "spring_damper", "pressure",
-                                               "point_mass", "torque", "rotational_spring_damper"});
-    const std::string name = r.string("name", type + "_" + std::to_string(index));
-    entry(r, name, false);
-    if (type == "point_mass") {
-      const double m = r.non_negative("mass");
-      const Point p = point(r.child("point"));
-      at_entry(r, [&] { builder.point_mass(name, p, m); });
-    } else if (type == "point_force") {
-      const Point p = point(r.child("point"));
-      std::shared_ptr<const TimeLaw> fx, fy;  // null: zero
-      std::optional<Vec2> f;
-      if (r.has("force")) {
-        f = r.vec2("force");
-      } else {
-        if (r.has("fx")) fx = law(r.child("fx"));
-        if (r.has("fy")) fy = law(r.child("fy"));
-      }
-      const double scale = r.number("scale", 1.0);
-      at_entry(r, [&] {
-        if (f)
-          builder.point_force(name, p, *f, scale);
-        else
-          builder.point_force(name, p, fx, fy, scale);
-      });
-    } else if (type == "spring_damper") {
-      const Point a = point(r.child("a")), b = point(r.child("b"));
-      SpringOptions o;
-      o.stiffness = r.non_negative("stiffness");
-      o.damping = r.non_negative("damping", 0.0);
-      if (r.has("free_length")) o.free_length = r.non_negative("free_length");
-      at_entry(r, [&] { builder.spring_damper(name, a, b, o); });
-    } else if (type == "torque") {
-      const std::string body = r.string("body");
-      if (r.has("torque") == r.has("law"))
-        r.fail("expected either \"torque\": T or \"law\": {...} (one of them)");
-      std::shared_ptr<const TimeLaw> l =
-          r.has("torque") ? std::make_shared<ConstantLaw>(r.number("torque")) : law(r.child("law"));
-      const double scale = r.number("scale", 1.0);
-      at_entry(r, [&] { builder.torque(name, body, l, scale); });
-    } else if (type == "rotational_spring_damper") {
-      const std::string a = r.string("a"), b = r.string("b");
-      RotationalSpringOptions o;
-      o.stiffness = r.non_negative("stiffness");
-      o.damping = r.non_negative("damping", 0.0);
-      if (r.has("free_angle")) o.free_angle = r.number("free_angle");
-      at_entry(r, [&] { builder.rotational_spring_damper(name, a, b, o); });
-    } else {  // pressure
-      const Point p = point(r.child("point"));
-      const Vec2 u = r.vec2("direction");
-      const double area = r.positive("area");
-      const JsonReader tr = r.child("table");
-      Table1D t = table(tr);
-      tr.finish();  // a misspelt table option (e.g. "x_scal") is an error, not ignored
-      PressureArgument arg;
-      if (r.has("argument")) {
-        const JsonReader a = r.child("argument");
-        if (a.is_string()) {
-          if (a.as_string() != "time")
-            a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
-        } else {
-          arg.angle_of = a.string("angle_of");
-          arg.offset = a.number("offset", 0.0);
-          a.finish();
-        }
-      }
-      if (arg.angle_of.empty()) arg.offset = r.number("time_offset", 0.0);
-      at_entry(r, [&] { builder.pressure(name, p, u, area, std::move(t), arg); });
-    }
-    r.finish();
+  // KindReader
+  ModelBuilder& builder() override { return builder_; }
+  void add_measure(std::unique_ptr<Measure> m) override { cs.measures.push_back(std::move(m)); }
+  void add_constraint_force(const std::string& name, const std::string& joint) override {
+    pending_forces.emplace_back(name, joint);
+    cs.measures.push_back(nullptr);  // filled after build() (rows known then)
   }
 
   // ---------------------------------------------------------------- measures and responses
-  void measure(const JsonReader& r) {
-    const std::string type = r.one_of(
-        "type", {"position", "velocity", "angle", "angular_velocity", "distance", "elongation",
-                 "path_deviation", "constraint_force", "kinetic_energy", "strain_energy", "mass",
-                 "stress", "frame_position", "frame_velocity", "line_distance", "combination"});
-    const std::string name = r.string("name");
-    // constraint_force measures are placeholders (null) until the model is built: their names are
-    // pending
-    for (const auto& m : cs.measures)
-      if (m && m->name() == name) r.fail("name", "duplicate measure name '" + name + "'");
-    for (const auto& pending : pending_forces)
-      if (pending.first == name) r.fail("name", "duplicate measure name '" + name + "'");
-    auto point_ref = [&](const std::string& key) { return builder.resolve(point(r.child(key))); };
-    auto angle_dof = [&] {
-      const std::string body = r.string("body");
-      return at_key(r, "body", [&] { return builder.angle_dof(body); });
-    };
-    // a point of a rigid body, whose frame (origin there, the body's axes) a measure refers to
-    auto frame_ref = [&](const std::string& key) {
-      const PointRef f = point_ref(key);
-      if (f.kind != PointRef::Kind::kBody)
-        r.child(key).fail("body",
-                          "expected a rigid body: the frame is a rigid body's (its axes, "
-                          "origin at the point given)");
-      return f;
-    };
-    std::unique_ptr<Measure> m;
-    if (type == "position")
-      m = std::make_unique<PositionMeasure>(name, point_ref("point"));
-    else if (type == "frame_position")
-      m = std::make_unique<FramePositionMeasure>(name, point_ref("point"), frame_ref("frame"));
-    else if (type == "frame_velocity")
-      m = std::make_unique<FrameVelocityMeasure>(name, point_ref("point"), frame_ref("frame"));
-    else if (type == "line_distance") {
-      const PointRef p = point_ref("point"), a = point_ref("a"), b = point_ref("b");
-      if (!((builder.initial_position(b) - builder.initial_position(a)).norm() > 0))
-        r.fail("b", "the line's two points coincide at t = 0 (a and b): no line through them");
-      m = std::make_unique<LineDistanceMeasure>(name, p, a, b);
-    } else if (type == "combination")
-      m = combination(r, name);
-    else if (type == "velocity")
-      m = std::make_unique<VelocityMeasure>(name, point_ref("point"));
-    else if (type == "angle")
-      m = std::make_unique<AngleMeasure>(name, angle_dof());
-    else if (type == "angular_velocity")
-      m = std::make_unique<AngularVelocityMeasure>(name, angle_dof());
-    else if (type == "distance" || type == "elongation") {
-      const PointRef a = point_ref("a"), b = point_ref("b");
-      const double ref = type == "elongation"
-                             ? (builder.initial_position(b) - builder.initial_position(a)).norm()
-                             : 0.0;
-      m = std::make_unique<DistanceMeasure>(name, a, b, ref);
-    } else if (type == "path_deviation") {
-      const PointRef p = point_ref("point");
-      const JsonReader pr = r.child("path");
-      pr.one_of("type", {"planar_chain"});
-      ChainPath path;
-      path.origin = pr.vec2("origin", Vec2::Zero());
-      for (const auto& l : pr.items("links", true)) {
-        const std::string d = l.string("driver");
-        const DriverInfo* drv = builder.driver(d);
-        if (!drv) l.fail("driver", "unknown driver '" + d + "'");
-        path.links.push_back({drv->law, drv->relative, l.positive("length")});
-        l.finish();
-      }
-      pr.finish();
-      m = std::make_unique<PathDeviationMeasure>(name, p, std::move(path));
-    } else if (type == "constraint_force") {
-      const std::string j = r.string("joint");
-      at_key(r, "joint", [&] { return builder.joint_equations(j); });
-      pending_forces.emplace_back(name, j);
-      r.finish();
-      cs.measures.push_back(nullptr);  // filled after build() (rows known then)
-      return;
-    } else if (type == "kinetic_energy")
-      m = std::make_unique<KineticEnergyMeasure>(name);
-    else if (type == "strain_energy")
-      m = std::make_unique<StrainEnergyMeasure>(name);
-    else if (type == "stress") {
-      const std::string body = r.string("body");
-      const FlexibleBody& fb =
-          at_key(r, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); });
-      StressMeasure::Options o;
-      o.aggregation = r.one_of("aggregate", {"ks", "pnorm"}, "ks") == "ks"
-                          ? StressMeasure::Aggregation::kKs
-                          : StressMeasure::Aggregation::kPNorm;
-      // σ_ref normalizes the KS exponent; a p-norm needs none
-      o.reference = o.aggregation == StressMeasure::Aggregation::kKs ? r.positive("reference")
-                                                                     : r.positive("reference", 1.0);
-      o.parameter =
-          r.positive("parameter", o.aggregation == StressMeasure::Aggregation::kKs ? 50.0 : 8.0);
-      if (o.aggregation == StressMeasure::Aggregation::kPNorm && o.parameter < 1)
-        r.fail("parameter", "expected a p-norm exponent >= 1");
-      o.relaxation = r.positive("relaxation", 0.5);
-      if (o.relaxation > 1) r.fail("relaxation", "expected the qp exponent q in (0, 1]");
-      m = std::make_unique<StressMeasure>(name, &fb, o);
-    } else {
-      const std::string body = r.string("body");
-      m = std::make_unique<FlexibleMassMeasure>(
-          name,
-          &at_key(r, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); }));
-    }
-    r.finish();
-    cs.measures.push_back(std::move(m));
-  }
-
   // c0 + Σ w_i (measure column)_i over columns of measures listed before this one
-  std::unique_ptr<Measure> combination(const JsonReader& r, const std::string& name) {
+  std::unique_ptr<Measure> combination(const JsonReader& r, const std::string& name) override {
     std::vector<CombinationMeasure::Term> terms;
     std::string unit;
     const StressMeasure* stress = nullptr;
@@ -623,7 +442,7 @@ struct Loader {
     if (auto w = r.optional_child("window")) {
       if (w->has("phase")) {
         const std::string d = w->string("driver");
-        const DriverInfo* drv = builder.driver(d);
+        const DriverInfo* drv = builder_.driver(d);
         if (!drv) w->fail("driver", "unknown driver '" + d + "'");
         const std::string ph = w->string("phase");
         bool found = false;
@@ -662,7 +481,7 @@ struct Loader {
       } else {  // constraint-force measure (built after build()): components from the joint's
                 // equations
         const auto& [nm, j] = pending_forces[pending_index(i)];
-        const int m = builder.joint_equations(j);
+        const int m = builder_.joint_equations(j);
         for (int k = 0; k < m; ++k) c.push_back(nm + "." + std::to_string(k));
       }
     }
@@ -763,183 +582,117 @@ struct Loader {
     return n;
   }
 
+  // A Design call for the entry r: its SetupError at r's field it names (below r), or at the
+  // entry of the feature it names (`features`: feature name -> its entry), or at r.
+  template <class F>
+  void at_design(const JsonReader& r, F&& call,
+                 const std::map<std::string, JsonReader>* features = nullptr) {
+    try {
+      call();
+    } catch (const SetupError& e) {
+      if (features && !e.entity().empty())
+        if (const auto at = features->find(e.entity()); at != features->end())
+          at->second.fail(e.reason());
+      if (!e.field().empty()) r.fail(e.field(), e.reason());
+      r.fail(e.reason());
+    }
+  }
+
+  void variable(const JsonReader& v, Design& d) {
+    const std::string name = v.string("name");
+    const double lower = v.number("lower"), upper = v.number("upper"),
+                 initial = v.number("initial");
+    v.finish();
+    at_design(v, [&] { d.add_variable(name, initial, lower, upper); });
+  }
+
+  // A feature entry: its parameters in the table's order (Feature's), each a number, a variable
+  // name or {variable, scale, offset}; whether it is a non-design feature.
+  Feature feature(const JsonReader& f, const Design& d, bool& non_design) {
+    const std::string name = f.string("name");
+    const std::string ts = f.one_of("type", kind_types("features"));
+    bool ok = false;
+    const auto type = Feature::parse_type(ts, &ok);
+    std::vector<ParamBinding> ps;
+    for (const KindKey& key : find_kind("features", ts)->keys) {
+      if (key.type != KeyType::kParameter) continue;
+      if (!key.required && !f.has(key.name))
+        ps.push_back(ParamBinding{});  // zero (an angle)
+      else
+        ps.push_back(binding(f, key.name, d));
+    }
+    // a non-design feature is solid inside and OR-ed with the region: material there whatever
+    // the design features do
+    non_design = f.boolean("non_design", false);
+    if (non_design && f.has("hole"))
+      f.fail("hole", "a non_design feature is solid inside (material forced there); drop \"hole\"");
+    const bool hole = non_design ? false : f.boolean("hole", true);
+    f.finish();
+    return Feature(name, type, ps, hole);
+  }
+
+  void geometry(const JsonReader& g, Design& d) {
+    const std::string body = g.string("body");
+    const FlexibleBody& fb =
+        at_key(g, "body", [&]() -> const FlexibleBody& { return builder_.flexible(body); });
+    for (const auto& other : d.bodies)
+      if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
+    GeometrySpec spec;
+    std::map<std::string, int> by_name;  // design features, by name: their index in the region
+    std::map<std::string, JsonReader> entries;  // every feature's entry, by name
+    for (const auto& f : g.items("features", true)) {
+      const std::string name = f.string("name");
+      if (entries.count(name)) f.fail("name", "duplicate feature name '" + name + "'");
+      entries.emplace(name, f);
+      bool non_design = false;
+      Feature feat = feature(f, d, non_design);
+      if (!non_design) by_name[name] = static_cast<int>(spec.features.size());
+      (non_design ? spec.non_design : spec.features).push_back(std::move(feat));
+    }
+    if (by_name.empty())
+      g.fail("features",
+             "every feature is non_design: non-design regions only keep material that the "
+             "design features would remove; give at least one design feature");
+    if (g.has("region")) {
+      for (const auto& f : spec.non_design)
+        if (g.child("region").raw().dump().find('"' + f.name() + '"') != std::string::npos)
+          g.fail("region", "feature '" + f.name() +
+                               "' is non_design: it is OR-ed with the region, not part of it");
+      spec.region = region(g.child("region"), by_name);
+    }
+    MappingOptions& mo = spec.options;
+    mo.mu_min = g.number("mu_min", mo.mu_min);
+    if (!(mo.mu_min > 0 && mo.mu_min < 1)) g.fail("mu_min", "expected a value in (0, 1)");
+    mo.subgrid = g.integer("subgrid", mo.subgrid, 1);
+    if (mo.subgrid > 64) g.fail("subgrid", "expected at most 64 sub-cells per edge");
+    mo.band = g.positive("band", mo.band);
+    g.finish();
+    at_design(
+        g, [&] { d.add_geometry(fb, std::move(spec)); }, &entries);
+  }
+
+  void parameter_binding(const JsonReader& b, Design& d) {
+    const std::string pname = b.string("parameter");
+    const int parameter = builder_.parameter(pname);
+    if (parameter < 0) {
+      std::string avail;
+      for (const auto& n : builder_.model().parameter_names())
+        avail += (avail.empty() ? "" : ", ") + n;
+      b.fail("parameter", "unknown model parameter '" + pname + "' (parameters: " + avail + ")");
+    }
+    const std::string vname = b.string("variable");
+    if (d.variable_index(vname) < 0) b.fail("variable", "unknown design variable '" + vname + "'");
+    const double scale = b.number("scale", 1.0), offset = b.number("offset", 0.0);
+    b.finish();
+    at_design(b, [&] { d.bind(parameter, vname, scale, offset, pname); });
+  }
+
   void design(const JsonReader& r) {
     auto d = std::make_unique<Design>();
-    for (const auto& v : r.items("variables", true)) {
-      DesignVariable dv;
-      dv.name = v.string("name");
-      if (d->variable_index(dv.name) >= 0)
-        v.fail("name", "duplicate design variable '" + dv.name + "'");
-      dv.lower = v.number("lower");
-      dv.upper = v.number("upper");
-      dv.initial = v.number("initial");
-      if (!(dv.upper > dv.lower)) v.fail("upper", "expected upper > lower");
-      // within round-off of a bound (Design::kBoundTolerance of the range): that bound
-      const double tol = Design::kBoundTolerance * (dv.upper - dv.lower);
-      if (std::abs(dv.initial - dv.lower) <= tol) dv.initial = dv.lower;
-      if (std::abs(dv.initial - dv.upper) <= tol) dv.initial = dv.upper;
-      if (dv.initial < dv.lower || dv.initial > dv.upper) {
-        char b[160];
-        std::snprintf(b, sizeof b, "initial value %.17g is outside its bounds [%.17g, %.17g]",
-                      dv.initial, dv.lower, dv.upper);
-        v.fail("initial", b);
-      }
-      v.finish();
-      d->variables.push_back(dv);
-    }
+    for (const auto& v : r.items("variables", true)) variable(v, *d);
     if (d->variables.empty()) r.fail("variables", "expected at least one design variable");
-    for (const auto& g : r.items("geometry")) {
-      const std::string body = g.string("body");
-      const FlexibleBody& fb =
-          at_key(g, "body", [&]() -> const FlexibleBody& { return builder.flexible(body); });
-      for (const auto& other : d->bodies)
-        if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
-      std::vector<Feature> feats;
-      std::map<std::string, int> by_name, fixed;  // design features, non-design ones
-      std::vector<double> reach;  // per feature: a radius about its centre that holds its shape
-      std::vector<std::array<Vec2, 2>> centres;  // per feature: the box its centre moves in
-      for (const auto& f : g.items("features", true)) {
-        const std::string name = f.string("name");
-        if (by_name.count(name) || fixed.count(name))
-          f.fail("name", "duplicate feature name '" + name + "'");
-        bool ok = false;
-        const std::string ts = f.one_of("type", {"ellipse", "super_ellipse", "circle"});
-        const auto type = Feature::parse_type(ts, &ok);
-        std::vector<ParamBinding> ps;
-        for (const auto& pn : Feature::parameter_names(type)) {
-          if (pn == "angle" && !f.has("angle"))
-            ps.push_back(ParamBinding{});
-          else
-            ps.push_back(binding(f, pn, *d));
-        }
-        // a non-design feature is solid inside and OR-ed with the region: material there
-        // whatever the design features do
-        const bool non_design = f.boolean("non_design", false);
-        if (non_design && f.has("hole"))
-          f.fail("hole",
-                 "a non_design feature is solid inside (material forced there); drop \"hole\"");
-        const bool hole = non_design ? false : f.boolean("hole", true);
-        f.finish();
-        Feature feat(name, type, ps, hole);
-        // each parameter is monotone in its variable: its extremes are at the bounds
-        std::vector<double> lo, hi;
-        for (const auto& b : ps) {
-          const double a =
-              b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].lower;
-          const double c =
-              b.variable < 0 ? b.offset : b.offset + b.scale * d->variables[b.variable].upper;
-          lo.push_back(std::min(a, c));
-          hi.push_back(std::max(a, c));
-        }
-        for (const auto* th : {&lo, &hi})
-          if (auto msg = feat.check(*th); !msg.empty())
-            f.fail("feature '" + name + "' is degenerate within the design bounds: " + msg);
-        // the shape lies within a disc about (cx, cy): r (circle), d·max(a, b) (ellipse, eq. 41),
-        // |(a, b)| (super-ellipse, eq. 43: inside the box |u| <= a, |v| <= b)
-        reach.push_back(type == Feature::Type::kCircle    ? hi[2]
-                        : type == Feature::Type::kEllipse ? hi[4] * std::max(hi[2], hi[3])
-                                                          : std::hypot(hi[2], hi[3]));
-        centres.push_back({Vec2(lo[0], lo[1]), Vec2(hi[0], hi[1])});
-        (non_design ? fixed : by_name)[name] = static_cast<int>(feats.size());
-        feats.push_back(std::move(feat));
-      }
-      if (by_name.empty())
-        g.fail("features",
-               "every feature is non_design: non-design regions only keep material that the "
-               "design features would remove; give at least one design feature");
-      LevelSetNode root;
-      if (g.has("region")) {
-        for (const auto& [name, i] : fixed)
-          if (g.child("region").raw().dump().find('"' + name + '"') != std::string::npos)
-            g.fail("region", "feature '" + name +
-                                 "' is non_design: it is OR-ed with the region, not part of it");
-        root = region(g.child("region"), by_name);
-      } else {  // the paper's default: material where every hole feature is positive
-        root.op = LevelSetNode::Op::kAnd;
-        for (const auto& [name, i] : by_name) {
-          LevelSetNode leaf;
-          leaf.feature = i;
-          root.children.push_back(leaf);
-        }
-        std::sort(root.children.begin(), root.children.end(),
-                  [](const auto& a, const auto& b) { return a.feature < b.feature; });
-      }
-      if (!fixed.empty()) {  // (region) OR every non-design feature (exact max: §2.2)
-        LevelSetNode any;
-        any.op = LevelSetNode::Op::kOr;
-        if (!root.children.empty() || root.op == LevelSetNode::Op::kFeature)
-          any.children.push_back(std::move(root));
-        for (const auto& [name, i] : fixed) {
-          LevelSetNode leaf;
-          leaf.feature = i;
-          any.children.push_back(leaf);
-        }
-        root = std::move(any);
-      }
-      MappingOptions mo;
-      mo.mu_min = g.number("mu_min", mo.mu_min);
-      if (!(mo.mu_min > 0 && mo.mu_min < 1)) g.fail("mu_min", "expected a value in (0, 1)");
-      mo.subgrid = g.integer("subgrid", mo.subgrid, 1);
-      if (mo.subgrid > 64) g.fail("subgrid", "expected at most 64 sub-cells per edge");
-      mo.band = g.positive("band", mo.band);
-      g.finish();
-      BodyDesign bd;
-      bd.body = &fb;
-      bd.map = std::make_unique<DesignMap>(
-          fb.mesh, LevelSet(std::move(feats), std::move(root), d->size()), mo);
-      // A feature wholly outside its body changes nothing. One that no design variable moves
-      // never will (a ring or hole drawn in another frame or unit): refused. One that a variable
-      // moves may come in during an optimization: the runs warn (Design::features_outside).
-      // One that the variables move but that no values within their bounds bring in (its shape's
-      // disc never reaches an element) never will either: refused as well.
-      for (int k : bd.map->features_outside_mesh(d->initial())) {
-        const auto& ls = bd.map->level_set();
-        const size_t kk = static_cast<size_t>(k);
-        const bool moved = !ls.feature_variables(k).empty();
-        if (moved && bd.map->disc_can_reach_mesh(centres[kk][0], centres[kk][1], reach[kk]))
-          continue;
-        const Feature& feat = ls.features()[kk];
-        g.child("features")
-            .at(kk)
-            .fail(std::string(fixed.count(feat.name()) ? "non-design feature '" : "feature '") +
-                  feat.name() + "' lies wholly outside body '" + fb.name +
-                  "' (it overlaps no element), and " +
-                  (moved ? "no values of its design variables within their bounds bring it in"
-                         : "no design variable moves it") +
-                  ": it has no effect; check its centre and size against the mesh, in the "
-                  "body's frame");
-      }
-      d->bodies.push_back(std::move(bd));
-    }
-    for (const auto& b : r.items("parameters")) {
-      ParameterBinding pb;
-      const std::string pname = b.string("parameter");
-      pb.parameter = builder.parameter(pname);
-      if (pb.parameter < 0) {
-        std::string avail;
-        for (const auto& n : builder.model().parameter_names())
-          avail += (avail.empty() ? "" : ", ") + n;
-        b.fail("parameter", "unknown model parameter '" + pname + "' (parameters: " + avail + ")");
-      }
-      const std::string vname = b.string("variable");
-      pb.variable = d->variable_index(vname);
-      if (pb.variable < 0) b.fail("variable", "unknown design variable '" + vname + "'");
-      pb.scale = b.number("scale", 1.0);
-      pb.offset = b.number("offset", 0.0);
-      b.finish();
-      // the parameter stays admissible over the variable's bounds (it is linear in it)
-      const DesignVariable& dv = d->variables[static_cast<size_t>(pb.variable)];
-      for (const double x : {dv.lower, dv.upper}) {
-        const double value = pb.offset + pb.scale * x;
-        if (auto msg = ModelBuilder::check_parameter_value(pname, value); !msg.empty())
-          b.fail("parameter '" + pname + "' = " + format_g(value) + " at " + vname + " = " +
-                 format_g(x) + " (a bound of the variable): " + msg);
-      }
-      for (const auto& o : d->bindings)
-        if (o.parameter == pb.parameter)
-          b.fail("parameter", "parameter '" + pname + "' is bound twice");
-      d->bindings.push_back(pb);
-    }
+    for (const auto& g : r.items("geometry")) geometry(g, *d);
+    for (const auto& b : r.items("parameters")) parameter_binding(b, *d);
     r.finish();
     cs.design = std::move(d);
   }
@@ -950,17 +703,21 @@ struct Loader {
 
 }  // namespace
 
-Case load_case_json(const nlohmann::json& j, const std::string& file_label,
-                    const std::string& base_dir) {
+namespace {
+
+// One case, without service conditions (its document has none).
+Case load_single(const nlohmann::json& j, const std::string& file_label,
+                 const std::string& base_dir) {
   Case cs;
   cs.file = file_label;
+  cs.base_dir = base_dir;
   cs.raw = j;
   Loader L(cs, base_dir);
-  ModelBuilder& builder = L.builder;
+  ModelBuilder& builder_ = L.builder_;
   const JsonReader root(j, file_label);
   if (!root.is_object()) root.fail("expected a JSON object at the top level");
   cs.name = root.string("name", fs::path(file_label).stem().string());
-  if (root.has("gravity")) builder.set_gravity(root.vec2("gravity"));
+  if (root.has("gravity")) builder_.set_gravity(root.vec2("gravity"));
   const auto bodies = root.items("bodies", true);
   if (bodies.empty()) root.fail("bodies", "expected at least one body");
   for (const auto& b : bodies) {
@@ -973,23 +730,23 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
       L.flexible_body(b, name);
   }
   int i = 0;
-  for (const auto& jt : root.items("joints")) L.joint(jt, i++);
+  for (const auto& jt : root.items("joints")) L.kind_entry(jt, "joints", i++);
   i = 0;
-  for (const auto& f : root.items("forces")) L.force(f, i++);
+  for (const auto& f : root.items("forces")) L.kind_entry(f, "forces", i++);
   if (auto d = root.optional_child("design")) L.design(*d);
   if (auto o = root.optional_child("optimization")) cs.optimization = o->raw();
   L.simulation(root.child("simulation"));
   if (auto out = root.optional_child("output")) {
     cs.output.csv_stride = out->integer("csv_stride", 1, 1);
     cs.output.vtu_stride = out->integer("vtu_stride", 0, 0);
-    for (const auto& m : out->items("measures")) L.measure(m);
+    for (const auto& m : out->items("measures")) L.kind_entry(m, "measures", 0);
     for (const auto& r : out->items("responses")) L.response(r);
     out->finish();
   }
   const auto initial_state = root.optional_child("initial_state");
   root.finish();
   try {  // refuses undetermined bodies, numbers the constraint rows
-    cs.model = builder.build();
+    cs.model = builder_.build();
   } catch (const ModelError& e) {
     root.fail("bodies", e.message());
   }
@@ -998,7 +755,7 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
   for (auto& m : cs.measures) {
     if (m) continue;
     const auto& [nm, jn] = L.pending_forces[pi++];
-    const std::vector<int>& rows = builder.joint_rows(jn);
+    const std::vector<int>& rows = builder_.joint_rows(jn);
     std::vector<bool> angular;  // per row: an angle equation (a moment) or a length one (a force)
     const auto& cons = cs.model->constraints();
     for (int row : rows)
@@ -1011,21 +768,14 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
       }
     m = std::make_unique<ConstraintForceMeasure>(nm, rows, std::move(angular));
   }
-  cs.joint_rows = builder.joint_rows();
-  for (const auto& [name, d] : builder.drivers()) cs.drivers[name] = d.law;
+  cs.joint_rows = builder_.joint_rows();
+  for (const auto& [name, d] : builder_.drivers()) cs.drivers[name] = d.law;
   // what the start checks need from the builder, kept for the checks of a case changed later
-  CaseStart& st = cs.start;
-  st.placed = builder.initial_state();
-  st.held_velocities = builder.held_velocities();
-  st.given_velocities = builder.given_velocities();
-  st.paths = L.paths;
+  cs.start = builder_.start();
+  cs.paths = L.paths;
   if (initial_state)
-    read_initial_state(*initial_state, *cs.model, L.base_dir, st, cs.initial_state_note,
-                       L.files_read);
-  for (size_t f = 0; f < cs.model->forces().size(); ++f)
-    st.force_owners.push_back(builder.force_owner(f));
-  for (const auto& [name, path] : L.paths)
-    if (auto ps = builder.parameters_of(name); !ps.empty()) st.entity_parameters[name] = ps;
+    read_initial_state(*initial_state, *cs.model, L.base_dir, cs.start, cs.paths,
+                       cs.initial_state_note, L.files_read);
   prepare_case(cs);
   for (const auto& f : L.files_read) {  // the bytes each file held when the case was loaded
     std::ifstream in(f, std::ios::binary);
@@ -1035,6 +785,210 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
     cs.input_files[f] = sha256_hex(ss.str());
   }
   return cs;
+}
+
+// The top-level keys a condition may not change: the design, the optimization and the conditions
+// themselves are one for all conditions.
+bool condition_may_set(const std::string& first_token) {
+  return first_token != "design" && first_token != "optimization" && first_token != "conditions" &&
+         first_token != "combined" && first_token != "name" && first_token != "description";
+}
+
+// "combined": [{"name", "aggregate": "sum" | "ks" | "max", "of": [names] or a response name
+// (every condition's), "weights" (sum), "ks" (ks)}]
+std::vector<ResponseCombination> read_combined(const JsonReader& root,
+                                               const std::vector<std::string>& conditions) {
+  std::vector<ResponseCombination> out;
+  for (const auto& c : root.items("combined")) {
+    ResponseCombination rc;
+    rc.name = c.string("name");
+    for (const auto& o : out)
+      if (o.name == rc.name) c.fail("name", "duplicate combined response '" + rc.name + "'");
+    const std::string agg = c.one_of("aggregate", {"sum", "ks", "max"});
+    rc.kind = agg == "sum"  ? ResponseCombination::Kind::kSum
+              : agg == "ks" ? ResponseCombination::Kind::kKs
+                            : ResponseCombination::Kind::kMax;
+    const JsonReader of = c.child("of");
+    if (of.is_string()) {  // the response of that name in every condition
+      for (const auto& k : conditions) rc.of.push_back(k + "." + of.as_string());
+    } else if (of.is_array()) {
+      for (size_t i = 0; i < of.size(); ++i) rc.of.push_back(of.at(i).as_string());
+    } else {
+      of.fail("expected a response name (that response of every condition) or a list of names");
+    }
+    if (rc.kind == ResponseCombination::Kind::kSum && c.has("weights")) {
+      const JsonReader w = c.child("weights");
+      if (!w.is_array()) w.fail("expected a list of numbers, one per response of \"of\"");
+      for (size_t i = 0; i < w.size(); ++i) rc.weights.push_back(w.at(i).as_number());
+    }
+    if (rc.kind == ResponseCombination::Kind::kKs) rc.ks = c.positive("ks");
+    c.finish();
+    out.push_back(std::move(rc));
+  }
+  return out;
+}
+
+// A JSON pointer whose tokens may name an entry of an array of named entries
+// (/forces/payload/mass): the same pointer with indices (/forces/2/mass). Error: which token.
+std::string indexed_pointer_at(const nlohmann::json& doc, const std::string& pointer,
+                               const JsonReader& at) {
+  nlohmann::json::json_pointer ptr;
+  try {
+    ptr = nlohmann::json::json_pointer(pointer);
+  } catch (const nlohmann::json::exception&) {
+    at.fail("'" + pointer + "' is not a JSON pointer (expected /key/index/…, e.g. /simulation/h)");
+  }
+  std::vector<std::string> tokens;
+  for (auto p = ptr; !p.empty(); p = p.parent_pointer()) tokens.insert(tokens.begin(), p.back());
+  const nlohmann::json* node = &doc;
+  std::string out;
+  for (size_t i = 0; i < tokens.size(); ++i) {
+    std::string t = tokens[i];
+    if (node->is_array() && (t.empty() || t.find_first_not_of("0123456789") != std::string::npos)) {
+      size_t found = node->size();
+      for (size_t k = 0; k < node->size(); ++k)
+        if ((*node)[k].is_object() && (*node)[k].value("name", "") == t) found = k;
+      if (found == node->size())
+        at.fail("'" + pointer + "': " + (out.empty() ? "/" : out) + " has no entry named '" + t +
+                "'");
+      t = std::to_string(found);
+    }
+    out += "/" + nlohmann::json::json_pointer(std::string("/") + t).back();
+    const auto here = nlohmann::json::json_pointer(out);
+    if (i + 1 < tokens.size()) {
+      if (!doc.contains(here))
+        at.fail("'" + pointer + "': the case has no " + out + " to set a value in");
+      node = &doc.at(here);
+    }
+  }
+  return out;
+}
+
+// One service condition: the base document with the condition's "set" applied, loaded as a case.
+std::unique_ptr<Case> load_condition(const nlohmann::json& base, const JsonReader& c,
+                                     const std::string& name, const std::string& file_label,
+                                     const std::string& base_dir, std::vector<std::string>& sets) {
+  nlohmann::json doc = base;
+  std::vector<std::pair<std::string, std::string>> set;  // the case's pointer, as given
+  if (auto s = c.optional_child("set")) {
+    if (!s->is_object()) s->fail("expected {\"/json/pointer\": value, …}");
+    for (const auto& [pointer, value] : s->raw().items()) {
+      const std::string key = pointer;
+      if (key.empty() || key[0] != '/')
+        s->fail("'" + key + "': expected a JSON pointer into the case (/forces/payload/mass)");
+      const std::string first = key.substr(1, key.find('/', 1) - 1);
+      if (!condition_may_set(first))
+        s->fail(key, "a condition changes the model, its loads, options and outputs; /" + first +
+                         " is one for all conditions");
+      const std::string indexed = indexed_pointer_at(doc, key, *s);
+      doc[nlohmann::json::json_pointer(indexed)] = value;
+      set.emplace_back(indexed, key);
+      sets.push_back(indexed);
+    }
+  }
+  try {
+    auto ck = std::make_unique<Case>(load_single(doc, file_label, base_dir));
+    ck->name = name;
+    return ck;
+  } catch (const Error& e) {  // where in the condition's document, and which value it set
+    std::string reason = e.what();
+    for (const std::string& part : {e.file(), e.json_path()})
+      if (!part.empty() && reason.rfind(part + ": ", 0) == 0) reason.erase(0, part.size() + 2);
+    std::string by;
+    for (const auto& [indexed, given] : set)
+      if (e.json_path() == indexed || e.json_path().rfind(indexed + "/", 0) == 0)
+        by = ", set by the condition as " + given;
+    c.fail("condition '" + name + "': " + e.json_path() + ": " + reason + by);
+  }
+}
+
+}  // namespace
+
+Case load_case_json(const nlohmann::json& j, const std::string& file_label,
+                    const std::string& base_dir) {
+  if (!j.is_object() || (!j.contains("conditions") && !j.contains("combined")))
+    return load_single(j, file_label, base_dir);
+  nlohmann::json base = j;
+  base.erase("conditions");
+  base.erase("combined");
+  Case cs = load_single(base, file_label, base_dir);
+  cs.raw = j;
+  const JsonReader root(j, file_label);
+  std::vector<std::string> names;
+  for (const auto& c : root.items("conditions")) {
+    const std::string name = c.string("name");
+    if (name.empty() || name.find('.') != std::string::npos)
+      c.fail("name", "expected a name without '.' (responses are named <condition>.<response>)");
+    if (std::find(names.begin(), names.end(), name) != names.end())
+      c.fail("name", "duplicate condition '" + name + "'");
+    names.push_back(name);
+    CaseCondition k;
+    k.name = name;
+    k.cs = load_condition(base, c, name, file_label, base_dir, k.set);
+    c.finish();
+    for (const auto& [f, sha] : k.cs->input_files) cs.input_files[f] = sha;
+    // a response that does not depend on the motion (a mass) is evaluated once, in the first
+    // condition (Conditions::reported)
+    if (!cs.conditions.empty()) {
+      std::vector<ResponseSpec> kept;
+      for (size_t r = 0; r < k.cs->responses.size(); ++r)
+        if (!Conditions::state_independent(*k.cs, r)) kept.push_back(k.cs->responses[r]);
+      k.cs->responses = std::move(kept);
+    }
+    cs.conditions.push_back(std::move(k));
+  }
+  if (root.has("conditions") && cs.conditions.empty())
+    root.fail("conditions", "expected at least one condition (or no \"conditions\" key)");
+  cs.combined = read_combined(root, names);
+  try {
+    conditions_of(cs).validate();
+  } catch (const SetupError& e) {
+    for (size_t i = 0; i < cs.combined.size(); ++i)
+      if (cs.combined[i].name == e.entity())
+        throw Error(file_label, "/combined/" + std::to_string(i), e.reason());
+    throw;
+  }
+  return cs;
+}
+
+std::string indexed_pointer(const nlohmann::json& doc, const std::string& pointer,
+                            const std::string& what) {
+  const nlohmann::json empty = nlohmann::json::object();
+  const JsonReader at(empty, what);
+  return indexed_pointer_at(doc, pointer, at);
+}
+
+nlohmann::json current_document(const Case& cs) {
+  nlohmann::json doc = cs.raw;
+  const nlohmann::json simulation = cs.simulation;  // named: items() refers to it
+  for (const auto& [key, value] : simulation.items())
+    doc["simulation"][key] = value;  // every option, as the case holds it now
+  const auto& names = cs.model->parameter_names();
+  for (size_t i = 0; i < names.size(); ++i) {
+    bool bound = false;
+    if (cs.design)
+      for (const auto& b : cs.design->bindings) bound |= b.parameter == static_cast<int>(i);
+    const std::string path = parameter_json_path(cs, static_cast<int>(i));
+    if (bound || path.empty()) continue;
+    const auto ptr = nlohmann::json::json_pointer(path);
+    if (doc.contains(ptr.parent_pointer())) doc[ptr] = cs.model->params().scalars[i];
+  }
+  return doc;
+}
+
+Conditions conditions_of(const Case& cs) {
+  if (cs.conditions.empty()) {
+    Conditions c = Conditions::single(cs);
+    c.combinations = cs.combined;
+    return c;
+  }
+  Conditions c;
+  for (const auto& k : cs.conditions) {
+    c.names.push_back(k.name);
+    c.studies.push_back(k.cs.get());
+  }
+  c.combinations = cs.combined;
+  return c;
 }
 
 Case load_case(const std::string& path) { return load_case(path, {}); }

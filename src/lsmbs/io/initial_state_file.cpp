@@ -18,12 +18,13 @@ namespace {
 constexpr const char* kFormat = "lsmbs final state";
 
 // The velocities of unknowns [first, end) are given: held by the projection, and a conflict with
-// the joints is reported at `path` (the key `label` stands for it in CaseStart::paths).
-void hold(CaseStart& st, const std::string& label, const std::string& path, int first, int end) {
+// the joints is reported at `path` (the key `label` stands for it in Case::paths).
+void hold(ModelStart& st, std::map<std::string, std::string>& paths, const std::string& label,
+          const std::string& path, int first, int end) {
   if (st.held_velocities.size() < static_cast<size_t>(end))
     st.held_velocities.resize(static_cast<size_t>(end), 0);
   for (int i = first; i < end; ++i) st.held_velocities[static_cast<size_t>(i)] = 1;
-  st.paths[label] = path;
+  paths[label] = path;
   st.given_velocities.push_back({label, "", first, end});
 }
 
@@ -38,7 +39,7 @@ std::string read_text(const std::string& path, const JsonReader& at, const std::
 
 // "from": the earlier run's state, body by body (every body of this case must be in it, with the
 // same kind and node count)
-std::string from_run(const JsonReader& r, const Model& m, const std::string& file, CaseStart& st) {
+std::string from_run(const JsonReader& r, const Model& m, const std::string& file, ModelStart& st) {
   const std::string text = read_text(file, r, "from");
   nlohmann::json j;
   try {
@@ -119,8 +120,8 @@ std::string from_run(const JsonReader& r, const Model& m, const std::string& fil
 // "nodes": [{"body", "file"}]: per node of the body's mesh, in order, ux, uy (from the placed
 // position) and vx, vy; a header line names the columns (an optional first column "node" is
 // checked against the row).
-void nodal(const JsonReader& e, const Model& m, const std::string& file, CaseStart& st,
-           const std::string& path) {
+void nodal(const JsonReader& e, const Model& m, const std::string& file, ModelStart& st,
+           std::map<std::string, std::string>& paths, const std::string& path) {
   const std::string name = e.string("body");
   const FlexibleBody* fb = m.find_flexible(name);
   if (!fb) {
@@ -193,7 +194,7 @@ void nodal(const JsonReader& e, const Model& m, const std::string& file, CaseSta
     throw Error(file, "",
                 "holds " + std::to_string(row) + " rows, body '" + name + "' has " +
                     std::to_string(n) + " nodes (a row per node, in node order)");
-  hold(st, "initial_state:nodes:" + name, path, fb->dof0, fb->dof0 + 2 * n);
+  hold(st, paths, "initial_state:nodes:" + name, path, fb->dof0, fb->dof0 + 2 * n);
 }
 
 }  // namespace
@@ -226,7 +227,8 @@ nlohmann::json final_state_json(const Model& m, const State& s, const std::strin
 }
 
 void read_initial_state(const JsonReader& r, const Model& m, const std::string& base_dir,
-                        CaseStart& st, std::string& note, std::set<std::string>& files) {
+                        ModelStart& st, std::map<std::string, std::string>& paths,
+                        std::string& note, std::set<std::string>& files) {
   auto resolve = [&](const std::string& f) {
     const std::string path = fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
     files.insert(path);
@@ -245,7 +247,7 @@ void read_initial_state(const JsonReader& r, const Model& m, const std::string& 
   for (const auto& e : r.items("nodes")) {
     if (!seen.insert(e.string("body")).second)
       e.fail("body", "body '" + e.string("body") + "' has two entries");
-    nodal(e, m, resolve(e.string("file")), st, r.path() + "/nodes/" + std::to_string(k++));
+    nodal(e, m, resolve(e.string("file")), st, paths, r.path() + "/nodes/" + std::to_string(k++));
     e.finish();
   }
   // an element folded or inverted at the start is an input error, not a failure of step 1

@@ -23,12 +23,14 @@ namespace lsmbs {
 nlohmann::json final_state_json(const Model& model, const State& s, const std::string& case_name,
                                 const std::string& status, const std::string& source);
 
-/// Reads the case's "initial_state" section (`r`) into `start`: "from" (an earlier run's
+/// Reads the case's "initial_state" section (`r`) into `start` (an entry that gives velocities is
+/// added to `paths` under its label, for the start checks' messages): "from" (an earlier run's
 /// final_state.json) and "nodes" (per flexible body, a CSV of ux, uy, vx, vy per node). File names
 /// are relative to `base_dir`. Throws Error naming the file (and line) or the JSON path.
 /// A state that a static analysis computed sets `note` (Study::initial_state_note).
 /// Every file it reads is added to `files`.
 void read_initial_state(const JsonReader& r, const Model& model, const std::string& base_dir,
-                        CaseStart& start, std::string& note, std::set<std::string>& files);
+                        ModelStart& start, std::map<std::string, std::string>& paths,
+                        std::string& note, std::set<std::string>& files);
 
 }  // namespace lsmbs

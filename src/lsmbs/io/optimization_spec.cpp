@@ -12,15 +12,26 @@ OptimizationSpec parse_optimization(const Case& cs) {
   const JsonReader r(cs.optimization, cs.file, "/optimization");
   if (!r.is_object()) r.fail("expected an object");
   OptimizationSpec s;
+  // the responses of the case, or of its service conditions ("<condition>.<response>",
+  // state-independent ones unprefixed) and the combined ones
+  const Conditions conditions = conditions_of(cs);
   auto response = [&](const JsonReader& at, const std::string& key, bool scalar) {
     const std::string n = at.string(key);
-    for (const auto& resp : cs.responses)
-      if (resp.name == n) {
-        if (scalar && resp.kind == ResponseSpec::Kind::kPerStep)
-          at.fail(key, "the objective must be a scalar response");
-        return n;
-      }
-    at.fail(key, "unknown response '" + n + "' (define it in output.responses)");
+    for (size_t k = 0; k < conditions.size(); ++k)
+      for (size_t i = 0; i < conditions.studies[k]->responses.size(); ++i)
+        if (conditions.reported(k, i) && conditions.response_name(k, i) == n) {
+          if (scalar && conditions.studies[k]->responses[i].kind == ResponseSpec::Kind::kPerStep)
+            at.fail(key, "the objective must be a scalar response");
+          return n;
+        }
+    for (const auto& c : conditions.combinations)
+      if (c.name == n) return n;
+    std::string all;
+    for (const auto& name : conditions.response_names()) all += (all.empty() ? "" : ", ") + name;
+    at.fail(key, "unknown response '" + n + "' (" +
+                     (conditions.several() ? "responses of the conditions: " + all
+                                           : "define it in output.responses") +
+                     ")");
   };
   s.objective = response(r, "objective", true);
   // a constraint bounds a response from above ("upper"), below ("lower"), both, or to a value

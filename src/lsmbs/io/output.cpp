@@ -16,6 +16,7 @@
 #include "lsmbs/core/text.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/fem/element_types.hpp"
+#include "lsmbs/io/case.hpp"
 
 namespace lsmbs {
 
@@ -26,6 +27,46 @@ nlohmann::json units_json(const Study& s) {
   for (size_t i = 0; i < cols.size(); ++i) m[cols[i]] = units[i];
   for (size_t i = 0; i < s.responses.size(); ++i) r[s.responses[i].name] = s.response_unit(i);
   return {{"t", "s"}, {"measures", m}, {"responses", r}};
+}
+
+nlohmann::json units_json(const Conditions& c) {
+  nlohmann::json j = units_json(c.first());
+  if (!c.several() && c.combinations.empty()) return j;
+  nlohmann::json r = nlohmann::json::object();
+  for (const auto& name : c.response_names()) r[name] = c.unit(name);
+  j["responses"] = r;
+  return j;
+}
+
+nlohmann::json conditions_json(const Case& cs, const Conditions& c) {
+  nlohmann::json conds = nlohmann::json::array();
+  for (size_t k = 0; k < cs.conditions.size(); ++k) {
+    const auto& raw = cs.raw.at("conditions").at(k);
+    conds.push_back({{"name", c.names[k]},
+                     {"set", raw.contains("set") ? raw.at("set") : nlohmann::json::object()},
+                     {"t_end", c.studies[k]->simulation.t_end},
+                     {"h", c.studies[k]->simulation.h}});
+  }
+  nlohmann::json comb = nlohmann::json::array();
+  for (const auto& x : c.combinations) {
+    nlohmann::json e = {
+        {"name", x.name}, {"aggregate", ResponseCombination::kind_name(x.kind)}, {"of", x.of}};
+    if (!x.weights.empty()) e["weights"] = x.weights;
+    if (x.kind == ResponseCombination::Kind::kKs) {
+      e["ks"] = x.ks;
+      e["error_bound"] = x.error_bound();
+      e["error_definition"] = "max <= ks <= max + ln(n)/ks, in the responses' unit";
+    }
+    comb.push_back(e);
+  }
+  nlohmann::json once = nlohmann::json::array();  // evaluated in the first condition only
+  if (c.several())
+    for (size_t r = 0; r < c.first().responses.size(); ++r)
+      if (Conditions::state_independent(c.first(), r)) once.push_back(c.first().responses[r].name);
+  return {{"conditions", conds},
+          {"combined", comb},
+          {"state_independent_responses", once},
+          {"responses", c.response_names()}};
 }
 
 nlohmann::json file_list(std::vector<std::string> files) {
@@ -272,8 +313,8 @@ void write_vtm(const std::string& path,
 }
 
 ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
-                              const std::string& suffix, const Model& m, const Vec& q,
-                              const std::vector<const StressMeasure*>& stress) {
+                              const std::string& suffix, const Model& m, const ModelParams& params,
+                              const Vec& q, const std::vector<const StressMeasure*>& stress) {
   ModelVtkFiles f;
   std::vector<std::pair<std::string, std::string>> blocks;  // relative to the .vtm
   const auto stems = body_file_stems(m);
@@ -290,10 +331,10 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
         State s;
         s.q = q;
         std::vector<double> se;
-        sm->element_stresses(s, m.params(), se);
+        sm->element_stresses(s, params, se);
         cells.emplace_back(sm->name() + "_relaxed_von_mises", std::move(se));
       }
-    write_vtu(add(b->name), *b, q, m.params(), cells);
+    write_vtu(add(b->name), *b, q, params, cells);
   }
   for (const auto& b : m.rigid_bodies()) write_rigid_vtu(add(b.name), b, q);
   f.multiblock = folder + kModelVtk + suffix + ".vtm";

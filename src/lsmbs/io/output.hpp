@@ -21,9 +21,12 @@
 #include "lsmbs/core/csv.hpp"
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/sensitivity/conditions.hpp"
 #include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
+
+struct Case;
 
 /// `poll`, when given, is called every few thousand rows (a long history: it may throw to stop).
 void write_csv(const std::string& path, const std::vector<std::string>& header,
@@ -63,13 +66,15 @@ struct ModelVtkFiles {
   std::vector<std::pair<std::string, std::string>> bodies;  ///< body name, its VTU
   std::string multiblock;                                   ///< the .vtm listing them
 };
-/// Every body of the model at positions q: OUT/<folder><body><suffix>.vtu (flexible bodies first,
-/// then rigid ones, each in model order) and OUT/<folder>model<suffix>.vtm listing them (folder:
+/// Every body of the model at positions q, with the parameters (μ_e) of the run:
+/// OUT/<folder><body><suffix>.vtu (flexible bodies first, then rigid ones, each in model order) and
+/// OUT/<folder>model<suffix>.vtm listing them (folder:
 /// "" or ending in '/'; it must exist).
 /// `stress`: stress measures whose relaxed element stresses are written as the cell array
 /// "<measure>_relaxed_von_mises" of their body.
 ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& folder,
-                              const std::string& suffix, const Model& model, const Vec& q,
+                              const std::string& suffix, const Model& model,
+                              const ModelParams& params, const Vec& q,
                               const std::vector<const StressMeasure*>& stress = {});
 
 /// The file-name stem of each body's files (<stem>.pvd, vtu/<stem>_<step>.vtu, <stem>.png):
@@ -85,6 +90,11 @@ nlohmann::json design_json(const Study& s, const Vec& p = {});
 /// summary.json["units"]: the SI unit of the time column ("t": "s"), of every measure column
 /// ("measures", as in history.csv) and of every response ("responses"); docs/case-format.md.
 nlohmann::json units_json(const Study& s);
+/// The same over service conditions: every gathered response's unit (sensitivity/conditions.hpp).
+nlohmann::json units_json(const Conditions& c);
+/// summary.json["conditions"]: each condition (its name, what it sets, t_end, h), the combinations
+/// (with the KS error bound), the responses evaluated once and every response's name.
+nlohmann::json conditions_json(const Case& cs, const Conditions& c);
 
 /// summary.json["files"]: the files a command wrote, relative to its output folder, sorted and
 /// without duplicates (summary.json itself included by the caller).

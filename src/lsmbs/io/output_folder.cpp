@@ -54,7 +54,8 @@ std::set<std::string> planned_outputs(const Model& model) {
       "summary.json", "history.csv",     "history.png", "gradients.csv",    "checkpoint.json",
       "report.md",    "bench.json",      "methods.csv", "methods.png",      "convergence.png",
       "dp_study.csv", "dp_study.png",    "h_study.csv", "h_study_plot.csv", "h_study.png",
-      "starts.csv",   "multistart.json", "vtu",         "final_design",     "final_state.json"};
+      "starts.csv",   "multistart.json", "vtu",         "final_design",     "final_state.json",
+      "conditions",   "sweep.csv",       "sweep.json"};
   p.insert(std::string(kModelVtk) + ".pvd");
   p.insert(std::string(kModelVtk) + ".vtm");
   for (const auto& [name, stem] : body_file_stems(model))

@@ -571,6 +571,17 @@ std::unique_ptr<Model> ModelBuilder::build() {
   return std::move(model_);
 }
 
+ModelStart ModelBuilder::start() const {
+  ModelStart st;
+  st.placed = initial_state();
+  st.held_velocities = held_velocities();
+  st.given_velocities = given_velocities();
+  for (size_t f = 0; f < m_->forces().size(); ++f) st.force_owners.push_back(force_owner(f));
+  for (const auto& [name, params] : entity_params_)
+    if (!params.empty()) st.entity_parameters[name] = params;
+  return st;
+}
+
 const State& ModelBuilder::initial_state() const {
   if (!built_) throw std::logic_error("ModelBuilder::initial_state before build()");
   return initial_;

@@ -150,6 +150,18 @@ struct GivenVelocity {
   int first = 0, end = 0;
 };
 
+/// What the start checks of a study (Study::prepare) need from the building of its model: the
+/// state as the bodies are placed, which velocities were given, and which entity (a body or
+/// force, by name) made each force element and each parameter, for messages that name it.
+struct ModelStart {
+  State placed;  ///< t = 0, positions and given velocities as placed (before the projection)
+  std::vector<char> held_velocities;  ///< per unknown: its initial velocity was given
+  std::vector<GivenVelocity>
+      given_velocities;                   ///< per body (or initial-state entry) that gives some
+  std::vector<std::string> force_owners;  ///< per force element: its body or force
+  std::map<std::string, std::vector<int>> entity_parameters;  ///< the parameters of each entity
+};
+
 class ModelBuilder {
  public:
   enum class BodyKind { kNone, kRigid, kFlexible };
@@ -256,6 +268,8 @@ class ModelBuilder {
   /// After build(): per unknown, whether its initial velocity was given.
   const std::vector<char>& held_velocities() const { return held_v_; }
   const std::vector<GivenVelocity>& given_velocities() const { return given_v_; }
+  /// After build(): what the start checks need (Study::prepare).
+  ModelStart start() const;
   /// After build(): the constraint rows (indices into Φ) of a joint, and of every joint.
   const std::vector<int>& joint_rows(const std::string& joint) const;
   const std::map<std::string, std::vector<int>>& joint_rows() const { return joint_rows_; }

@@ -100,7 +100,7 @@ struct Context {
     }
   }
   void checkpoint() {
-    if (o.out_dir.empty()) return;
+    if (o.out_dir.empty() || !o.write_files) return;
     nlohmann::json ev = nlohmann::json::array();
     for (const auto& h : history) ev.push_back(evaluation_to_json(h));
     write_json_atomic(o.out_dir + "/checkpoint.json",
@@ -309,6 +309,7 @@ std::string OptimizeOptions::validate() const {
   if (stop_after != -1 && stop_after < 1)
     return "stop_after: expected -1 (never) or a positive number of simulations";
   if (resume && out_dir.empty()) return "resume: needs out_dir (the folder of the checkpoint)";
+  if (!initial.allFinite()) return "initial: expected finite values";
   return {};
 }
 
@@ -319,7 +320,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
     throw SetupError("optimization.optimizer", "unknown optimizer '" + name +
                                                    "': expected mma, ccsaq, slsqp or mma-svanberg");
   const auto t0 = std::chrono::steady_clock::now();
-  Study& cs = prob.study();
+  const Study& cs = prob.study();
   const Design& d = *cs.design;
   const int n = d.size(), m = prob.num_constraints();
   Context c(prob, o);
@@ -389,7 +390,7 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
                         : prob.spec().optimizer == "slsqp" ? NLOPT_LD_SLSQP
                                                            : NLOPT_LD_MMA;
   std::vector<double> lb(n, 0.0), ub(n, 1.0), x(n);
-  const Vec p0 = d.initial();
+  const Vec p0 = o.initial.size() ? o.initial : d.initial();
   for (int i = 0; i < n; ++i) x[i] = (p0[i] - c.lower[i]) / c.range[i];
   // objective scale from the initial design (evaluated first, also as the optimizer's first point)
   const Evaluation e0 = c.eval(x.data());
@@ -453,7 +454,8 @@ OptimizeResult optimize(DesignProblem& prob, const OptimizeOptions& o) {
                   (r == NLOPT_FTOL_REACHED || r == NLOPT_XTOL_REACHED || r == NLOPT_SUCCESS) &&
                   res.kkt && res.kkt->satisfied();
   res.warnings = result_warnings(prob, res);
-  if (!o.out_dir.empty()) write_history(o.out_dir + "/history.csv", prob, c.history);
+  if (!o.out_dir.empty() && o.write_files)
+    write_history(o.out_dir + "/history.csv", prob, c.history);
   res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

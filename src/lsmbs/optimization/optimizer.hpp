@@ -21,6 +21,8 @@ namespace lsmbs {
 
 struct OptimizeOptions {
   std::string out_dir;  ///< history.csv, checkpoint.json (empty: nothing written)
+  /// false: out_dir is read (resume), never written (the MPI ranks but rank 0, runs/mpi.hpp)
+  bool write_files = true;
   bool resume = false;  ///< seed from out_dir/checkpoint.json
   /// Hash of the input the problem was built from (a case file's SHA-256): a checkpoint of another
   /// input is refused on resume.
@@ -28,6 +30,8 @@ struct OptimizeOptions {
   std::function<void(int, const Evaluation&)>
       on_evaluation;     ///< progress (evaluation index, result)
   long stop_after = -1;  ///< testing: stop (as if killed) after this many new simulations
+  /// The design the run starts from; empty: the design's initial values (Design::initial).
+  Vec initial;
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
 };

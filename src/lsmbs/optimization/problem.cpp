@@ -1,11 +1,13 @@
 #include "lsmbs/optimization/problem.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/records/json.hpp"
@@ -36,15 +38,77 @@ nlohmann::json OptimizationSpec::to_json() const {
           {"asymptote_init", asymptote_init}};
 }
 
-DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(std::move(spec)) {
-  auto find = [&](const std::string& n) { return cs_.response_index(n); };
+DesignProblem::DesignProblem(const Study& cs, OptimizationSpec spec)
+    : DesignProblem(Conditions::single(cs), std::move(spec)) {}
+
+namespace {
+
+// The study and response index of a gathered response name; null study for a combination.
+struct ResponseSource {
+  const Study* study = nullptr;
+  int response = -1;
+  const ResponseCombination* combination = nullptr;
+};
+ResponseSource source_of(const Conditions& c, const std::string& name) {
+  for (size_t k = 0; k < c.size(); ++k)
+    for (size_t r = 0; r < c.studies[k]->responses.size(); ++r)
+      if (c.reported(k, r) && c.response_name(k, r) == name)
+        return {c.studies[k], static_cast<int>(r), nullptr};
+  for (const auto& comb : c.combinations)
+    if (comb.name == name) return {nullptr, -1, &comb};
+  return {};
+}
+
+// The steps of a per-step response's window on its study's time grid.
+int window_steps(const Study& s, const ResponseSpec& r) {
+  const double h = s.simulation.h;
+  const long n = std::lround(std::ceil(s.simulation.t_end / h - 1e-9));
+  int count = 0;
+  for (long i = 0; i <= n; ++i) {
+    const double t = i * h;
+    if (t >= r.t0 - 1e-9 * h && t <= r.t1 + 1e-9 * h) ++count;
+  }
+  return count;
+}
+
+}  // namespace
+
+DesignProblem::DesignProblem(Conditions conditions, OptimizationSpec spec, ConditionExecutor run)
+    : conditions_(std::move(conditions)), run_(std::move(run)), spec_(std::move(spec)) {
+  if (!run_) run_ = thread_executor(static_cast<int>(std::thread::hardware_concurrency()));
+  names_ = conditions_.response_names();
+  auto find = [&](const std::string& n) {
+    const auto it = std::find(names_.begin(), names_.end(), n);
+    return it == names_.end() ? -1 : static_cast<int>(it - names_.begin());
+  };
   objective_index_ = find(spec_.objective);
   if (objective_index_ < 0)
     throw SetupError("optimization.objective", "unknown response '" + spec_.objective + "'");
-  if (cs_.responses[objective_index_].kind == ResponseSpec::Kind::kPerStep)
+  const ResponseSource obj = source_of(conditions_, spec_.objective);
+  if (obj.study && obj.study->responses[obj.response].kind == ResponseSpec::Kind::kPerStep)
     throw SetupError("optimization.objective",
                      "the objective must be a scalar response (not per_step)");
+  if (obj.combination && obj.combination->kind == ResponseCombination::Kind::kMax)
+    throw SetupError("optimization.objective",
+                     "'" + spec_.objective +
+                         "' is an exact max: it has a kink where two of its terms tie, which "
+                         "the optimizer does not see; minimize a \"ks\" combination (smooth, "
+                         "above the max by at most ln(n)/ρ), or a sum");
+  // a constraint on an exact max is one constraint per term (the same bound)
+  std::vector<OptimizationSpec::Constraint> expanded;
   for (const auto& c : spec_.constraints) {
+    const ResponseSource src = source_of(conditions_, c.response);
+    if (src.combination && src.combination->kind == ResponseCombination::Kind::kMax) {
+      for (const auto& t : src.combination->of) {
+        OptimizationSpec::Constraint e = c;
+        e.response = t;
+        expanded.push_back(e);
+      }
+      continue;
+    }
+    expanded.push_back(c);
+  }
+  for (const auto& c : expanded) {
     const int k = find(c.response);
     if (k < 0)
       throw SetupError("optimization.constraints", "unknown response '" + c.response + "'");
@@ -52,41 +116,32 @@ DesignProblem::DesignProblem(Study& cs, OptimizationSpec spec) : cs_(cs), spec_(
   }
   // the discrete adjoint takes scalar responses; those the optimization does not use are skipped
   if (spec_.sensitivity.is_adjoint()) {
-    for (size_t j = 0; j < constraint_index_.size(); ++j)
-      if (cs_.responses[constraint_index_[j]].kind == ResponseSpec::Kind::kPerStep)
+    for (size_t j = 0; j < expanded.size(); ++j) {
+      const ResponseSource src = source_of(conditions_, expanded[j].response);
+      if (src.study && src.study->responses[src.response].kind == ResponseSpec::Kind::kPerStep)
         throw SetupError("optimization.constraints",
-                         "constraint on '" + spec_.constraints[j].response +
+                         "constraint on '" + expanded[j].response +
                              "' is per_step (one constraint per grid step): the adjoint method "
                              "takes scalar responses; constrain an aggregate (max, ks) or use "
                              "sensitivity method direct-analytic");
+    }
     spec_.sensitivity.adjoint_skip_per_step = true;
   }
   // per-step constraints: count the steps of the window on the time grid
-  for (size_t j = 0; j < constraint_index_.size(); ++j) {
-    const auto& r = cs_.responses[constraint_index_[j]];
-    if (r.kind != ResponseSpec::Kind::kPerStep) {
-      ++num_constraints_;
-      constraint_upper_.push_back(spec_.constraints[j].upper);
-      constraint_scale_.push_back(spec_.constraints[j].normalizer());
-      constraint_names_.push_back((spec_.constraints[j].lower ? "-" : "") + r.name);
-      continue;
-    }
-    const double h = cs_.simulation.h;
-    const long n = std::lround(std::ceil(cs_.simulation.t_end / h - 1e-9));
-    int count = 0;
-    for (long i = 0; i <= n; ++i) {
-      const double t = i * h;
-      if (t >= r.t0 - 1e-9 * h && t <= r.t1 + 1e-9 * h) ++count;
-    }
+  for (size_t j = 0; j < expanded.size(); ++j) {
+    const auto& c = expanded[j];
+    const ResponseSource src = source_of(conditions_, c.response);
+    const bool per_step =
+        src.study && src.study->responses[src.response].kind == ResponseSpec::Kind::kPerStep;
+    const int count = per_step ? window_steps(*src.study, src.study->responses[src.response]) : 1;
     num_constraints_ += count;
     for (int k = 0; k < count; ++k)
-      constraint_names_.push_back((spec_.constraints[j].lower ? "-" : "") + r.name + "." +
-                                  std::to_string(k));
-    constraint_upper_.insert(constraint_upper_.end(), static_cast<size_t>(count),
-                             spec_.constraints[j].upper);
-    constraint_scale_.insert(constraint_scale_.end(), static_cast<size_t>(count),
-                             spec_.constraints[j].normalizer());
+      constraint_names_.push_back((c.lower ? "-" : "") + c.response +
+                                  (per_step ? "." + std::to_string(k) : ""));
+    constraint_upper_.insert(constraint_upper_.end(), static_cast<size_t>(count), c.upper);
+    constraint_scale_.insert(constraint_scale_.end(), static_cast<size_t>(count), c.normalizer());
   }
+  expanded_ = std::move(expanded);
 }
 
 void DesignProblem::seed(const Evaluation& e) {
@@ -100,18 +155,33 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
     return it->second;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const auto res = compute_sensitivities(cs_, p, spec_.sensitivity);
+  const auto res = merge(conditions_, compute_conditions(conditions_, p, spec_.sensitivity, run_));
   ++simulations_;
   Evaluation e;
   e.p = p;
   e.ok = res.ok;
   e.message = res.message;
-  const auto& obj = res.responses[objective_index_];
+  // the gathered responses by their index in names_ (a failed condition leaves some out)
+  std::vector<const ResponseSensitivity*> by_index(names_.size(), nullptr);
+  for (const auto& r : res.responses) {
+    const auto it = std::find(names_.begin(), names_.end(), r.name);
+    if (it != names_.end()) by_index[static_cast<size_t>(it - names_.begin())] = &r;
+  }
+  static const ResponseSensitivity kNone;
+  auto response = [&](int i) -> const ResponseSensitivity& {
+    const auto* r = by_index[static_cast<size_t>(i)];
+    if (!r && e.ok) {
+      e.ok = false;
+      e.message = "response '" + names_[static_cast<size_t>(i)] + "' was not computed";
+    }
+    return r ? *r : kNone;
+  };
+  const auto& obj = response(objective_index_);
   auto note_extreme = [&](const ResponseSensitivity& r) {
     if (std::isfinite(r.extreme_time)) e.extreme_times[r.name] = r.extreme_time;
   };
   note_extreme(obj);
-  for (int j : constraint_index_) note_extreme(res.responses[static_cast<size_t>(j)]);
+  for (int j : constraint_index_) note_extreme(response(j));
   e.objective = obj.values.empty() ? NAN : obj.values[0];
   e.objective_gradient =
       obj.gradient.rows() ? Vec(obj.gradient.row(0).transpose()) : Vec::Zero(p.size());
@@ -121,8 +191,8 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
   // empty maximum −∞, which JSON cannot hold: summary.json wrote null, read back as not feasible)
   e.max_violation = num_constraints_ == 0 ? 0.0 : -INFINITY;
   for (size_t j = 0; j < constraint_index_.size(); ++j) {
-    const auto& r = res.responses[constraint_index_[j]];
-    const auto& spec = spec_.constraints[j];
+    const auto& r = response(constraint_index_[j]);
+    const auto& spec = expanded_[j];
     const double ub = spec.upper, sign = spec.lower ? -1.0 : 1.0, sc = spec.normalizer();
     for (size_t k = 0; k < r.values.size() && row < num_constraints_; ++k, ++row) {
       const double g = sign * r.values[k];
@@ -133,7 +203,7 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
       e.max_violation = std::max(e.max_violation, (g - ub) / sc);
     }
   }
-  if (row != num_constraints_ && res.ok) {  // a failed run's own message says when and why
+  if (row != num_constraints_ && e.ok) {  // a failed run's own message says when and why
     e.ok = false;
     e.message = "a per-step constraint produced " + std::to_string(row) + " values instead of " +
                 std::to_string(num_constraints_) + " (the run did not reach t_end?)";
@@ -241,15 +311,16 @@ Evaluation evaluation_from_json(const nlohmann::json& j) {
 std::optional<GradientCheckResult> check_problem_gradients(DesignProblem& problem, const Vec& p,
                                                            const GradientCheckOptions& o) {
   const OptimizationSpec& spec = problem.spec();
-  const auto sres = compute_sensitivities(problem.study(), p, spec.sensitivity);
+  const Conditions& c = problem.conditions();
+  const auto sres = merge(c, compute_conditions(c, p, spec.sensitivity, problem.executor()));
   if (!sres.ok) return std::nullopt;
   std::vector<ResponseSensitivity> used;
   for (const auto& r : sres.responses) {
     bool use = r.name == spec.objective;
-    for (const auto& c : spec.constraints) use |= r.name == c.response;
+    for (const auto& k : spec.constraints) use |= r.name == k.response;
     if (use) used.push_back(r);
   }
-  return check_gradients(problem.study(), p, used, o);
+  return check_gradients(c, p, used, o, problem.executor());
 }
 
 }  // namespace lsmbs

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "lsmbs/sensitivity/conditions.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/sensitivity/study.hpp"
@@ -71,8 +72,15 @@ struct Evaluation {
 
 class DesignProblem {
  public:
-  DesignProblem(Study& cs, OptimizationSpec spec);
-  int num_variables() const { return cs_.design->size(); }
+  /// The problem of one study.
+  DesignProblem(const Study& cs, OptimizationSpec spec);
+  /// The problem over service conditions: the objective and constraints name the gathered
+  /// responses (sensitivity/conditions.hpp: "<condition>.<response>", state-independent ones
+  /// unprefixed, combinations). A constraint on an exact-max combination is one constraint per
+  /// term. `run` evaluates the conditions (default: threads of this process); its results do not
+  /// depend on it.
+  DesignProblem(Conditions conditions, OptimizationSpec spec, ConditionExecutor run = {});
+  int num_variables() const { return design().size(); }
   /// Number of scalar constraints (per-step responses count one per step).
   int num_constraints() const { return num_constraints_; }
   /// Name of each scalar constraint: its response's name, followed by ".k" for step k of a
@@ -85,12 +93,20 @@ class DesignProblem {
   void seed(const Evaluation& e);
   const std::map<std::vector<double>, Evaluation>& cache() const { return cache_; }
   const OptimizationSpec& spec() const { return spec_; }
-  Study& study() { return cs_; }
-  const Study& study() const { return cs_; }
+  /// The first condition's study (the only one without conditions).
+  const Study& study() const { return conditions_.first(); }
+  const Conditions& conditions() const { return conditions_; }
+  const Design& design() const { return *conditions_.first().design; }
+  /// Evaluates the conditions of the problem (for its gradient check: check_problem_gradients).
+  const ConditionExecutor& executor() const { return run_; }
 
  private:
-  Study& cs_;
+  Conditions conditions_;
+  ConditionExecutor run_;
   OptimizationSpec spec_;
+  std::vector<std::string> names_;  // the gathered responses' names (Conditions::response_names)
+  /// The constraints as evaluated: spec's, an exact max turned into one per term.
+  std::vector<OptimizationSpec::Constraint> expanded_;
   int objective_index_ = -1;
   std::vector<int> constraint_index_;
   int num_constraints_ = 0;

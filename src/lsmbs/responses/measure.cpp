@@ -199,6 +199,11 @@ bool CombinationMeasure::depends_on_params() const {
                      [](const Term& t) { return t.measure->depends_on_params(); });
 }
 
+bool CombinationMeasure::state_independent() const {
+  return std::all_of(terms_.begin(), terms_.end(),
+                     [](const Term& t) { return t.measure->state_independent(); });
+}
+
 bool CombinationMeasure::field_partials(const Model& m, const State& s, const ModelParams& p, int,
                                         int& field, Vec& df_dmu) const {
   // the terms with exact ∂f/∂μ (the loader lets them combine only with terms that do not depend

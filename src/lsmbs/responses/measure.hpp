@@ -38,6 +38,9 @@ class Measure {
                         MeasureGradient& g) const = 0;
   /// Whether the measure depends on model parameters explicitly (∂f/∂p of eq. 24).
   virtual bool depends_on_params() const { return false; }
+  /// The value does not depend on the state (q, v, a, λ, t): a mass. Such a measure is the same
+  /// under every service condition (sensitivity/conditions.hpp evaluates it once).
+  virtual bool state_independent() const { return false; }
   /// Exact ∂f/∂μ_e of component c for the material field `field` (one per flexible body), when
   /// the measure provides it; otherwise false, and ∂f/∂p is taken by a central difference along
   /// each parameter direction (exact for the measures linear in μ).
@@ -200,6 +203,7 @@ class CombinationMeasure : public Measure {
   void gradient(const Model& m, const State& s, const ModelParams& p, int c,
                 MeasureGradient& g) const override;
   bool depends_on_params() const override;
+  bool state_independent() const override;
   bool field_partials(const Model& m, const State& s, const ModelParams& p, int c, int& field,
                       Vec& df_dmu) const override;
 
@@ -306,6 +310,7 @@ class FlexibleMassMeasure : public Measure {
   void gradient(const Model&, const State&, const ModelParams&, int,
                 MeasureGradient&) const override {}
   bool depends_on_params() const override { return true; }
+  bool state_independent() const override { return true; }
 
  private:
   const FlexibleBody* body_;

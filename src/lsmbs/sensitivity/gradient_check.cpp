@@ -74,8 +74,16 @@ GradientCheckResult check_gradients(const Study& cs, const Vec& p,
                                     const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o) {
   if (!cs.design) throw SetupError("design", "a gradient check needs design variables");
+  return check_gradients(*cs.design, p, gradients, o, [&](const Vec& x, SensitivityCounts& counts) {
+    return simulate_responses(cs, x, counts);
+  });
+}
+
+GradientCheckResult check_gradients(const Design& d, const Vec& p,
+                                    const std::vector<ResponseSensitivity>& gradients,
+                                    const GradientCheckOptions& o,
+                                    const ResponseSimulator& simulate) {
   if (auto msg = o.validate(); !msg.empty()) throw Error("gradient check option " + msg);
-  const Design& d = *cs.design;
   const int nv = d.size();
   GradientCheckResult res;
   // random unit direction, reproducible from the seed (a portable generator and transform)
@@ -97,8 +105,8 @@ GradientCheckResult check_gradients(const Study& cs, const Vec& p,
   std::vector<ResponseSensitivity> plus, minus;
   signal_point("gradient-check");
   try {
-    plus = simulate_responses(cs, p + res.step, counts);
-    minus = simulate_responses(cs, p - res.step, counts);
+    plus = simulate(p + res.step, counts);
+    minus = simulate(p - res.step, counts);
   } catch (const NumericalFailure& e) {
     res.ok = false;
     res.interrupted = interrupted() != 0;  // not a failure of the check: it did not finish

@@ -5,6 +5,7 @@
 // p ± δ (s ∘ d), against the method's gradient projected on the same direction, ∇r · (s ∘ d).
 // Two simulations whatever the number of variables; a wrong gradient passes only if its error is
 // orthogonal to a random direction.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -77,5 +78,14 @@ GradientDifference compare_gradients(const std::vector<ResponseSensitivity>& a,
 GradientCheckResult check_gradients(const Study& cs, const Vec& p,
                                     const std::vector<ResponseSensitivity>& gradients,
                                     const GradientCheckOptions& o = {});
+/// The same check with the responses at the perturbed designs from `simulate(p, counts)` (plain
+/// runs, values only), for responses that are not one study's (service conditions). A
+/// NumericalFailure of `simulate` makes the check fail, saying why.
+using ResponseSimulator =
+    std::function<std::vector<ResponseSensitivity>(const Vec& p, SensitivityCounts& counts)>;
+GradientCheckResult check_gradients(const Design& d, const Vec& p,
+                                    const std::vector<ResponseSensitivity>& gradients,
+                                    const GradientCheckOptions& o,
+                                    const ResponseSimulator& simulate);
 
 }  // namespace lsmbs

@@ -4,6 +4,12 @@
 
 namespace lsmbs {
 
+Study::Study(ModelBuilder& builder, GeneralizedAlphaOptions o)
+    : model(builder.build()),
+      initial(builder.initial_state()),
+      simulation(std::move(o)),
+      start(builder.start()) {}
+
 std::vector<std::string> Study::measure_columns() const {
   std::vector<std::string> c;
   for (const auto& m : measures)

@@ -11,6 +11,7 @@
 #include "lsmbs/design/design.hpp"
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 #include "lsmbs/responses/measure.hpp"
 
 namespace lsmbs {
@@ -26,11 +27,20 @@ struct Study {
   std::vector<ResponseSpec> responses;
   /// Null without design variables; when present, the model parameters hold a design of it.
   std::unique_ptr<Design> design;
+  /// What the building of the model knew, for the start checks (ModelBuilder::start); empty for
+  /// a study made from a model and a state alone.
+  ModelStart start;
+  /// Refuse redundant or conflicting constraints in prepare() (false only for models that are
+  /// evaluated, never integrated, e.g. derivative tests).
+  bool check_constraints = true;
 
   // ---------------------------------------------------------- building a study in code
   /// Takes the model and its initial state (e.g. ModelBuilder::build() and initial_state()).
   Study(std::unique_ptr<Model> m, State s0, GeneralizedAlphaOptions o)
       : model(std::move(m)), initial(std::move(s0)), simulation(std::move(o)) {}
+  /// Takes the model of a builder and what the start checks need of it (ModelBuilder::build(),
+  /// initial_state() and start()).
+  Study(ModelBuilder& builder, GeneralizedAlphaOptions o);
   Study() = default;
   /// Adds a measure; its names must be new (SetupError "measures" otherwise).
   Measure& add_measure(std::unique_ptr<Measure> m);
@@ -41,6 +51,15 @@ struct Study {
                              ResponseSpec::Kind kind, double t0 = -1e300, double t1 = 1e300);
   /// Sets the design variables and writes their initial values into the model's parameters.
   void set_design(std::unique_ptr<Design> d);
+
+  /// The start checks, the same for a study built in code, by the Python builder or from a case
+  /// file: valid simulation options, independent constraints at t = 0, a time step in every
+  /// response window, finite forces and iteration matrix at the start with `design` (or the
+  /// initial design) written into the model's parameters, given velocities the joints allow (they
+  /// are kept, the others projected: `initial` is set), bodies placed where the joints and drivers
+  /// put them at t = 0, finite measures. Throws SetupError naming the subject or the entity (a
+  /// body, joint or force by name). Call it after the last change of the study and before a run.
+  void prepare(const Vec* design = nullptr);
 
   /// Column names of the measure history (in the order measures are evaluated).
   std::vector<std::string> measure_columns() const;

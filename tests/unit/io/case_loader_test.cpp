@@ -5,8 +5,10 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <set>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/io/model_kinds.hpp"
 #include "lsmbs/io/sha256.hpp"
 #include "support/test_models.hpp"
 
@@ -548,5 +550,139 @@ TEST(CaseLoader, CoincidentFeaturesAreReportedWithTheirOneSidedGradient) {
     edit(k);
     const Case ck = test::make_case(k);
     EXPECT_EQ(ck.design->coincident_features(ck.design->initial()), "") << what;
+  }
+}
+
+// The table of model kinds (io/model_kinds.hpp) is what the loader reads joints, forces, measures
+// and feature parameters with: its feature parameters are the geometry's own, in the order the
+// level set takes them (Feature::parameter_names); every other kind has a reader; names are unique;
+// an unknown type is refused with the table's types, and a key no kind reads with its path.
+TEST(ModelKinds, TheTableIsTheLoadersVocabulary) {
+  std::set<std::pair<std::string, std::string>> seen;
+  for (const ModelKind& k : model_kinds()) {
+    EXPECT_TRUE(seen.insert({k.section, k.type}).second) << k.section << " " << k.type;
+    std::set<std::string> keys;
+    for (const KindKey& key : k.keys) EXPECT_TRUE(keys.insert(key.name).second) << key.name;
+    EXPECT_FALSE(k.doc.empty()) << k.type;
+    if (k.section == "features") {
+      bool ok = false;
+      std::vector<std::string> params;
+      for (const KindKey& key : k.keys)
+        if (key.type == KeyType::kParameter) params.push_back(key.name);
+      EXPECT_EQ(params, Feature::parameter_names(Feature::parse_type(k.type, &ok))) << k.type;
+      EXPECT_TRUE(ok) << k.type;
+    } else {
+      EXPECT_TRUE(static_cast<bool>(k.read)) << k.type;
+    }
+  }
+  for (const char* section : {"joints", "forces", "measures", "features"})
+    EXPECT_FALSE(kind_types(section).empty()) << section;
+  json j = R"({"name": "m", "bodies": [{"name": "b", "type": "rigid", "mass": 1, "inertia": 1}],
+               "joints": [{"name": "pin", "type": "hinge", "a": {"body": "b"}}],
+               "simulation": {"t_end": 0.1, "h": 0.01}})"_json;
+  try {
+    test::make_case(j);
+    ADD_FAILURE() << "an unknown joint type loaded";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.json_path(), "/joints/0/type");
+    for (const auto& t : kind_types("joints"))
+      EXPECT_NE(std::string(e.what()).find('"' + t + '"'), std::string::npos) << t;
+  }
+  j["joints"][0] = {{"name", "pin"}, {"type", "revolute"}, {"a", {{"body", "b"}}}, {"bee", 1}};
+  try {
+    test::make_case(j);
+    ADD_FAILURE() << "an unknown key loaded";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.json_path(), "/joints/0/bee");
+  }
+}
+
+// A design built in code (Design::add_variable, add_geometry with a GeometrySpec, bind) is the
+// case file's: the hole-and-kept-disc geometry of NonDesignFeatureStaysSolidWithExactDerivatives
+// written as Design calls on the case's own body maps to the same μ_e and ∂μ/∂p, bit for bit; a
+// feature degenerate within the bounds, one off its body that nothing moves and a parameter bound
+// twice are refused naming the feature or the field, as the loader words them.
+TEST(DesignInCode, AddGeometryMapsAsTheCaseFile) {
+  json j = with_design();
+  j["bodies"][1]["mesh"]["elements"] = {40, 8};
+  j["design"]["geometry"][0]["features"].push_back({{"name", "keep"},
+                                                    {"type", "circle"},
+                                                    {"cx", 0.05},
+                                                    {"cy", 0.01},
+                                                    {"r", 0.002},
+                                                    {"non_design", true}});
+  const Case cs = test::make_case(j);
+  const auto& file_features = cs.design->bodies[0].map->level_set().features();
+  const FlexibleBody& body = *cs.design->bodies[0].body;
+  Design d;
+  const auto& v = cs.design->variables[0];
+  d.add_variable(v.name, v.initial, v.lower, v.upper);
+  GeometrySpec spec;
+  spec.features.push_back(file_features[0]);  // the hole, its parameters as the file binds them
+  spec.non_design.push_back(
+      Feature("keep", Feature::Type::kCircle,
+              {Design::constant(0.05), Design::constant(0.01), Design::constant(0.002)}, false));
+  spec.options = cs.design->bodies[0].map->options();
+  d.add_geometry(body, spec);
+  Vec mu_file, mu_code;
+  SpMat dmu_file, dmu_code;
+  cs.design->bodies[0].map->map(cs.design->initial(), mu_file, &dmu_file);
+  d.bodies[0].map->map(d.initial(), mu_code, &dmu_code);
+  ASSERT_EQ(mu_file.size(), mu_code.size());
+  EXPECT_EQ((mu_file - mu_code).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(SpMat(dmu_file - dmu_code).norm(), 0.0);
+
+  // refusals, with the loader's words
+  Design twice;
+  twice.add_variable(v.name, v.initial, v.lower, v.upper);
+  twice.add_geometry(body, spec);
+  try {
+    twice.add_geometry(body, spec);
+    ADD_FAILURE() << "a body with two geometries was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_EQ(e.subject(), "design.geometry");
+  }
+  GeometrySpec flat = spec;
+  flat.features = {Feature("flat", Feature::Type::kCircle,
+                           {Design::constant(0.05), Design::constant(0.01), d.variable(v.name, -1)},
+                           true)};  // r = −p: negative over the whole range
+  Design degenerate;
+  degenerate.add_variable(v.name, v.initial, v.lower, v.upper);
+  try {
+    degenerate.add_geometry(body, flat);
+    ADD_FAILURE() << "a degenerate feature was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_EQ(e.entity(), "flat");
+    EXPECT_NE(e.reason().find("is degenerate within the design bounds"), std::string::npos)
+        << e.reason();
+  }
+  GeometrySpec far = spec;
+  far.non_design = {Feature("far", Feature::Type::kCircle,
+                            {Design::constant(5), Design::constant(5), Design::constant(0.002)},
+                            false)};
+  Design outside;
+  outside.add_variable(v.name, v.initial, v.lower, v.upper);
+  try {
+    outside.add_geometry(body, far);
+    ADD_FAILURE() << "a feature off its body that nothing moves was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_EQ(e.entity(), "far");
+    EXPECT_NE(e.reason().find("lies wholly outside body"), std::string::npos) << e.reason();
+  }
+  Design bound;
+  bound.add_variable("k", 1, 0.5, 2);
+  bound.bind(0, "k", 1, 0, "x.stiffness");
+  try {
+    bound.bind(0, "k", 1, 0, "x.stiffness");
+    ADD_FAILURE() << "a parameter bound twice was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_EQ(e.field(), "parameter");
+    EXPECT_EQ(e.reason(), "parameter 'x.stiffness' is bound twice");
+  }
+  try {
+    bound.add_variable("k", 1, 2, 0.5);
+    ADD_FAILURE() << "a duplicate variable was accepted";
+  } catch (const SetupError& e) {
+    EXPECT_EQ(e.field(), "name");
   }
 }

@@ -9,12 +9,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <tuple>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/text.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 #include "lsmbs/optimization/problem.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "support/test_models.hpp"
@@ -639,4 +641,119 @@ TEST(LoaderErrors, APlacementWhoseProjectionStrainsAFlexibleBodyIsRefused) {
   };
   expect_error(arm(1e-3), "/bodies/0", "which strains flexible body 'arm'");
   EXPECT_NO_THROW(test::make_case(arm(1e-15)));
+}
+
+namespace {
+
+// base()'s pendulum built in code, as the loader builds it from the document: ModelBuilder calls,
+// then the study's measures and responses. `angle`: the bob's angle at t = 0; `twice`: a second
+// pin at the same point (redundant constraints); `velocity`: the bob's given velocity.
+Study pendulum_in_code(double angle, bool twice = false, std::optional<Vec2> velocity = {}) {
+  ModelBuilder b;
+  RigidBodyOptions bob;
+  bob.position = Vec2(1, 0);
+  bob.angle = angle;
+  bob.mass = 1;
+  bob.inertia = 0.1;
+  bob.velocity = velocity;
+  b.rigid_body("bob", bob);
+  b.revolute("pin", Point::at("bob", Vec2(-1, 0)));  // "b": "ground": at a's initial position
+  if (twice) b.revolute("pin2", Point::at("bob", Vec2(-1, 0)));
+  b.rotation_driver("motor", "bob", std::make_shared<TrapezoidLaw>(0, 1, 4, 1, 0));
+  SpringOptions spring;
+  spring.stiffness = 100;
+  spring.damping = 1;
+  b.spring_damper("spring", Point::at("bob"), Point::ground(Vec2(2, 0)), spring);
+  GeneralizedAlphaOptions o;
+  o.t_end = 1.5;
+  o.h = 0.01;
+  Study s(b, o);
+  s.add_measure(std::make_unique<PositionMeasure>("bob", b.resolve(Point::at("bob"))));
+  s.add_response("mean_x", "bob.x", ResponseSpec::Kind::kAverage);
+  return s;
+}
+
+// The reason of the case file's error for the same model (without the "file: path: " prefix).
+std::pair<std::string, std::string> case_error(const json& j) {
+  try {
+    test::make_case(j);
+  } catch (const Error& e) {
+    const std::string prefix = e.file() + ": " + e.json_path() + ": ";
+    return {e.json_path(), std::string(e.what()).substr(prefix.size())};
+  }
+  return {"", "no error"};
+}
+
+}  // namespace
+
+// A study built in code meets the start checks of a case file (Study::prepare): the same refusals
+// with the same words, naming the entity (the loader turns the name into the JSON path); a study
+// that passes gets the case file's initial state.
+TEST(StudyPrepare, AStudyBuiltInCodeMeetsTheChecksOfACaseFile) {
+  {  // placed against its driver
+    Study s = pendulum_in_code(1.0);
+    json j = base();
+    j["bodies"][0]["angle"] = 1.0;
+    const auto [path, reason] = case_error(j);
+    EXPECT_EQ(path, "/bodies/0");
+    try {
+      s.prepare();
+      ADD_FAILURE() << "a study placed against its driver was accepted";
+    } catch (const SetupError& e) {
+      EXPECT_EQ(e.entity(), "bob");
+      EXPECT_EQ(e.reason(), reason);
+    }
+  }
+  {  // redundant constraints: the second pin
+    Study s = pendulum_in_code(0.0, true);
+    json j = base();
+    j["joints"].push_back(
+        {{"name", "pin2"}, {"type", "revolute"}, {"a", {{"body", "bob"}, {"at", {-1, 0}}}}});
+    const auto [path, reason] = case_error(j);
+    EXPECT_EQ(path, "/joints");
+    try {
+      s.prepare();
+      ADD_FAILURE() << "redundant constraints were accepted";
+    } catch (const SetupError& e) {
+      EXPECT_EQ(e.subject(), "joints");
+      EXPECT_EQ(e.reason(), reason);
+    }
+  }
+  {  // a given velocity the pin contradicts (the bob's centre moves along x, away from the pin)
+    Study s = pendulum_in_code(0.0, false, Vec2(1, 0));
+    json j = base();
+    j["bodies"][0]["velocity"] = {1, 0};
+    const auto [path, reason] = case_error(j);
+    EXPECT_EQ(path, "/bodies/0/velocity");
+    try {
+      s.prepare();
+      ADD_FAILURE() << "a velocity against the joints was accepted";
+    } catch (const SetupError& e) {
+      EXPECT_EQ(e.entity(), "bob");
+      EXPECT_EQ(e.field(), "velocity");
+      EXPECT_EQ(e.reason(), reason);
+    }
+  }
+  {  // an option out of range, and a response window without a step
+    Study s = pendulum_in_code(0.0);
+    s.simulation.h = -1;
+    EXPECT_THROW(s.prepare(), SetupError);
+    Study w = pendulum_in_code(0.0);
+    w.add_response("late", "bob.x", ResponseSpec::Kind::kAverage, 2.0, 3.0);
+    try {
+      w.prepare();
+      ADD_FAILURE() << "a window after t_end was accepted";
+    } catch (const SetupError& e) {
+      EXPECT_EQ(e.subject(), "responses.1.window");
+    }
+  }
+  // a study that passes starts where the case file's starts, bit for bit
+  Study s = pendulum_in_code(0.0);
+  s.prepare();
+  const Case cs = test::make_case(base());
+  ASSERT_EQ(s.initial.q.size(), cs.initial.q.size());
+  for (Eigen::Index i = 0; i < s.initial.q.size(); ++i) {
+    EXPECT_EQ(s.initial.q[i], cs.initial.q[i]) << i;
+    EXPECT_EQ(s.initial.v[i], cs.initial.v[i]) << i;
+  }
 }

@@ -18,6 +18,6 @@ struct GeometryRunOptions {
 };
 
 /// Returns the summary (also written to out_dir/summary.json when out_dir is set).
-nlohmann::json run_geometry(Case& cs, const Vec& p, const GeometryRunOptions& o);
+nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptions& o);
 
 }  // namespace lsmbs

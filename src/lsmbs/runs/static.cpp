@@ -1,4 +1,4 @@
-#include "lsmbs/io/static_run.hpp"
+#include "lsmbs/runs/static.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -11,6 +11,7 @@
 #include "lsmbs/io/initial_state_file.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/responses/aggregation.hpp"
+#include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
 
@@ -30,10 +31,43 @@ std::string StaticRunResult::report() const {
   return r;
 }
 
+namespace {
+
+// history.csv (the one state), the bodies as VTU, final_state.json and summary.json.
+void write_outputs(const Case& cs, const ModelParams& params, const StaticRunOptions& o,
+                   StaticRunResult& res) {
+  const Model& m = *cs.model;
+  nlohmann::json& S = res.summary;
+  std::filesystem::create_directories(o.out_dir);
+  std::vector<std::string> header = {"t"};
+  header.insert(header.end(), res.columns.begin(), res.columns.end());
+  std::vector<double> row = {o.t};
+  row.insert(row.end(), res.measures.begin(), res.measures.end());
+  std::vector<std::string> files = {"summary.json"};
+  if (res.solver.ok) {
+    write_csv(o.out_dir + "/history.csv", header, {row});
+    files.push_back("history.csv");
+    const ModelVtkFiles f = write_model_vtk(o.out_dir, "", "", m, params, res.state.q);
+    for (const auto& b : f.bodies) files.push_back(b.second);
+    files.push_back(f.multiblock);
+    // the equilibrium, for a run to start from ("initial_state": {"from": ...})
+    write_json_atomic(o.out_dir + "/final_state.json",
+                      final_state_json(m, res.state, cs.name, "complete", "static"));
+    files.push_back("final_state.json");
+  }
+  S["files"] = file_list(std::move(files));
+  write_json_atomic(o.out_dir + "/summary.json", S);
+}
+
+}  // namespace
+
 StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   if (auto msg = o.validate(); !msg.empty()) throw SetupError("static", msg);
   const auto t0 = std::chrono::steady_clock::now();
   const Model& m = *cs.model;
+  // the case's parameters with the design point written in (the case is not changed)
+  const ModelParams params =
+      cs.design && o.design_point.size() ? parameters_at(cs, o.design_point) : m.params();
   StaticRunResult res;
   res.state = cs.initial;
   res.state.t = o.t;
@@ -44,13 +78,13 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   so.max_iter = o.max_iter;
   so.tol_phi = cs.simulation.tol_phi;
   so.k = cs.simulation.k;
-  res.solver = solve_static(m, m.params(), res.state, so);
+  res.solver = solve_static(m, params, res.state, so);
   res.columns = cs.measure_columns();
   res.measures.assign(res.columns.size(), NAN);
   if (res.solver.ok) {
     size_t c = 0;
     for (const auto& meas : cs.measures) {
-      meas->evaluate(m, res.state, m.params(), res.measures.data() + c);
+      meas->evaluate(m, res.state, params, res.measures.data() + c);
       c += meas->components().size();
     }
   }
@@ -83,27 +117,7 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   S["measures"] = measures;
   S["responses"] = responses;
   S["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!o.out_dir.empty()) {
-    std::filesystem::create_directories(o.out_dir);
-    std::vector<std::string> header = {"t"};
-    header.insert(header.end(), res.columns.begin(), res.columns.end());
-    std::vector<double> row = {o.t};
-    row.insert(row.end(), res.measures.begin(), res.measures.end());
-    std::vector<std::string> files = {"summary.json"};
-    if (res.solver.ok) {
-      write_csv(o.out_dir + "/history.csv", header, {row});
-      files.push_back("history.csv");
-      const ModelVtkFiles f = write_model_vtk(o.out_dir, "", "", m, res.state.q);
-      for (const auto& b : f.bodies) files.push_back(b.second);
-      files.push_back(f.multiblock);
-      // the equilibrium, for a run to start from ("initial_state": {"from": ...})
-      write_json_atomic(o.out_dir + "/final_state.json",
-                        final_state_json(m, res.state, cs.name, "complete", "static"));
-      files.push_back("final_state.json");
-    }
-    S["files"] = file_list(std::move(files));
-    write_json_atomic(o.out_dir + "/summary.json", S);
-  }
+  if (!o.out_dir.empty()) write_outputs(cs, params, o, res);
   return res;
 }
 

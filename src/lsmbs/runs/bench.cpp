@@ -1,4 +1,4 @@
-#include "lsmbs/io/bench_run.hpp"
+#include "lsmbs/runs/bench.hpp"
 
 #include <sys/resource.h>
 
@@ -8,8 +8,8 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/output.hpp"
-#include "lsmbs/io/simulation_run.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
+#include "lsmbs/runs/simulate.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
@@ -30,21 +30,12 @@ std::string BenchOptions::validate() const {
   return {};
 }
 
-nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
-  if (auto msg = o.validate(); !msg.empty()) throw Error("bench option " + msg);
-  Case cs = load_case(file);
-  for (const auto& m : o.methods) {
-    SensitivityOptions::Method mm;
-    if (!SensitivityOptions::parse(m, mm))
-      throw Error("--methods: unknown sensitivity method '" + m + "'");
-  }
-  if (!o.methods.empty() && (!cs.design || cs.responses.empty()))
-    throw Error(file, "/design",
-                "sensitivity benchmarks need design variables and responses (or --methods none)");
-  if (o.on_loaded) o.on_loaded(cs);
-  std::filesystem::create_directories(o.out_dir);
+namespace {
+
+// The floor of one step at the initial state: one residual, one iteration matrix, one KLU
+// refactorization and one solve, each timed over `repetitions`.
+nlohmann::json floor_seconds(const Case& cs, const BenchOptions& o, SparseLU& lu, double& floor) {
   const Model& m = *cs.model;
-  // ---- floor at the initial state
   State s = cs.initial;
   s.v.conservativeResize(m.nq());
   s.a.setZero(m.nq());
@@ -53,7 +44,6 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   const double k = GeneralizedAlpha::automatic_scaling(m, m.params(), s, c);
   Vec R, x;
   std::vector<double> vals;
-  SparseLU lu;
   lu.set_ordering(cs.simulation.ordering);
   lu.analyze(m.pattern());
   m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
@@ -78,13 +68,92 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   }
   const double t_solve = (now() - t) / n;
   const double t_lu = t_factor + t_solve;
-  const double floor = t_res + t_mat + t_lu;
-  // ---- primal
-  t = now();
+  floor = t_res + t_mat + t_lu;
+  return {{"residual", t_res},    {"iteration_matrix", t_mat},      {"klu_refactor", t_factor},
+          {"klu_solve", t_solve}, {"klu_refactor_and_solve", t_lu}, {"total", floor}};
+}
+
+// Per step, without the run's setup (symbolic analysis, projection, consistent start), split as
+// the integrator timed it (IntegratorSummary::seconds).
+nlohmann::json primal_json(const IntegratorSummary& primal, double t_primal, double floor) {
+  const auto& ps = primal.seconds;
+  const double steps = static_cast<double>(primal.steps);
+  const double step = t_primal / steps;
+  return {{"wall_seconds", t_primal},
+          {"steps", primal.steps},
+          {"newton_per_step", primal.newton_iterations / steps},
+          {"factorizations_per_step", primal.factorizations / steps},
+          {"seconds_per_step", step},
+          {"step_over_floor", step / floor},
+          {"setup_seconds", ps.setup},
+          {"stepping_seconds_per_step", (t_primal - ps.setup) / steps},
+          {"per_step_seconds",
+           {{"residual", ps.residual / steps},
+            {"matrix", ps.matrix / steps},
+            {"factor", ps.factor / steps},
+            {"solve", ps.solve / steps}}}};
+}
+
+// Each sensitivity method at the initial design: the default matrix under the method's name, the
+// others (direct methods) as "method/matrix".
+nlohmann::json sensitivity_seconds(const Case& cs, const BenchOptions& o, double t_primal) {
+  nlohmann::json sens = nlohmann::json::object();
+  for (const auto& name : o.methods) {
+    SensitivityOptions probe;
+    SensitivityOptions::parse(name, probe.method);
+    const bool direct = !probe.is_idas() &&
+                        probe.method != SensitivityOptions::Method::kFdForward &&
+                        probe.method != SensitivityOptions::Method::kFdCentral;
+    std::vector<std::string> matrices = {SensitivityOptions::matrix_name(probe.matrix)};
+    if (direct)
+      for (const auto& m : o.matrices)
+        if (m != matrices[0]) matrices.push_back(m);
+    for (const auto& mx : matrices) {
+      SensitivityOptions so = probe;
+      SensitivityOptions::parse_matrix(mx, so.matrix);
+      so.threads = o.threads;
+      const double t = now();
+      const auto r = compute_sensitivities(cs, cs.design->initial(), so);
+      const double w = now() - t;
+      sens[mx == matrices[0] ? name : name + "/" + mx] = {
+          {"wall_seconds", w},
+          {"over_primal", w / t_primal},
+          {"ok", r.ok},
+          {"variables", cs.design->size()},
+          {"matrix", mx},
+          {"factorizations", r.counts.factorizations},
+          {"sensitivity_factorizations", r.counts.sensitivity_factorizations},
+          {"refinement_solves", r.counts.refinement_solves},
+          {"predictor_matrix_steps", r.counts.predictor_matrix_steps},
+          {"steps", r.counts.steps}};
+    }
+  }
+  return sens;
+}
+
+}  // namespace
+
+nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
+  if (auto msg = o.validate(); !msg.empty()) throw Error("bench option " + msg);
+  const Case cs = load_case(file);
+  for (const auto& m : o.methods) {
+    SensitivityOptions::Method mm;
+    if (!SensitivityOptions::parse(m, mm))
+      throw Error("--methods: unknown sensitivity method '" + m + "'");
+  }
+  if (!o.methods.empty() && (!cs.design || cs.responses.empty()))
+    throw Error(file, "/design",
+                "sensitivity benchmarks need design variables and responses (or --methods none)");
+  if (o.on_loaded) o.on_loaded(cs);
+  std::filesystem::create_directories(o.out_dir);
+  const Model& m = *cs.model;
+  SparseLU lu;
+  double floor = 0;
+  const nlohmann::json floor_json = floor_seconds(cs, o, lu, floor);
+  const double t = now();
   const auto primal = GeneralizedAlpha(cs.simulation).run(m, m.params(), cs.initial, {});
   const double t_primal = now() - t;
   if (!primal.ok) throw NumericalFailure("primal run failed: " + primal.message);
-  const double step = t_primal / primal.steps;
   nlohmann::json J = provenance(o.command_line, file, cs.sha256);
   if (!cs.input_files.empty()) J["input_files_sha256"] = cs.input_files;
   J["case_name"] = cs.name;
@@ -94,60 +163,9 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
                 {"nonzeros", m.pattern().nnz()},
                 {"ordering", SparseLU::ordering_name(lu.ordering())},
                 {"lu_nonzeros", lu.factor_nonzeros()}};
-  J["floor_seconds"] = {
-      {"residual", t_res},    {"iteration_matrix", t_mat},      {"klu_refactor", t_factor},
-      {"klu_solve", t_solve}, {"klu_refactor_and_solve", t_lu}, {"total", floor}};
-  // Per step, without the run's setup (symbolic analysis, projection, consistent start), split
-  // as the integrator timed it (IntegratorSummary::seconds).
-  const auto& ps = primal.seconds;
-  const double steps = static_cast<double>(primal.steps);
-  J["primal"] = {{"wall_seconds", t_primal},
-                 {"steps", primal.steps},
-                 {"newton_per_step", primal.newton_iterations / steps},
-                 {"factorizations_per_step", primal.factorizations / steps},
-                 {"seconds_per_step", step},
-                 {"step_over_floor", step / floor},
-                 {"setup_seconds", ps.setup},
-                 {"stepping_seconds_per_step", (t_primal - ps.setup) / steps},
-                 {"per_step_seconds",
-                  {{"residual", ps.residual / steps},
-                   {"matrix", ps.matrix / steps},
-                   {"factor", ps.factor / steps},
-                   {"solve", ps.solve / steps}}}};
-  nlohmann::json sens = nlohmann::json::object();
-  for (const auto& name : o.methods) {
-    SensitivityOptions probe;
-    SensitivityOptions::parse(name, probe.method);
-    const bool direct = !probe.is_idas() &&
-                        probe.method != SensitivityOptions::Method::kFdForward &&
-                        probe.method != SensitivityOptions::Method::kFdCentral;
-    // the default matrix under the method's name; the others (direct methods) as "method/matrix"
-    std::vector<std::string> matrices = {SensitivityOptions::matrix_name(probe.matrix)};
-    if (direct)
-      for (const auto& m : o.matrices)
-        if (m != matrices[0]) matrices.push_back(m);
-    for (const auto& mx : matrices) {
-      Case cm = load_case(file);
-      SensitivityOptions so = probe;
-      SensitivityOptions::parse_matrix(mx, so.matrix);
-      so.threads = o.threads;
-      t = now();
-      const auto r = compute_sensitivities(cm, cm.design->initial(), so);
-      const double w = now() - t;
-      sens[mx == matrices[0] ? name : name + "/" + mx] = {
-          {"wall_seconds", w},
-          {"over_primal", w / t_primal},
-          {"ok", r.ok},
-          {"variables", cm.design->size()},
-          {"matrix", mx},
-          {"factorizations", r.counts.factorizations},
-          {"sensitivity_factorizations", r.counts.sensitivity_factorizations},
-          {"refinement_solves", r.counts.refinement_solves},
-          {"predictor_matrix_steps", r.counts.predictor_matrix_steps},
-          {"steps", r.counts.steps}};
-    }
-  }
-  J["sensitivities"] = sens;
+  J["floor_seconds"] = floor_json;
+  J["primal"] = primal_json(primal, t_primal, floor);
+  J["sensitivities"] = sensitivity_seconds(cs, o, t_primal);
   J["peak_rss_kb"] = peak_rss_kb();
   J["options"] = {{"repetitions", o.repetitions},
                   {"methods", o.methods},

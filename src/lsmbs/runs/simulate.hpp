@@ -31,6 +31,10 @@ struct SimulationResult {
   State final_state;
   bool interrupted = false;  ///< stopped by SIGINT/SIGTERM (partial)
   nlohmann::json summary;    ///< what summary.json contains
+  /// A case with service conditions: each condition's run (its history, responses, summary), in
+  /// the case's order; `responses` then holds every condition's as "<condition>.<response>" (and
+  /// the combined ones), and the output folder a folder per condition under conditions/.
+  std::vector<std::pair<std::string, SimulationResult>> conditions;
   RunStatus status() const;
   std::string report() const;  ///< the integrator's report, then the responses
   /// Column of the history by name (throws if unknown).
@@ -54,6 +58,8 @@ struct RunOptions {
 /// stands for rtol): "" when valid, else "rtol: what is expected" or "atol: what is expected".
 std::string idas_tolerance_error(double rtol, double atol);
 
+/// A simulation of the case (of each of its service conditions, at once on threads: their results
+/// do not depend on it).
 SimulationResult run_simulation(const Case& cs, const RunOptions& ro = {});
 
 }  // namespace lsmbs

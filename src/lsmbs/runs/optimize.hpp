@@ -26,9 +26,18 @@ struct OptimizeRunOptions {
   /// The gradient check at the initial design of a new run (none on resume: the first run did it).
   std::optional<GradientCheckOptions> check;
   long stop_after = -1;  ///< testing: stop as if interrupted after this many new simulations
+  /// The design the run starts from; empty: the initial values of the case's design variables.
+  /// Given (a start of a multi-start), it is part of the resume hash.
+  Vec initial;
   /// Called once the problem is set up, before the check: the number of constraints.
   std::function<void(int)> on_start;
   std::function<void(int, const Evaluation&)> on_evaluation;  ///< progress
+  /// Runs the service conditions of an evaluation (empty: threads of this process; runs/mpi.hpp
+  /// on MPI ranks).
+  ConditionExecutor executor;
+  /// This process runs the whole job by itself (a task of a campaign handed to one rank): its
+  /// conditions on threads of this process, its files written by this process, whatever its rank.
+  bool alone = false;
 };
 
 /// The phase an interrupted run's summary.json names when it stopped in the gradient check: no
@@ -51,6 +60,9 @@ struct OptimizeRun {
   /// features outside their body, idle variables, a start from a static equilibrium).
   std::vector<std::string> warnings;
   nlohmann::json summary;  ///< summary.json's content (also when nothing is written)
+  /// What `lsmbs optimize` exits with: 0 a complete run; 1 a numerical failure, a final design
+  /// that could not be evaluated, or a refused gradient check; 130 interrupted.
+  int exit_code() const;
 };
 
 /// Whether out_dir holds a run interrupted during its gradient check (no checkpoint, summary.json's
@@ -59,6 +71,6 @@ bool interrupted_in_initial_check(const std::string& out_dir);
 
 /// Runs the optimization of cs's design with spec (its sensitivity progress callback included).
 /// Throws lsmbs::Error for an option or a checkpoint that does not fit.
-OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeRunOptions& o);
+OptimizeRun run_optimize(const Case& cs, const OptimizationSpec& spec, const OptimizeRunOptions& o);
 
 }  // namespace lsmbs

@@ -1,4 +1,4 @@
-#include "lsmbs/io/optimize_run.hpp"
+#include "lsmbs/runs/optimize.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,11 +8,13 @@
 
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/core/json_file.hpp"
-#include "lsmbs/io/geometry_run.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/io/plot.hpp"
+#include "lsmbs/io/sha256.hpp"
 #include "lsmbs/optimization/problem.hpp"
 #include "lsmbs/records/json.hpp"
+#include "lsmbs/runs/geometry.hpp"
+#include "lsmbs/runs/mpi.hpp"
 
 namespace lsmbs {
 namespace {
@@ -90,69 +92,33 @@ bool initial_check(DesignProblem& prob, const Case& cs, const OptimizationSpec& 
   run.summary["status"] = "refused";
   run.summary["failure"] = "gradient check at the initial design failed: " + run.check_message;
   run.summary["gradient_check"] = gradient_check_json(c, co);
-  run.summary["units"] = units_json(cs);
+  run.summary["units"] = units_json(prob.conditions());
   return false;
 }
 
-void write_summary(const std::string& out, nlohmann::json& S, std::vector<std::string> files) {
-  if (out.empty()) return;
-  S["files"] = file_list(std::move(files));
-  write_json_atomic(out + "/summary.json", S);
-}
-
-}  // namespace
-
-bool interrupted_in_initial_check(const std::string& out_dir) {
-  std::error_code ec;
-  if (out_dir.empty() || std::filesystem::exists(out_dir + "/checkpoint.json", ec)) return false;
-  try {
-    const auto S = nlohmann::json::parse(std::ifstream(out_dir + "/summary.json"));
-    return S.value("interrupted_phase", "") == kInitialCheckPhase;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
-OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeRunOptions& o) {
+// What the user should know, the optimizer's first, then the design's.
+std::vector<std::string> warnings_of(const Case& cs, const OptimizeRun& run) {
   const Design& d = *cs.design;
-  OptimizeRun run;
-  run.initial = d.initial();
-  DesignProblem prob(cs, spec);
-  if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
-  if (o.on_start) o.on_start(prob.num_constraints());
-  // a run interrupted during its gradient check has no checkpoint: resuming starts it anew
-  OptimizeRunOptions opt = o;
-  opt.resume = o.resume && !interrupted_in_initial_check(o.out_dir);
-  if (opt.check && !opt.resume && !initial_check(prob, cs, spec, opt, run)) {
-    write_summary(o.out_dir, run.summary, {"summary.json"});
-    return run;
-  }
-  OptimizeOptions oo;
-  oo.out_dir = o.out_dir;
-  oo.resume = opt.resume;
-  oo.stop_after = o.stop_after;
-  oo.on_evaluation = o.on_evaluation;
-  oo.input_sha256 = resume_hash(cs);  // a resumed run must see the same problem
-  // an interrupt stops the evaluation in progress at its next step; that evaluation is dropped,
-  // and the checkpoint keeps every one before it (--resume evaluates it again)
-  run.result = optimize(prob, oo);
   const OptimizeResult& res = run.result;
-
-  // what the user should know, the optimizer's first, then the design's
-  run.warnings = res.warnings;
+  std::vector<std::string> w = res.warnings;
   if (run.check_verdict == "warn")
-    run.warnings.push_back("gradient check at the initial design: " + run.check_message);
-  if (auto w = d.coincident_features(run.initial); !w.empty())
-    run.warnings.push_back("initial design: " + w);
-  if (auto w = d.features_outside(run.initial); !w.empty())
-    run.warnings.push_back("initial design: " + w);
-  if (auto w = d.idle_variables(); !w.empty()) run.warnings.push_back(w);
-  if (!cs.initial_state_note.empty()) run.warnings.push_back(cs.initial_state_note);
-  if (auto w = d.coincident_features(res.p); !w.empty())
-    run.warnings.push_back("final design: " + w);
+    w.push_back("gradient check at the initial design: " + run.check_message);
+  if (auto x = d.coincident_features(run.initial); !x.empty()) w.push_back("initial design: " + x);
+  if (auto x = d.features_outside(run.initial); !x.empty()) w.push_back("initial design: " + x);
+  if (auto x = d.idle_variables(); !x.empty()) w.push_back(x);
+  if (!cs.initial_state_note.empty()) w.push_back(cs.initial_state_note);
+  if (auto x = d.coincident_features(res.p); !x.empty()) w.push_back("final design: " + x);
+  return w;
+}
 
-  nlohmann::json& S = run.summary = provenance(cs, spec, opt);
-  // a numerical failure, or a final evaluation that failed, leaves a partial result
+// summary.json of an optimization that ran: its status (a numerical failure, or a final
+// evaluation that failed, leaves a partial result), the initial and final designs, the verdicts.
+nlohmann::json outcome_summary(const Case& cs, const OptimizationSpec& spec,
+                               const OptimizeRunOptions& o, const OptimizeRun& run,
+                               const DesignProblem& prob) {
+  const Design& d = *cs.design;
+  const OptimizeResult& res = run.result;
+  nlohmann::json S = provenance(cs, spec, o);
   S["status"] = !res.failure.empty() ? "partial"
                 : res.interrupted    ? "interrupted"
                 : res.final.ok       ? "complete"
@@ -182,8 +148,87 @@ OptimizeRun run_optimize(Case& cs, const OptimizationSpec& spec, const OptimizeR
                  {"simulations_this_run", res.simulations},
                  {"cache_hits", prob.cache_hits()}};
   S["wall_seconds"] = res.wall_seconds;
-  S["units"] = units_json(cs);
-  if (o.out_dir.empty()) return run;
+  S["units"] = units_json(prob.conditions());
+  if (prob.conditions().several() || !prob.conditions().combinations.empty())
+    S["conditions"] = conditions_json(cs, prob.conditions());
+  return S;
+}
+
+void write_summary(const std::string& out, nlohmann::json& S, std::vector<std::string> files) {
+  if (out.empty()) return;
+  S["files"] = file_list(std::move(files));
+  write_json_atomic(out + "/summary.json", S);
+}
+
+}  // namespace
+
+int OptimizeRun::exit_code() const {
+  if (stage == Stage::kInterruptedInCheck) return 130;
+  if (stage == Stage::kCheckFailed || !result.failure.empty()) return 1;
+  if (result.interrupted) return 130;
+  return result.final.ok ? 0 : 1;
+}
+
+bool interrupted_in_initial_check(const std::string& out_dir) {
+  std::error_code ec;
+  if (out_dir.empty() || std::filesystem::exists(out_dir + "/checkpoint.json", ec)) return false;
+  try {
+    const auto S = nlohmann::json::parse(std::ifstream(out_dir + "/summary.json"));
+    return S.value("interrupted_phase", "") == kInitialCheckPhase;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+OptimizeRun run_optimize(const Case& cs, const OptimizationSpec& spec,
+                         const OptimizeRunOptions& o) {
+  const Design& d = *cs.design;
+  OptimizeRun run;
+  if (o.initial.size() && o.initial.size() != d.size())
+    throw Error("run_optimize: the initial design has " + std::to_string(o.initial.size()) +
+                " values, the case " + std::to_string(d.size()) + " design variables");
+  run.initial = o.initial.size() ? o.initial : d.initial();
+  const ConditionExecutor executor = o.executor ? o.executor
+                                     : o.alone  ? thread_executor(spec.sensitivity.threads)
+                                                : mpi::conditions_executor();
+  DesignProblem prob(conditions_of(cs), spec, executor);
+  // under MPI every rank runs this job (runs/mpi.hpp) and rank 0 writes its files, unless the
+  // job is this process's alone
+  const bool writes = !o.out_dir.empty() && (o.alone || mpi::world().rank == 0);
+  if (writes) std::filesystem::create_directories(o.out_dir);
+  if (o.on_start) o.on_start(prob.num_constraints());
+  // a run interrupted during its gradient check has no checkpoint: resuming starts it anew
+  OptimizeRunOptions opt = o;
+  opt.resume = o.resume && !interrupted_in_initial_check(o.out_dir);
+  if (opt.check && !opt.resume && !initial_check(prob, cs, spec, opt, run)) {
+    if (writes) write_summary(o.out_dir, run.summary, {"summary.json"});
+    return run;
+  }
+  OptimizeOptions oo;
+  oo.out_dir = o.out_dir;
+  oo.write_files = writes;
+  oo.resume = opt.resume;
+  oo.stop_after = o.stop_after;
+  oo.on_evaluation = o.on_evaluation;
+  oo.initial = run.initial;
+  // a resumed run must see the same problem, and the same start when one was given
+  oo.input_sha256 = resume_hash(cs);
+  if (o.initial.size()) {
+    std::string start = oo.input_sha256 + " start";
+    char b[32];
+    for (Eigen::Index i = 0; i < o.initial.size(); ++i)
+      start += (std::snprintf(b, sizeof b, " %.17g", o.initial[i]), b);
+    oo.input_sha256 = sha256_hex(start);
+  }
+  // an interrupt stops the evaluation in progress at its next step; that evaluation is dropped,
+  // and the checkpoint keeps every one before it (--resume evaluates it again)
+  run.result = optimize(prob, oo);
+  const OptimizeResult& res = run.result;
+
+  run.warnings = warnings_of(cs, run);
+  run.summary = outcome_summary(cs, spec, opt, run, prob);
+  nlohmann::json& S = run.summary;
+  if (!writes) return run;
 
   // final design pictures and the convergence plot
   GeometryRunOptions go;

@@ -1,0 +1,114 @@
+#include "lsmbs/runs/geometry.hpp"
+
+#include <chrono>
+#include <filesystem>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/io/design_picture.hpp"
+#include "lsmbs/io/output.hpp"
+
+namespace lsmbs {
+
+std::string GeometryRunOptions::validate() const {
+  if (image_width < DesignPictureLayout::kMinWidth || image_width > 20000)
+    return "image_width: expected " + std::to_string(DesignPictureLayout::kMinWidth) +
+           "..20000 pixels";
+  return {};
+}
+
+namespace {
+
+// One designed body at p: its mass and gradient, areas and the mapping's counts; with an output
+// folder its μ_e and φ as VTU and the picture (their names added to `files`).
+nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params,
+                         const BodyDesign& bd, const SpMat& dmu, const MapCounts& counts,
+                         const GeometryRunOptions& o, std::vector<std::string>& files) {
+  const Design& d = *cs.design;
+  Vec grad;
+  const double mass = Design::mass_gradient(bd, dmu, params, grad);
+  const Vec& mu = params.fields[bd.body->field];
+  const auto& A = bd.map->element_areas();
+  const double mu_min = bd.map->options().mu_min;
+  double solid = 0, voids = 0;
+  for (int e = 0; e < mu.size(); ++e) {
+    solid += A[e];
+    voids += A[e] * (1 - mu[e]) / (1 - mu_min);
+  }
+  nlohmann::json g = nlohmann::json::object();
+  for (int k = 0; k < d.size(); ++k) g[d.variables[k].name] = grad[k];
+  nlohmann::json jb = {{"body", bd.body->name},
+                       {"mass", mass},
+                       {"mass_gradient", g},
+                       {"domain_area", solid},
+                       {"void_area", voids},
+                       {"cut_elements", counts.cut},
+                       {"band_elements", counts.band},
+                       {"elements", mu.size()},
+                       {"epsilon", bd.map->epsilon()},
+                       {"mu_min", mu_min},
+                       {"subgrid", bd.map->options().subgrid},
+                       {"band", bd.map->options().band}};
+  if (o.out_dir.empty()) return jb;
+  const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
+  const std::string base = o.out_dir + "/" + stem;
+  const Mesh2D& mesh = bd.body->mesh;
+  const auto values = bd.map->level_set().values(p);
+  Vec phi(mesh.num_nodes());
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
+  write_design_vtu(base + ".vtu", mesh, mu, phi);
+  write_design_png(base + ".png", mesh, mu, mu_min, phi, o.image_width);
+  jb["files"] = {{"vtu", stem + ".vtu"}, {"png", stem + ".png"}};
+  files.push_back(stem + ".vtu");
+  files.push_back(stem + ".png");
+  return jb;
+}
+
+}  // namespace
+
+nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptions& o) {
+  if (auto msg = o.validate(); !msg.empty()) throw Error("geometry option " + msg);
+  if (!cs.design)
+    throw Error(cs.file, "/design", "the case has no design section (nothing to map)");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Design& d = *cs.design;
+  ModelParams params = cs.model->params();  // the design is a value: the case is not changed
+  for (const auto& b : d.bodies)
+    for (const auto& f : b.map->level_set().features())
+      if (auto msg = f.check(f.values(p)); !msg.empty())
+        throw Error(cs.file, "/design",
+                    "feature '" + f.name() + "' is degenerate at this design: " + msg);
+  std::vector<SpMat> dmu;
+  d.apply(p, params, &dmu);
+  std::vector<MapCounts> counts(d.bodies.size());  // the mapping's diagnostics at p, per body
+  for (size_t b = 0; b < d.bodies.size(); ++b) {
+    Vec mu;
+    d.bodies[b].map->map(p, mu, nullptr, &counts[b]);
+  }
+  if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
+  nlohmann::json bodies = nlohmann::json::array();
+  std::vector<std::string> files = {"summary.json"};
+  for (size_t b = 0; b < d.bodies.size(); ++b)
+    bodies.push_back(body_json(cs, p, params, d.bodies[b], dmu[b], counts[b], o, files));
+  nlohmann::json S = case_provenance(o.command_line.empty() ? "geometry" : o.command_line, cs);
+  S["overrides"] = cs.overrides;
+  S["case_name"] = cs.name;
+  S["status"] = "complete";
+  S["design"] = design_json(cs, p);
+  S["bodies"] = bodies;
+  S["warnings"] = nlohmann::json::array();
+  if (auto w = d.features_outside(p); !w.empty()) S["warnings"].push_back(w);
+  S["responses"] = nlohmann::json::object();
+  for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
+  S["units"] = {{"responses", nlohmann::json::object()}};
+  for (const auto& b : bodies)
+    S["units"]["responses"]["mass." + b["body"].get<std::string>()] = "kg";
+  S["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!o.out_dir.empty()) {
+    S["files"] = file_list(std::move(files));
+    write_json_atomic(o.out_dir + "/summary.json", S);
+  }
+  return S;
+}
+
+}  // namespace lsmbs
