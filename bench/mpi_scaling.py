@@ -8,7 +8,7 @@ model of docs/performance.md ("Service conditions on MPI ranks") checked at K = 
 Cases (written to DIR from the shipped ones; one sensitivity thread per process, --threads 1):
   payloads   the robot arm (robot_arm_holes.json, 15 variables) carrying 2 kg and 5 kg: two
              conditions of equal length, the efficiency figure at K = 2
-  speeds     the three-hole rod at 2000, 3000, 4000 rpm (slider_crank_3holes_speeds.json):
+  speeds     the three-hole rod at 2000, 3000, 4000 rpm (slider_crank_3holes_coarse_speeds.json):
              conditions of 320, 220 and 170 steps, the model's check at K = 1, 2, 3
 
 Cost model of one evaluation on K ranks (conditions assigned longest first, runs/mpi.cpp):
@@ -54,7 +54,7 @@ def cases(out):
     arm["conditions"] = [{"name": "kg2", "set": {"/forces/effector/mass": 2.0}},
                          {"name": "kg5", "set": {"/forces/effector/mass": 5.0}}]
     arm["output"]["vtu_stride"] = 0
-    rod = json.loads((ROOT / "data/slider_crank/slider_crank_3holes_speeds.json").read_text())
+    rod = json.loads((ROOT / "data/slider_crank/slider_crank_3holes_coarse_speeds.json").read_text())
     for c in (arm, rod):
         c.setdefault("optimization", {}).setdefault("sensitivity", {})["threads"] = 1
     files = {}

@@ -3,10 +3,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "python/support.hpp"
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/io/json_reader.hpp"
 #include "lsmbs/io/model_kinds.hpp"
+#include "python/support.hpp"
 
 namespace lsmbs_python {
 
@@ -219,15 +219,14 @@ void bind_model_kinds(py::module_& m) {
         for (const ModelKind& k : model_kinds()) {
           py::list keys;
           for (const KindKey& key : k.keys)
-            keys.append(py::dict(py::arg("name") = key.name,
-                                 py::arg("type") = std::string(key_type_name(key.type)),
-                                 py::arg("required") = key.required,
-                                 py::arg("positional") = key.positional,
-                                 py::arg("python_default") =
-                                     key.python_default.empty()
-                                         ? py::object(py::none())
-                                         : json_to_python(nlohmann::json::parse(key.python_default)),
-                                 py::arg("doc") = key.doc));
+            keys.append(py::dict(
+                py::arg("name") = key.name, py::arg("type") = std::string(key_type_name(key.type)),
+                py::arg("required") = key.required, py::arg("positional") = key.positional,
+                py::arg("python_default") =
+                    key.python_default.empty()
+                        ? py::object(py::none())
+                        : json_to_python(nlohmann::json::parse(key.python_default)),
+                py::arg("doc") = key.doc));
           out.append(py::dict(py::arg("section") = k.section, py::arg("type") = k.type,
                               py::arg("doc") = k.doc, py::arg("keys") = keys));
         }

@@ -88,8 +88,7 @@ py::dict optimize_dict(const OptimizeRun& job, const std::optional<GradientCheck
 // One optimization (run_optimize): the check at the initial design of a new run, the run, its
 // files; a dict of the result, GradientCheckFailed for a refused check.
 py::dict optimize_one(const CasePtr& cs, const OptimizationSpec& spec, const std::string& out_dir,
-                      bool resume, const std::optional<GradientCheckOptions>& co,
-                      PythonRun& run) {
+                      bool resume, const std::optional<GradientCheckOptions>& co, PythonRun& run) {
   OptimizeRunOptions o;
   o.out_dir = out_dir;
   o.command = "lsmbs.optimize (Python)";
@@ -112,13 +111,13 @@ py::dict optimize_starts(const CasePtr& cs, const OptimizationSpec& spec, Multis
                 " of the multi-start (no start had begun; nothing was written)");
   py::list starts;
   for (const auto& r : job.rows)
-    starts.append(py::dict(
-        py::arg("start") = r.start, py::arg("exit_code") = r.exit_code,
-        py::arg("status") = r.status, py::arg("objective") = r.objective,
-        py::arg("max_violation") = r.violation, py::arg("feasible") = r.feasible,
-        py::arg("converged") = r.converged, py::arg("stop_reason") = r.stop_reason,
-        py::arg("initial") = array(r.initial), py::arg("p") = array(r.final_design),
-        py::arg("message") = r.message));
+    starts.append(py::dict(py::arg("start") = r.start, py::arg("exit_code") = r.exit_code,
+                           py::arg("status") = r.status, py::arg("objective") = r.objective,
+                           py::arg("max_violation") = r.violation, py::arg("feasible") = r.feasible,
+                           py::arg("converged") = r.converged,
+                           py::arg("stop_reason") = r.stop_reason,
+                           py::arg("initial") = array(r.initial),
+                           py::arg("p") = array(r.final_design), py::arg("message") = r.message));
   return py::dict(py::arg("status") = job.summary["status"].get<std::string>(),
                   py::arg("best_start") = job.best, py::arg("order") = job.order,
                   py::arg("starts") = starts, py::arg("summary") = json_to_python(job.summary));

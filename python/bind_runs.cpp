@@ -177,8 +177,8 @@ void bind_geometry(py::module_& m) {
 void bind_verify(py::module_& m) {
   m.def(
       "verify",
-      [](const std::filesystem::path& path, const std::filesystem::path& out_dir, bool idas, bool mesh_study,
-         bool overwrite, double idas_rtol, double tol_mesh) {
+      [](const std::filesystem::path& path, const std::filesystem::path& out_dir, bool idas,
+         bool mesh_study, bool overwrite, double idas_rtol, double tol_mesh) {
         return claimed(nullptr, out_dir, overwrite, false, [&](OutputClaim& claim) {
           VerifyOptions o;
           o.on_loaded = [&](const Case& cs) { claim.claim(*cs.model); };

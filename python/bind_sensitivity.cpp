@@ -138,8 +138,8 @@ void bind_sensitivity(py::module_& m) {
          bool check, double check_delta, unsigned check_seed, double check_warn, double check_fail,
          const py::object& progress, double adjoint_memory, const std::vector<std::string>& compare,
          const std::filesystem::path& out_dir, bool overwrite) {
-        const SensitivityKeywords k{method, compare, delta,  relative,      matrix,
-                                    threads, rtol,   atol,   adjoint_memory};
+        const SensitivityKeywords k{method,  compare, delta, relative,      matrix,
+                                    threads, rtol,    atol,  adjoint_memory};
         k.options();  // the keywords are checked before the case is touched
         std::optional<GradientCheckOptions> co;
         if (check) co = check_options_from(check_delta, check_seed, check_warn, check_fail);

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs missing packages, builds (Release with tests), and runs every test through ctest.
+# Installs missing packages, builds (Release with tests), and runs every test through ctest (the
+# MPI tests too: OpenMPI is among the packages; they run on localhost with --oversubscribe).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup-deps.sh"

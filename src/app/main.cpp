@@ -221,7 +221,7 @@ void add_sensitivity(CommandLine& cl) {
       ->check(CLI::NonNegativeNumber);
   sen->add_option("--threads", a.threads,
                   "2: the sensitivity update of each step runs on a second thread while the next "
-                  "step is computed; 1: one thread (same results to round-off)")
+                  "step is computed; 1: one thread (the same results, bit for bit)")
       ->capture_default_str()
       ->transform(cl.int_range)
       ->check(CLI::Range(1, 2));

@@ -3,6 +3,8 @@
 // mass on a spring, x(T) = L0 + A cos(ω T), ω = sqrt(k/m), dx(T)/dk = −A sin(ωT) T / (2 sqrt(k m)),
 // for each condition's payload; central differences of whole runs of the combined responses;
 // the same evaluation one condition after the other.
+#include "lsmbs/sensitivity/conditions.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,7 +19,6 @@
 #include "lsmbs/optimization/problem.hpp"
 #include "lsmbs/runs/sensitivity.hpp"
 #include "lsmbs/runs/simulate.hpp"
-#include "lsmbs/sensitivity/conditions.hpp"
 #include "support/test_models.hpp"
 
 using namespace lsmbs;
@@ -70,8 +71,8 @@ TEST(Conditions, ResponsesAreEachConditionsClosedFormAndTheirCombinations) {
   const Case cs = test::make_case(oscillator());
   ASSERT_EQ(cs.conditions.size(), 2u);
   const Conditions c = conditions_of(cs);
-  EXPECT_EQ(c.response_names(), (std::vector<std::string>{"light.x_end", "heavy.x_end", "sum",
-                                                          "envelope", "worst"}));
+  EXPECT_EQ(c.response_names(),
+            (std::vector<std::string>{"light.x_end", "heavy.x_end", "sum", "envelope", "worst"}));
   SensitivityOptions o;
   o.method = SensitivityOptions::Method::kDirectAnalytic;
   const Vec p = cs.design->initial();
@@ -131,8 +132,7 @@ TEST(Conditions, EveryMethodsGradientsAreTheCentralDifferencesOfTheCombinedRespo
     for (const auto& name : c.response_names()) {
       const double fd = (named(plus, name).values[0] - named(minus, name).values[0]) / (2 * d);
       const double g = named(r.responses, name).gradient(0, 0);
-      EXPECT_NEAR(g, fd, 1e-5 * scale)
-          << SensitivityOptions::name(m) << " " << name;
+      EXPECT_NEAR(g, fd, 1e-5 * scale) << SensitivityOptions::name(m) << " " << name;
     }
   }
 }
@@ -158,8 +158,8 @@ TEST(Conditions, ResultsDoNotDependOnHowTheConditionsRun) {
 }
 
 // The assignment of conditions to ranks, against the longest-processing-time schedule worked by
-// hand: the three engine speeds of slider_crank_3holes_speeds.json (320, 220 and 170 steps) on 2
-// ranks put the 2000 rpm run alone (320 against 220 + 170 = 390; round robin: 490), on 3 ranks
+// hand: the three engine speeds of slider_crank_3holes_coarse_speeds.json (320, 220 and 170 steps)
+// on 2 ranks put the 2000 rpm run alone (320 against 220 + 170 = 390; round robin: 490), on 3 ranks
 // one each; equal costs go round robin; the costliest task starts first on a pool of threads.
 TEST(Conditions, TasksGoToRanksLongestFirst) {
   ConditionTasks t;
@@ -201,16 +201,16 @@ TEST(Conditions, ADesignProblemOverConditionsConstrainsEachConditionOfAnExactMax
 // A response that does not depend on the motion (a body's mass) is the same under every
 // condition: it is evaluated once, in the first condition, under its own name.
 TEST(Conditions, AMassIsEvaluatedOnceUnderItsOwnName) {
-  json j = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
-                                     "/examples/getting_started/flexible_arm.json"));
+  json j = json::parse(
+      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/examples/getting_started/flexible_arm.json"));
   j["simulation"]["t_end"] = 0.1;
   j["bodies"][1]["mesh"]["elements"] = {20, 2};
   j["conditions"] = {{{"name", "light"}, {"set", {{"/forces/tool/mass", 0.2}}}},
                      {{"name", "heavy"}, {"set", {{"/forces/tool/mass", 1.0}}}}};
   const Case cs = load_case_json(j, "<test>", std::string(LSMBS_SOURCE_DIR) + "/examples");
   const Conditions c = conditions_of(cs);
-  EXPECT_EQ(c.response_names(), (std::vector<std::string>{"arm_mass", "light.rms_deflection",
-                                                          "heavy.rms_deflection"}));
+  EXPECT_EQ(c.response_names(),
+            (std::vector<std::string>{"arm_mass", "light.rms_deflection", "heavy.rms_deflection"}));
   EXPECT_EQ(cs.conditions[1].cs->responses.size(), 1u) << "the mass is not evaluated again";
   SensitivityOptions o;
   const auto r = compute_sensitivities(c, cs.design->initial(), o, thread_executor(2));
@@ -220,7 +220,8 @@ TEST(Conditions, AMassIsEvaluatedOnceUnderItsOwnName) {
   base.erase("conditions");
   const Case one = load_case_json(base, "<test>", std::string(LSMBS_SOURCE_DIR) + "/examples");
   const auto single = compute_sensitivities(one, one.design->initial(), o);
-  EXPECT_EQ(named(r.responses, "arm_mass").values[0], named(single.responses, "arm_mass").values[0]);
+  EXPECT_EQ(named(r.responses, "arm_mass").values[0],
+            named(single.responses, "arm_mass").values[0]);
   EXPECT_GT(named(r.responses, "heavy.rms_deflection").values[0],
             named(r.responses, "light.rms_deflection").values[0]);
 }

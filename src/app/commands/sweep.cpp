@@ -1,18 +1,19 @@
 // lsmbs sweep: the command line of run_sweep (runs/sweep.hpp): responses (and gradients) at the
 // points of a grid or a Latin hypercube over design variables, model parameters or values of the
 // case, in sweep.csv, one row per point as it finishes.
+#include "lsmbs/runs/sweep.hpp"
+
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-
-#include <unistd.h>
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/runs/mpi.hpp"
-#include "lsmbs/runs/sweep.hpp"
 
 namespace lsmbs::app {
 namespace {

@@ -261,6 +261,7 @@ class AlphaRun {
  private:
   bool fail(std::string message);
   bool stop_requested() const;
+  void start_observers();
   void evaluate_residual();
   double residual_measure() const;
   bool factor_iteration_matrix(const Coefficients& coeffs, NewtonStatus& failure);
@@ -309,6 +310,7 @@ class AlphaRun {
   // is retried once with a fresh one.
   SparseLU lu_, lu_alt_;
   SparseLU* step_lu_ = &lu_;
+  bool alternate_ = false;  // steps alternate between lu_ and lu_alt_ (start_observers)
   bool have_factor_ = false, started_with_old_factor_ = false, retried_fresh_ = false;
   double factor_h_ = 0;
   std::optional<ObserverWorker> worker_;  // last: joined before the factorizations it reads go
@@ -318,6 +320,22 @@ bool AlphaRun::fail(std::string message) {
   sum_.ok = false;
   sum_.message = std::move(message);
   return false;
+}
+
+// The observers that may run on the worker thread (threads > 1) go to it, the others run in the
+// step. With any such observer the steps alternate between the two factorizations whatever the
+// threads: KLU's refactorization reuses the pivot sequence of the factorization it writes into,
+// so one thread alternating as the worker mode does gives the same bits as two.
+void AlphaRun::start_observers() {
+  std::vector<StepObserver*> concurrent;
+  sync_observers_.clear();
+  alternate_ = false;
+  for (auto* o : observers_) {
+    alternate_ |= o->concurrent();
+    (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
+  }
+  if (alternate_) lu_alt_.share_analysis(lu_);
+  if (!concurrent.empty()) worker_.emplace(std::move(concurrent));
 }
 
 bool AlphaRun::stop_requested() const {
@@ -365,13 +383,7 @@ bool AlphaRun::start(State s0) {
     o->on_start(s0, a_cur_, c0, k_, zeta_, opt_.consistent_start ? &lu_ : nullptr);
   lu_.reset_pivoting();  // the first Newton iteration factorizes with fresh pivoting
 
-  std::vector<StepObserver*> concurrent;
-  for (auto* o : observers_)
-    (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
-  if (!concurrent.empty()) {
-    lu_alt_.share_analysis(lu_);
-    worker_.emplace(std::move(concurrent));
-  }
+  start_observers();
 
   tol_phi_ = opt_.tol_phi * L_;
   t0_ = s0.t;
@@ -405,13 +417,7 @@ bool AlphaRun::start_from(const GridCheckpoint& from, long grid_end) {
   row_floor_.setZero(nq_);
   const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
   for (auto* o : observers_) o->on_start(from.state, a_cur_, c0, k_, zeta_, nullptr);
-  std::vector<StepObserver*> concurrent;
-  for (auto* o : observers_)
-    (served_.threads > 1 && o->concurrent() ? concurrent : sync_observers_).push_back(o);
-  if (!concurrent.empty()) {
-    lu_alt_.share_analysis(lu_);
-    worker_.emplace(std::move(concurrent));
-  }
+  start_observers();
   tol_phi_ = opt_.tol_phi * L_;
   t0_ = from.t_origin;
   grid_ = from.grid;
@@ -696,6 +702,8 @@ bool AlphaRun::notify_observers(const AlphaCoefficients& c) {
   if (worker_) {
     stop |= !worker_->wait_idle();  // step n's observers are done with the other factorization
     worker_->post(info);
+  }
+  if (alternate_) {
     step_lu_ = step_lu_ == &lu_ ? &lu_alt_ : &lu_;
     have_factor_ = false;  // the worker solves with the last one; the other is two steps old
   }

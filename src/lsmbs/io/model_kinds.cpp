@@ -68,7 +68,9 @@ std::optional<Vec2> optional_vec2(const JsonReader& r, const std::string& key) {
 // ---------------------------------------------------------------- joints and drivers
 std::vector<ModelKind> joints() {
   return {
-      {"joints", "revolute", "p_a = p_b: a pin between two bodies, or a body and the ground",
+      {"joints",
+       "revolute",
+       "p_a = p_b: a pin between two bodies, or a body and the ground",
        {pos("a", K::kPoint, "the point of the first body"),
         opt_pos("b", K::kPointOrGround,
                 "the point it is pinned to (default, or \"ground\": the ground point at a's "
@@ -82,7 +84,9 @@ std::vector<ModelKind> joints() {
          }
          k.at_entry(r, [&] { k.builder().revolute(name, a, b); });
        }},
-      {"joints", "prismatic", "point a slides on a line of the given direction",
+      {"joints",
+       "prismatic",
+       "point a slides on a line of the given direction",
        {pos("a", K::kPoint, "the sliding point"),
         pos("direction", K::kVec2, "direction of the line (any length)"),
         kw("through", K::kVec2, "a point of the line (default: the initial position of a)"),
@@ -96,7 +100,8 @@ std::vector<ModelKind> joints() {
          o.lock_rotation = r.boolean("lock_rotation", true);
          k.at_entry(r, [&] { k.builder().prismatic(name, a, u, o); });
        }},
-      {"joints", "rigid_connection",
+      {"joints",
+       "rigid_connection",
        "every node of a node set keeps its initial offset in a rigid body's frame",
        {pos("rigid", K::kName, "the rigid body"), pos("flexible", K::kName, "the flexible body"),
         pos("node_set", K::kName, "the flexible body's node set")},
@@ -105,14 +110,18 @@ std::vector<ModelKind> joints() {
                            set = r.string("node_set");
          k.at_entry(r, [&] { k.builder().rigid_connection(name, rigid, flexible, set); });
        }},
-      {"joints", "clamp", "every node of a node set stays at its initial position",
+      {"joints",
+       "clamp",
+       "every node of a node set stays at its initial position",
        {pos("flexible", K::kName, "the flexible body"),
         pos("node_set", K::kName, "the flexible body's node set")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const std::string flexible = r.string("flexible"), set = r.string("node_set");
          k.at_entry(r, [&] { k.builder().clamp(name, flexible, set); });
        }},
-      {"joints", "rotation_driver", "θ_body − θ_relative_to − s(t) = 0",
+      {"joints",
+       "rotation_driver",
+       "θ_body − θ_relative_to − s(t) = 0",
        {pos("body", K::kName, "the rigid body driven"), pos("law", K::kLaw, "s(t) [rad]"),
         opt_pos("relative_to", K::kName, "a rigid body, or \"ground\" (default)")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
@@ -121,7 +130,9 @@ std::vector<ModelKind> joints() {
          auto l = k.law(r.child("law"));
          k.at_entry(r, [&] { k.builder().rotation_driver(name, body, l, rel); });
        }},
-      {"joints", "translation_driver", "u·(p − x0) − s(t) = 0 along a fixed direction u",
+      {"joints",
+       "translation_driver",
+       "u·(p − x0) − s(t) = 0 along a fixed direction u",
        {pos("point", K::kPoint, "the driven point"), pos("direction", K::kVec2, "u (any length)"),
         pos("law", K::kLaw, "s(t) [m]"),
         opt_pos("through", K::kVec2, "x0 (default: the initial position of the point)")},
@@ -147,7 +158,8 @@ void read_pressure(KindReader& k, const JsonReader& r, const std::string& name) 
   if (r.has("argument")) {
     const JsonReader a = r.child("argument");
     if (a.is_string()) {
-      if (a.as_string() != "time") a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
+      if (a.as_string() != "time")
+        a.fail("expected \"time\" or {\"angle_of\": body, \"offset\": rad}");
     } else {
       arg.angle_of = a.string("angle_of");
       arg.offset = a.number("offset", 0.0);
@@ -160,11 +172,13 @@ void read_pressure(KindReader& k, const JsonReader& r, const std::string& name) 
 
 std::vector<ModelKind> forces() {
   return {
-      {"forces", "point_force",
+      {"forces",
+       "point_force",
        "scale · F at a point, in the inertial frame: a constant force, or time laws fx and fy",
        {pos("point", K::kPoint, "where"),
         opt_pos("force", K::kVec2, "a constant force [N] (or fx, fy)"),
-        kw("fx", K::kLaw, "Fx(t) [N] (default zero)"), kw("fy", K::kLaw, "Fy(t) [N] (default zero)"),
+        kw("fx", K::kLaw, "Fx(t) [N] (default zero)"),
+        kw("fy", K::kLaw, "Fy(t) [N] (default zero)"),
         kw("scale", K::kNumber, "factor (default 1)")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const Point p = k.point(r.child("point"));
@@ -182,7 +196,9 @@ std::vector<ModelKind> forces() {
              k.builder().point_force(name, p, fx, fy, scale);
          });
        }},
-      {"forces", "spring_damper", "a linear spring and damper between two points",
+      {"forces",
+       "spring_damper",
+       "a linear spring and damper between two points",
        {pos("a", K::kPoint, "one end"), pos("b", K::kPoint, "the other end"),
         kw("stiffness", K::kNonNegative, "[N/m]", true),
         kw("damping", K::kNonNegative, "[N s/m] (default 0)"),
@@ -195,7 +211,8 @@ std::vector<ModelKind> forces() {
          if (r.has("free_length")) o.free_length = r.non_negative("free_length");
          k.at_entry(r, [&] { k.builder().spring_damper(name, a, b, o); });
        }},
-      {"forces", "pressure",
+      {"forces",
+       "pressure",
        "a pressure P(s) × area along a fixed direction; s is the time or a body's angle",
        {pos("point", K::kPoint, "where the force acts"),
         pos("direction", K::kVec2, "of the force (any length)"), pos("area", K::kPositive, "[m²]"),
@@ -204,14 +221,18 @@ std::vector<ModelKind> forces() {
                 "\"time\" (default) or {\"angle_of\": body, \"offset\": rad}"),
         opt_pos("time_offset", K::kNumber, "s = t + offset [s] (with the time as argument)")},
        read_pressure},
-      {"forces", "point_mass", "a mass at a point (a node, or a rigid body's point)",
+      {"forces",
+       "point_mass",
+       "a mass at a point (a node, or a rigid body's point)",
        {pos("point", K::kPoint, "where"), pos("mass", K::kNonNegative, "[kg]")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const double m = r.non_negative("mass");
          const Point p = k.point(r.child("point"));
          k.at_entry(r, [&] { k.builder().point_mass(name, p, m); });
        }},
-      {"forces", "torque", "the moment scale · T on a rigid body's angle: a constant or a time law",
+      {"forces",
+       "torque",
+       "the moment scale · T on a rigid body's angle: a constant or a time law",
        {pos("body", K::kName, "the rigid body"),
         opt_pos("torque", K::kNumber, "a constant moment [N m] (or law)"),
         kw("law", K::kLaw, "T(t) [N m]"), kw("scale", K::kNumber, "factor (default 1)")},
@@ -225,7 +246,8 @@ std::vector<ModelKind> forces() {
          const double scale = r.number("scale", 1.0);
          k.at_entry(r, [&] { k.builder().torque(name, body, l, scale); });
        }},
-      {"forces", "rotational_spring_damper",
+      {"forces",
+       "rotational_spring_damper",
        "a torsion spring and damper between the angles of two rigid bodies",
        {pos("a", K::kName, "a rigid body"),
         opt_pos("b", K::kName, "a rigid body, or \"ground\"", "\"ground\""),
@@ -262,16 +284,13 @@ int angle_dof(KindReader& k, const JsonReader& r) {
 }
 const FlexibleBody& flexible(KindReader& k, const JsonReader& r) {
   const std::string body = r.string("body");
-  return k.at_key(r, "body",
-                  [&]() -> const FlexibleBody& { return k.builder().flexible(body); });
+  return k.at_key(r, "body", [&]() -> const FlexibleBody& { return k.builder().flexible(body); });
 }
 
 void read_distance(KindReader& k, const JsonReader& r, const std::string& name, bool elongation) {
   const PointRef a = point_ref(k, r, "a"), b = point_ref(k, r, "b");
   const double ref =
-      elongation
-          ? (k.builder().initial_position(b) - k.builder().initial_position(a)).norm()
-          : 0.0;
+      elongation ? (k.builder().initial_position(b) - k.builder().initial_position(a)).norm() : 0.0;
   k.add_measure(std::make_unique<DistanceMeasure>(name, a, b, ref));
 }
 
@@ -313,30 +332,44 @@ void read_stress(KindReader& k, const JsonReader& r, const std::string& name) {
 std::vector<ModelKind> point_measures() {
   const KindKey point = kw("point", K::kPoint, "the point measured", true);
   return {
-      {"measures", "position", "x, y of a point (columns <name>.x, <name>.y) [m]", {point},
+      {"measures",
+       "position",
+       "x, y of a point (columns <name>.x, <name>.y) [m]",
+       {point},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<PositionMeasure>(name, point_ref(k, r, "point")));
        }},
-      {"measures", "velocity", "ẋ, ẏ of a point [m/s]", {point},
+      {"measures",
+       "velocity",
+       "ẋ, ẏ of a point [m/s]",
+       {point},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<VelocityMeasure>(name, point_ref(k, r, "point")));
        }},
-      {"measures", "angle", "θ of a rigid body [rad]",
+      {"measures",
+       "angle",
+       "θ of a rigid body [rad]",
        {kw("body", K::kName, "the rigid body", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<AngleMeasure>(name, angle_dof(k, r)));
        }},
-      {"measures", "angular_velocity", "θ̇ of a rigid body [rad/s]",
+      {"measures",
+       "angular_velocity",
+       "θ̇ of a rigid body [rad/s]",
        {kw("body", K::kName, "the rigid body", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<AngularVelocityMeasure>(name, angle_dof(k, r)));
        }},
-      {"measures", "distance", "|p_b − p_a| [m]",
+      {"measures",
+       "distance",
+       "|p_b − p_a| [m]",
        {kw("a", K::kPoint, "one point", true), kw("b", K::kPoint, "the other", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          read_distance(k, r, name, false);
        }},
-      {"measures", "elongation", "|p_b − p_a| minus its initial value [m] (eq. 42)",
+      {"measures",
+       "elongation",
+       "|p_b − p_a| minus its initial value [m] (eq. 42)",
        {kw("a", K::kPoint, "one point", true), kw("b", K::kPoint, "the other", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          read_distance(k, r, name, true);
@@ -347,7 +380,8 @@ std::vector<ModelKind> point_measures() {
 std::vector<ModelKind> model_measures() {
   const KindKey point = kw("point", K::kPoint, "the point measured", true);
   return {
-      {"measures", "path_deviation",
+      {"measures",
+       "path_deviation",
        "distance of a point from where a planar chain of driven links puts it (eq. 45) [m]",
        {kw("point", K::kPoint, "the point measured", true),
         kw("path", K::kJson,
@@ -355,27 +389,38 @@ std::vector<ModelKind> model_measures() {
            "\"length\": m}, …]}",
            true)},
        read_path_deviation},
-      {"measures", "constraint_force", "the multipliers λ of a joint's equations [N or N m]",
+      {"measures",
+       "constraint_force",
+       "the multipliers λ of a joint's equations [N or N m]",
        {kw("joint", K::kName, "the joint", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const std::string j = r.string("joint");
          k.at_key(r, "joint", [&] { return k.builder().joint_equations(j); });
          k.add_constraint_force(name, j);
        }},
-      {"measures", "kinetic_energy", "of the whole model [J]", {},
+      {"measures",
+       "kinetic_energy",
+       "of the whole model [J]",
+       {},
        [](KindReader& k, const JsonReader&, const std::string& name) {
          k.add_measure(std::make_unique<KineticEnergyMeasure>(name));
        }},
-      {"measures", "strain_energy", "of the flexible bodies [J]", {},
+      {"measures",
+       "strain_energy",
+       "of the flexible bodies [J]",
+       {},
        [](KindReader& k, const JsonReader&, const std::string& name) {
          k.add_measure(std::make_unique<StrainEnergyMeasure>(name));
        }},
-      {"measures", "mass", "of a flexible body at the design (eq. 3) [kg]",
+      {"measures",
+       "mass",
+       "of a flexible body at the design (eq. 3) [kg]",
        {kw("body", K::kName, "the flexible body", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<FlexibleMassMeasure>(name, &flexible(k, r)));
        }},
-      {"measures", "stress",
+      {"measures",
+       "stress",
        "aggregated relaxed von Mises stress of a flexible body, s_e = μ_e^q σ_vM [Pa]",
        {kw("body", K::kName, "the flexible body", true),
         kw("reference", K::kPositive, "σ_ref of the KS aggregate [Pa] (required with ks)"),
@@ -383,19 +428,25 @@ std::vector<ModelKind> model_measures() {
         kw("parameter", K::kPositive, "KS ρ (default 50) or p-norm p (default 8)"),
         kw("relaxation", K::kPositive, "q in (0, 1] (default 0.5)")},
        read_stress},
-      {"measures", "frame_position", "a point's position in a rigid body's frame [m]",
+      {"measures",
+       "frame_position",
+       "a point's position in a rigid body's frame [m]",
        {point, kw("frame", K::kPoint, "a point of a rigid body: the frame's origin", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<FramePositionMeasure>(name, point_ref(k, r, "point"),
                                                               frame_ref(k, r, "frame")));
        }},
-      {"measures", "frame_velocity", "a point's velocity seen in a rigid body's frame [m/s]",
+      {"measures",
+       "frame_velocity",
+       "a point's velocity seen in a rigid body's frame [m/s]",
        {point, kw("frame", K::kPoint, "a point of a rigid body: the frame's origin", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<FrameVelocityMeasure>(name, point_ref(k, r, "point"),
                                                               frame_ref(k, r, "frame")));
        }},
-      {"measures", "line_distance", "signed distance of a point from the line through a and b [m]",
+      {"measures",
+       "line_distance",
+       "signed distance of a point from the line through a and b [m]",
        {point, kw("a", K::kPoint, "a point of the line", true),
         kw("b", K::kPoint, "another point of the line", true)},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
@@ -405,7 +456,9 @@ std::vector<ModelKind> model_measures() {
            r.fail("b", "the line's two points coincide at t = 0 (a and b): no line through them");
          k.add_measure(std::make_unique<LineDistanceMeasure>(name, p, a, b));
        }},
-      {"measures", "combination", "c0 + Σ w_i · (a column of an earlier measure)",
+      {"measures",
+       "combination",
+       "c0 + Σ w_i · (a column of an earlier measure)",
        {kw("terms", K::kJson, "[{\"measure\": column, \"weight\": w}, …]", true),
         kw("constant", K::kNumber, "c0 (default 0)")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
@@ -423,21 +476,37 @@ std::vector<ModelKind> features() {
   };
   const KindKey hole =
       opt_pos("hole", K::kBoolean, "material outside (default true) or inside", "true");
-  const KindKey non_design = kw(
-      "non_design", K::kBoolean, "solid inside and OR-ed with the region: material kept there");
+  const KindKey non_design =
+      kw("non_design", K::kBoolean, "solid inside and OR-ed with the region: material kept there");
   return {
-      {"features", "ellipse", "((x − cx)/(a d))² + ((y − cy)/(b d))² = 1 turned by angle (eq. 41)",
-       {par("cx", "centre x [m]"), par("cy", "centre y [m]"), par("a", "semi-axis [m]"),
-        par("b", "semi-axis [m]"), par("d", "scale of both semi-axes (eq. 41)", "1.0"),
-        {"angle", K::kParameter, false, true, "", "[rad] (default 0)"}, hole, non_design},
+      {"features",
+       "ellipse",
+       "((x − cx)/(a d))² + ((y − cy)/(b d))² = 1 turned by angle (eq. 41)",
+       {par("cx", "centre x [m]"),
+        par("cy", "centre y [m]"),
+        par("a", "semi-axis [m]"),
+        par("b", "semi-axis [m]"),
+        par("d", "scale of both semi-axes (eq. 41)", "1.0"),
+        {"angle", K::kParameter, false, true, "", "[rad] (default 0)"},
+        hole,
+        non_design},
        nullptr},
-      {"features", "super_ellipse", "|u/a|^ξ + |v/b|^η = 1 in the frame turned by angle (eq. 43)",
-       {par("cx", "centre x [m]"), par("cy", "centre y [m]"), par("a", "half-width [m]"),
-        par("b", "half-height [m]"), par("xi", "exponent ξ", "5.0"),
+      {"features",
+       "super_ellipse",
+       "|u/a|^ξ + |v/b|^η = 1 in the frame turned by angle (eq. 43)",
+       {par("cx", "centre x [m]"),
+        par("cy", "centre y [m]"),
+        par("a", "half-width [m]"),
+        par("b", "half-height [m]"),
+        par("xi", "exponent ξ", "5.0"),
         par("eta", "exponent η", "5.0"),
-        {"angle", K::kParameter, false, true, "", "[rad] (default 0)"}, hole, non_design},
+        {"angle", K::kParameter, false, true, "", "[rad] (default 0)"},
+        hole,
+        non_design},
        nullptr},
-      {"features", "circle", "a circle of radius r",
+      {"features",
+       "circle",
+       "a circle of radius r",
        {par("cx", "centre x [m]"), par("cy", "centre y [m]"), par("r", "radius [m]"), hole,
         non_design},
        nullptr},

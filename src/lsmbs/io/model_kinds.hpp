@@ -52,9 +52,9 @@ struct KindKey {
 class KindReader;
 
 struct ModelKind {
-  std::string section;  ///< "joints", "forces", "measures" or "features"
-  std::string type;     ///< the entry's "type"
-  std::string doc;      ///< one sentence: what it is
+  std::string section;        ///< "joints", "forces", "measures" or "features"
+  std::string type;           ///< the entry's "type"
+  std::string doc;            ///< one sentence: what it is
   std::vector<KindKey> keys;  ///< besides "name" and "type"
   /// Reads one entry of this kind (its name already read and checked) into the model; the
   /// features' entries are read by the design section of the loader.

@@ -41,14 +41,18 @@ bool built() {
 
 int launched_size() {
   for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "SLURM_NTASKS"})
-    if (std::getenv(v) && (std::string(v) != "SLURM_NTASKS" || std::getenv("PMI_RANK") ||
-                           std::getenv("PMIX_RANK")))
+    if (std::getenv(v) &&
+        (std::string(v) != "SLURM_NTASKS" || std::getenv("PMI_RANK") || std::getenv("PMIX_RANK")))
       return env_int(v);
   if (std::getenv("PMIX_RANK")) return 1;  // a PMIx launch that does not say its size here
   return 0;
 }
 
 const World& world() { return g_world; }
+
+int conditions_at_once(int sensitivity_threads) {
+  return std::max(1, local_threads() / std::max(1, sensitivity_threads));
+}
 
 int local_threads() {
   const int cores = std::max(1u, std::thread::hardware_concurrency());
@@ -336,7 +340,7 @@ class FarmServer {
   std::atomic<bool> own_done_{false};
   std::mutex lock_;
   std::deque<std::pair<int, std::string>> local_done_;  // this rank's finished tasks
-  std::vector<int> given_;                               // each worker's task (−1: none)
+  std::vector<int> given_;                              // each worker's task (−1: none)
   int stopped_ = 0, outstanding_ = 0;
   std::chrono::steady_clock::time_point since_{};
   std::thread own_;

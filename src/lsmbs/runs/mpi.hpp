@@ -13,9 +13,9 @@
 //    finish, so that a campaign writes each result at once and a killed one resumes.
 //
 // A process is under MPI when an MPI launcher started it (mpirun, mpiexec, srun: the environment
-// holds OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK). Without MPI built in, such a launch is refused
-// (two copies of the same run would write one folder). docs/performance.md "MPI" has the cost model
-// and the measured efficiency; docs/getting-started.md a Slurm script.
+// holds OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK). Without MPI built in, such a launch is
+// refused (two copies of the same run would write one folder). docs/performance.md "MPI" has the
+// cost model and the measured efficiency; docs/getting-started.md a Slurm script.
 #include <functional>
 #include <string>
 
@@ -40,12 +40,16 @@ const World& world();
 /// Ends MPI now (idempotent): a command that ends normally calls it before it exits.
 void finalize();
 
-/// The cores of this machine over the ranks on it (OMPI_COMM_WORLD_LOCAL_SIZE, SLURM_NTASKS_PER_NODE;
-/// at least 1): how many threads one rank runs at a time.
+/// The cores of this machine over the ranks on it (OMPI_COMM_WORLD_LOCAL_SIZE,
+/// SLURM_NTASKS_PER_NODE; at least 1): how many threads one rank runs at a time.
 int local_threads();
 /// The executor of service conditions over the ranks, `threads` at a time on each (0:
 /// local_threads()); without MPI (or with one rank) the thread executor.
 ConditionExecutor conditions_executor(int threads = 0);
+/// How many conditions a rank runs at once when each uses `sensitivity_threads` threads: its
+/// cores over that (at least 1), so that a condition's sensitivity update keeps a core of its
+/// own. The conditions are independent runs: the results do not depend on this number.
+int conditions_at_once(int sensitivity_threads);
 
 /// The bytes of rank 0, on every rank.
 std::string broadcast(const std::string& bytes);

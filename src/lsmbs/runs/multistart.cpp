@@ -114,8 +114,8 @@ MultistartRow run_start(const Case& cs, const OptimizationSpec& spec, const Mult
     std::filesystem::create_directories(dir);
     OptimizeRunOptions ro;
     ro.out_dir = dir;
-    ro.command = o.command + " [start " + std::to_string(k + 1) + " of " +
-                 std::to_string(o.starts) + "]";
+    ro.command =
+        o.command + " [start " + std::to_string(k + 1) + " of " + std::to_string(o.starts) + "]";
     ro.resume = resume;
     ro.check = o.check;
     ro.initial = p0;
@@ -220,7 +220,7 @@ nlohmann::json summary_json(const Case& cs, const OptimizationSpec& spec,
   nlohmann::json S = case_provenance(o.command, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
-  S["status"] = interrupted()                  ? "interrupted"
+  S["status"] = interrupted()                 ? "interrupted"
                 : run.all_ran && run.best > 0 ? "complete"
                                               : "partial";
   S["options"] = {{"optimization", spec.to_json()},
@@ -277,7 +277,9 @@ int MultistartRun::exit_code() const {
 namespace {
 
 // A start's row as bytes (a task of the farm hands it to rank 0): exact doubles (NaN as null).
-nlohmann::json number(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
+nlohmann::json number(double v) {
+  return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v);
+}
 double number(const nlohmann::json& j) { return j.is_null() ? NAN : j.get<double>(); }
 nlohmann::json vector(const Vec& v) {
   nlohmann::json a = nlohmann::json::array();
@@ -290,14 +292,19 @@ Vec vector(const nlohmann::json& a) {
   return v;
 }
 std::string row_bytes(const MultistartRow& r) {
-  return nlohmann::json{{"start", r.start},         {"exit_code", r.exit_code},
-                        {"status", r.status},       {"message", r.message},
+  return nlohmann::json{{"start", r.start},
+                        {"exit_code", r.exit_code},
+                        {"status", r.status},
+                        {"message", r.message},
                         {"objective", number(r.objective)},
                         {"violation", number(r.violation)},
-                        {"wall", number(r.wall)},   {"evaluations", r.evaluations},
-                        {"feasible", r.feasible},   {"converged", r.converged},
+                        {"wall", number(r.wall)},
+                        {"evaluations", r.evaluations},
+                        {"feasible", r.feasible},
+                        {"converged", r.converged},
                         {"stop_reason", r.stop_reason},
-                        {"kkt", r.kkt_verdict},     {"initial", vector(r.initial)},
+                        {"kkt", r.kkt_verdict},
+                        {"initial", vector(r.initial)},
                         {"final", vector(r.final_design)}}
       .dump();
 }
@@ -326,7 +333,8 @@ std::vector<Vec> plan_starts(const Case& cs, const OptimizationSpec& spec,
     if (screen(cs, spec, o, starts, run.candidates)) {
       plan = {{"seed", o.seed}, {"starts", o.starts}, {"candidates_evaluated", run.candidates}};
       nlohmann::json rows = nlohmann::json::array();
-      for (const auto& p : starts) rows.push_back(std::vector<double>(p.data(), p.data() + p.size()));
+      for (const auto& p : starts)
+        rows.push_back(std::vector<double>(p.data(), p.data() + p.size()));
       plan["initial_designs"] = rows;
       if (!o.resume) write_json_atomic(plan_file, plan);
     }
@@ -357,9 +365,9 @@ MultistartRun run_multistart(const Case& cs, const OptimizationSpec& spec,
   }
   // one sensitivity thread per start when several run at once, unless the case chose its own
   OptimizationSpec start_spec = spec;
-  const bool own_threads =
-      cs.optimization.contains("sensitivity") && cs.optimization["sensitivity"].is_object() &&
-      cs.optimization["sensitivity"].contains("threads");
+  const bool own_threads = cs.optimization.contains("sensitivity") &&
+                           cs.optimization["sensitivity"].is_object() &&
+                           cs.optimization["sensitivity"].contains("threads");
   if ((o.jobs > 1 || mpi::world().size > 1) && !own_threads) start_spec.sensitivity.threads = 1;
   start_spec.sensitivity.progress = nullptr;  // the starts report by their end only
   run.rows.resize(starts.size());

@@ -188,9 +188,10 @@ OptimizeRun run_optimize(const Case& cs, const OptimizationSpec& spec,
     throw Error("run_optimize: the initial design has " + std::to_string(o.initial.size()) +
                 " values, the case " + std::to_string(d.size()) + " design variables");
   run.initial = o.initial.size() ? o.initial : d.initial();
-  const ConditionExecutor executor = o.executor ? o.executor
-                                     : o.alone  ? thread_executor(spec.sensitivity.threads)
-                                                : mpi::conditions_executor();
+  const ConditionExecutor executor =
+      o.executor ? o.executor
+      : o.alone  ? thread_executor(1)  // a campaign uses the cores
+                 : mpi::conditions_executor(mpi::conditions_at_once(spec.sensitivity.threads));
   DesignProblem prob(conditions_of(cs), spec, executor);
   // under MPI every rank runs this job (runs/mpi.hpp) and rank 0 writes its files, unless the
   // job is this process's alone

@@ -184,7 +184,9 @@ std::string SensitivityRun::failure(const std::optional<GradientCheckOptions>& c
 
 SensitivityRun run_sensitivity(const Case& cs, const Vec& p, const SensitivityRunOptions& o) {
   const Conditions c = conditions_of(cs);
-  const ConditionExecutor executor = o.executor ? o.executor : mpi::conditions_executor();
+  const ConditionExecutor executor =
+      o.executor ? o.executor
+                 : mpi::conditions_executor(mpi::conditions_at_once(o.options.threads));
   if (!cs.design)
     throw SetupError("design", "sensitivities need a design section (design variables)");
   if (cs.responses.empty())
@@ -219,7 +221,8 @@ SensitivityRun run_sensitivity(const Case& cs, const Vec& p, const SensitivityRu
   S["primal"] = nlohmann::json(res.primal);
   S["warnings"] = res.warnings;
   S["wall_seconds"] = res.counts.wall_seconds;
-  if (!res.quadratures.empty() && res.ok) S["quadratures"] = quadratures_json(res.quadratures, vars);
+  if (!res.quadratures.empty() && res.ok)
+    S["quadratures"] = quadratures_json(res.quadratures, vars);
   if (so.is_idas()) S["idas"] = nlohmann::json(res.idas);
   S["units"] = units_json(c);
   if (c.several() || !c.combinations.empty()) S["conditions"] = conditions_json(cs, c);

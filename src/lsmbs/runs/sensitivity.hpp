@@ -24,14 +24,14 @@ struct SensitivityRunOptions {
   /// Runs the service conditions of one evaluation (empty: threads of this process; runs/mpi.hpp
   /// on MPI ranks).
   ConditionExecutor executor;
-  std::string command;                        ///< summary.json's "command"
+  std::string command;  ///< summary.json's "command"
 };
 
 struct SensitivityRun {
-  SensitivityResult result;               ///< the first method's
+  SensitivityResult result;                 ///< the first method's
   std::vector<SensitivityResult> compared;  ///< every method run, the first one first
   std::optional<GradientCheckResult> checked;
-  bool stopped = false;    ///< an interrupt came in some part (the method, a compared one, the check)
+  bool stopped = false;  ///< an interrupt came in some part (the method, a compared one, the check)
   bool others_ok = true;   ///< every compared method completed
   nlohmann::json summary;  ///< summary.json's content (also when nothing is written)
   /// 0 complete; 1 a numerical failure of a method or a failed gradient check; 130 interrupted.

@@ -49,8 +49,8 @@ Target target_of(const Case& cs, const nlohmann::json& doc, const SweepAxis& a) 
     std::string known;
     if (cs.design)
       for (const auto& v : cs.design->variables) known += (known.empty() ? "" : ", ") + v.name;
-    throw Error("sweep axis '" + a.name +
-                "': not a design variable (" + (known.empty() ? "none" : known) +
+    throw Error("sweep axis '" + a.name + "': not a design variable (" +
+                (known.empty() ? "none" : known) +
                 "), a model parameter (lsmbs.Case.parameters) or a JSON pointer (/simulation/h)");
   }
   if (cs.design)
@@ -195,8 +195,7 @@ nlohmann::json evaluate_point(const Case& cs, const SweepOptions& o, const Plan&
     message = e.what();
     values.assign(pl.responses.size() * (o.gradients ? 1 + pl.variables.size() : 1), NAN);
   }
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json j = {{"status", status}, {"message", message}, {"wall", wall}};
   nlohmann::json v = nlohmann::json::array();
   for (double d : values) v.push_back(std::isnan(d) ? nlohmann::json(nullptr) : nlohmann::json(d));
@@ -217,7 +216,8 @@ std::string csv_row(int k, const SweepOptions& o, const Plan& pl, const nlohmann
 nlohmann::json plan_json(const SweepOptions& o) {
   nlohmann::json axes = nlohmann::json::array();
   for (const auto& a : o.axes)
-    axes.push_back({{"name", a.name}, {"lower", a.lower}, {"upper", a.upper}, {"points", a.points}});
+    axes.push_back(
+        {{"name", a.name}, {"lower", a.lower}, {"upper", a.upper}, {"points", a.points}});
   return {{"axes", axes},
           {"samples", o.samples},
           {"seed", o.seed},
@@ -237,7 +237,8 @@ std::vector<int> finished_points(const SweepOptions& o, const Plan& pl) {
     throw Error(plan_file + ": unreadable (" + e.what() + ")");
   }
   if (stored.value("plan", nlohmann::json()) != plan_json(o))
-    throw Error("resume: " + plan_file + " holds another sweep (axes, samples, seed, gradients or "
+    throw Error("resume: " + plan_file +
+                " holds another sweep (axes, samples, seed, gradients or "
                 "method); give the same options");
   std::vector<int> done;
   std::ifstream csv(o.out_dir + "/sweep.csv");
@@ -288,7 +289,9 @@ nlohmann::json sweep_summary(const Case& cs, const SweepOptions& o, const Plan& 
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
   S["status"] = run.interrupted ? "interrupted" : run.failed ? "partial" : "complete";
-  S["options"] = {{"sweep", plan_json(o)}, {"jobs", o.jobs}, {"ranks", mpi::world().size},
+  S["options"] = {{"sweep", plan_json(o)},
+                  {"jobs", o.jobs},
+                  {"ranks", mpi::world().size},
                   {"sensitivity", nlohmann::json(o.sensitivity)}};
   S["points"] = {{"total", n},
                  {"completed", run.completed},
@@ -346,11 +349,12 @@ SweepRun run_sweep(const Case& cs, const SweepOptions& o) {
       todo.push_back(k);
   run.skipped = static_cast<int>(done_before.size());
   std::string header;
-  for (size_t i = 0; i < pl.columns.size(); ++i) header += (i ? "," : "") + csv_field(pl.columns[i]);
+  for (size_t i = 0; i < pl.columns.size(); ++i)
+    header += (i ? "," : "") + csv_field(pl.columns[i]);
   header += "\n";
   // every finished point's row (this run's and earlier ones')
-  std::map<int, std::string> lines = writes ? start_files(o, pl, done_before, header)
-                                            : std::map<int, std::string>{};
+  std::map<int, std::string> lines =
+      writes ? start_files(o, pl, done_before, header) : std::map<int, std::string>{};
   std::ofstream appended;
   if (writes) appended.open(o.out_dir + "/sweep.csv", std::ios::app);
   auto record = [&](int k, const nlohmann::json& r) {

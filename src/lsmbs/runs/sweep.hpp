@@ -44,14 +44,14 @@ struct SweepOptions {
 };
 
 struct SweepRun {
-  std::vector<std::string> columns;  ///< sweep.csv's header
+  std::vector<std::string> columns;         ///< sweep.csv's header
   std::vector<std::vector<double>> points;  ///< per point: the axes' values
   /// Per point, in the points' order: the responses, then (gradients) d(response)/d(variable),
   /// as sweep.csv's columns; NaN for what a failed point did not give (empty: not run here).
   std::vector<std::vector<double>> rows;
-  std::vector<double> wall;  ///< per point: its wall time [s] (NaN: not run here)
-  std::vector<std::string> status;   ///< per point: complete, failed, not run
-  std::vector<std::string> message;  ///< per point: why it failed
+  std::vector<double> wall;                    ///< per point: its wall time [s] (NaN: not run here)
+  std::vector<std::string> status;             ///< per point: complete, failed, not run
+  std::vector<std::string> message;            ///< per point: why it failed
   int completed = 0, failed = 0, skipped = 0;  ///< skipped: finished by an earlier run
   bool interrupted = false;
   nlohmann::json summary;

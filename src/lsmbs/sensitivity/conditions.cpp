@@ -83,8 +83,7 @@ void Conditions::validate() const {
   for (size_t k = 0; k < studies.size(); ++k)
     for (size_t r = 0; r < studies[k]->responses.size(); ++r)
       if (reported(k, r))
-        known[response_name(k, r)] =
-            studies[k]->responses[r].kind != ResponseSpec::Kind::kPerStep;
+        known[response_name(k, r)] = studies[k]->responses[r].kind != ResponseSpec::Kind::kPerStep;
   for (const auto& c : combinations) {
     auto fail = [&](const std::string& why) { throw SetupError("combined", why, c.name); };
     if (known.count(c.name)) fail("the name '" + c.name + "' is a response already");
@@ -252,7 +251,9 @@ std::vector<SensitivityResult> compute_conditions(const Conditions& c, const Vec
   ConditionTasks t;
   t.n = static_cast<int>(c.size());
   t.cost = c.costs();
-  t.run = [&](int k) { results[static_cast<size_t>(k)] = compute_sensitivities(*c.studies[k], p, o); };
+  t.run = [&](int k) {
+    results[static_cast<size_t>(k)] = compute_sensitivities(*c.studies[k], p, o);
+  };
   t.save = [&](int k) { return to_wire(results[static_cast<size_t>(k)]); };
   t.load = [&](int k, const std::string& b) {
     results[static_cast<size_t>(k)] = sensitivity_result_from_wire(b);

@@ -95,9 +95,10 @@ void check_finite_start(const Study& cs) {
       continue;
     }
     const std::string e = owner_of(f);
-    throw SetupError("", forces[f]->describe() + ": its forces or iteration matrix are not finite " +
-                             when + ": a value is beyond double precision; check its parameters" +
-                             parameters_of(e) + ", its initial velocity and the gravity",
+    throw SetupError("",
+                     forces[f]->describe() + ": its forces or iteration matrix are not finite " +
+                         when + ": a value is beyond double precision; check its parameters" +
+                         parameters_of(e) + ", its initial velocity and the gravity",
                      e);
   }
   // The factorization of [S kΦ_qᵀ; kΦ_q 0] forms products of entries (k²/S in the pivots of the
@@ -156,11 +157,11 @@ void check_finite_start(const Study& cs) {
     for (int at = pat.col_ptr[col]; at < pat.col_ptr[col + 1]; ++at)
       if (!std::isfinite(vals[at]) || !std::isfinite(k))
         throw SetupError("simulation",
-                    "the iteration matrix is not finite " + std::string(when) +
-                        " in the equations of " + m.describe_unknown(col) +
-                        " (the sum of its masses or stiffnesses overflows; automatic "
-                        "scaling k = " +
-                        std::to_string(k) + "): a value is beyond double precision");
+                         "the iteration matrix is not finite " + std::string(when) +
+                             " in the equations of " + m.describe_unknown(col) +
+                             " (the sum of its masses or stiffnesses overflows; automatic "
+                             "scaling k = " +
+                             std::to_string(k) + "): a value is beyond double precision");
 }
 
 // Initial velocities the case gives are kept; the others follow from the constraints
@@ -262,19 +263,20 @@ void check_initial_placement(const Study& cs, const State& placed) {
     worst = 2;
   }
   if (worst <= 1) return;
-  throw SetupError("bodies",
-              "body '" + body +
-                  "' does not satisfy the joints and drivers at t = 0: projecting "
-                  "the initial state onto them " +
-                  what +
-                  ". Place it where they put it at t = 0 "
-                  "(check a driver's law value at t = 0 against the body's angle or position); the "
-                  "projection corrects placements only within 10 % of the model's length scale "
-                  "(L = " +
-                  std::to_string(L) +
-                  " m) and 0.1 rad, and a flexible body's only while it strains the body by less "
-                  "than 1e-7",
-              body);
+  throw SetupError(
+      "bodies",
+      "body '" + body +
+          "' does not satisfy the joints and drivers at t = 0: projecting "
+          "the initial state onto them " +
+          what +
+          ". Place it where they put it at t = 0 "
+          "(check a driver's law value at t = 0 against the body's angle or position); the "
+          "projection corrects placements only within 10 % of the model's length scale "
+          "(L = " +
+          std::to_string(L) +
+          " m) and 0.1 rad, and a flexible body's only while it strains the body by less "
+          "than 1e-7",
+      body);
 }
 
 // Every response window must contain a time step of the run [0, t_end].
@@ -285,10 +287,10 @@ void check_response_windows(const Study& cs) {
                  b = std::min(r.t1, cs.simulation.t_end);
     const double k_first = std::ceil(a / h - 1e-9), k_last = std::floor(b / h + 1e-9);
     if (b < a || k_last < k_first)
-      throw SetupError("responses." + std::to_string(i) +
-                           (r.t0 > -1e299 || r.t1 < 1e299 ? ".window" : ""),
-                  "the window (" + r.window_text + ") contains no time step of the run [0, " +
-                      std::to_string(cs.simulation.t_end) + "] s with h = " + std::to_string(h));
+      throw SetupError(
+          "responses." + std::to_string(i) + (r.t0 > -1e299 || r.t1 < 1e299 ? ".window" : ""),
+          "the window (" + r.window_text + ") contains no time step of the run [0, " +
+              std::to_string(cs.simulation.t_end) + "] s with h = " + std::to_string(h));
   }
 }
 
@@ -302,8 +304,8 @@ void check_finite_measures(const Study& cs) {
     for (double v : vals)
       if (!std::isfinite(v))
         throw SetupError("measures." + std::to_string(i),
-                    "measure '" + cs.measures[i]->name() +
-                        "' is not finite at t = 0 (a point or value beyond double precision)");
+                         "measure '" + cs.measures[i]->name() +
+                             "' is not finite at t = 0 (a point or value beyond double precision)");
   }
 }
 
@@ -318,7 +320,8 @@ void Study::prepare(const Vec* design) {
   }
   check_constraint_rank(*this);
   check_response_windows(*this);
-  if (this->design) this->design->apply(design ? *design : this->design->initial(), model->params());
+  if (this->design)
+    this->design->apply(design ? *design : this->design->initial(), model->params());
   // every check and every run starts from the study's placement (a study without one keeps the
   // initial state it was given)
   if (start.placed.q.size() == model->nq()) initial = start.placed;

@@ -92,10 +92,10 @@ ResponseSensitivity get_response(Reader& rd) {
 
 void put(Writer& w, const IntegratorSummary& s) {
   w.raw(s.ok), w.raw(s.aborted), w.str(s.message), w.raw(s.t_reached);
-  for (long v : {s.steps, s.newton_iterations, s.factorizations, s.residual_evaluations,
-                 s.matrix_evaluations, s.halvings, s.fresh_factor_retries, s.increment_rejections,
-                 s.inverted_element_rejections, s.folded_element_rejections,
-                 s.folded_element_steps})
+  for (long v :
+       {s.steps, s.newton_iterations, s.factorizations, s.residual_evaluations,
+        s.matrix_evaluations, s.halvings, s.fresh_factor_retries, s.increment_rejections,
+        s.inverted_element_rejections, s.folded_element_rejections, s.folded_element_steps})
     w.raw(v);
   w.str(s.folded_first);
   w.raw(s.seconds);
@@ -106,10 +106,10 @@ IntegratorSummary get_summary(Reader& rd) {
   IntegratorSummary s;
   s.ok = rd.raw<bool>(), s.aborted = rd.raw<bool>(), s.message = rd.str();
   s.t_reached = rd.raw<double>();
-  for (long* v : {&s.steps, &s.newton_iterations, &s.factorizations, &s.residual_evaluations,
-                  &s.matrix_evaluations, &s.halvings, &s.fresh_factor_retries,
-                  &s.increment_rejections, &s.inverted_element_rejections,
-                  &s.folded_element_rejections, &s.folded_element_steps})
+  for (long* v :
+       {&s.steps, &s.newton_iterations, &s.factorizations, &s.residual_evaluations,
+        &s.matrix_evaluations, &s.halvings, &s.fresh_factor_retries, &s.increment_rejections,
+        &s.inverted_element_rejections, &s.folded_element_rejections, &s.folded_element_steps})
     *v = rd.raw<long>();
   s.folded_first = rd.str();
   s.seconds = rd.raw<IntegratorSummary::Seconds>();
@@ -121,11 +121,11 @@ IntegratorSummary get_summary(Reader& rd) {
 
 void put(Writer& w, const IdasStats& s) {
   w.raw(s.ok), w.str(s.message);
-  for (long v : {s.steps, s.residual_evaluations, s.jacobian_evaluations, s.nonlinear_iterations,
-                 s.error_test_failures, s.nonlinear_convergence_failures,
-                 s.sensitivity_residual_evaluations, s.massless_velocities, s.adjoint_problems,
-                 s.adjoint_steps, s.adjoint_residual_evaluations, s.adjoint_jacobian_evaluations,
-                 s.checkpoints})
+  for (long v :
+       {s.steps, s.residual_evaluations, s.jacobian_evaluations, s.nonlinear_iterations,
+        s.error_test_failures, s.nonlinear_convergence_failures, s.sensitivity_residual_evaluations,
+        s.massless_velocities, s.adjoint_problems, s.adjoint_steps, s.adjoint_residual_evaluations,
+        s.adjoint_jacobian_evaluations, s.checkpoints})
     w.raw(v);
   w.str(s.error_test), w.raw(s.max_order), w.raw(s.adjoint_wall_seconds), w.raw(s.wall_seconds);
 }
@@ -136,8 +136,7 @@ IdasStats get_idas(Reader& rd) {
                   &s.nonlinear_iterations, &s.error_test_failures,
                   &s.nonlinear_convergence_failures, &s.sensitivity_residual_evaluations,
                   &s.massless_velocities, &s.adjoint_problems, &s.adjoint_steps,
-                  &s.adjoint_residual_evaluations, &s.adjoint_jacobian_evaluations,
-                  &s.checkpoints})
+                  &s.adjoint_residual_evaluations, &s.adjoint_jacobian_evaluations, &s.checkpoints})
     *v = rd.raw<long>();
   s.error_test = rd.str(), s.max_order = rd.raw<int>();
   s.adjoint_wall_seconds = rd.raw<double>(), s.wall_seconds = rd.raw<double>();
@@ -157,9 +156,8 @@ std::string to_wire(const SensitivityResult& r) {
   for (long v : {c.simulations, c.steps, c.newton_iterations, c.factorizations,
                  c.residual_evaluations, c.pseudo_load_residuals, c.element_pseudo_loads,
                  c.mass_damping_products, c.back_solves, c.back_solve_rhs,
-                 c.sensitivity_matrix_assemblies, c.refinement_solves,
-                 c.sensitivity_factorizations, c.predictor_matrix_steps, c.adjoint_solves,
-                 c.adjoint_recomputed_steps})
+                 c.sensitivity_matrix_assemblies, c.refinement_solves, c.sensitivity_factorizations,
+                 c.predictor_matrix_steps, c.adjoint_solves, c.adjoint_recomputed_steps})
     w.raw(v);
   w.raw(c.wall_seconds), w.raw(c.primal_wall_seconds), w.raw(c.adjoint_memory_bytes);
   put(w, r.primal);
@@ -179,12 +177,12 @@ SensitivityResult sensitivity_result_from_wire(const std::string& bytes) {
   for (auto n = rd.raw<uint64_t>(); n > 0; --n) r.warnings.push_back(rd.str());
   for (auto n = rd.raw<uint64_t>(); n > 0; --n) r.responses.push_back(get_response(rd));
   SensitivityCounts& c = r.counts;
-  for (long* v : {&c.simulations, &c.steps, &c.newton_iterations, &c.factorizations,
-                  &c.residual_evaluations, &c.pseudo_load_residuals, &c.element_pseudo_loads,
-                  &c.mass_damping_products, &c.back_solves, &c.back_solve_rhs,
-                  &c.sensitivity_matrix_assemblies, &c.refinement_solves,
-                  &c.sensitivity_factorizations, &c.predictor_matrix_steps, &c.adjoint_solves,
-                  &c.adjoint_recomputed_steps})
+  for (long* v :
+       {&c.simulations, &c.steps, &c.newton_iterations, &c.factorizations, &c.residual_evaluations,
+        &c.pseudo_load_residuals, &c.element_pseudo_loads, &c.mass_damping_products, &c.back_solves,
+        &c.back_solve_rhs, &c.sensitivity_matrix_assemblies, &c.refinement_solves,
+        &c.sensitivity_factorizations, &c.predictor_matrix_steps, &c.adjoint_solves,
+        &c.adjoint_recomputed_steps})
     *v = rd.raw<long>();
   c.wall_seconds = rd.raw<double>(), c.primal_wall_seconds = rd.raw<double>();
   c.adjoint_memory_bytes = rd.raw<double>();
@@ -195,7 +193,8 @@ SensitivityResult sensitivity_result_from_wire(const std::string& bytes) {
     q.name = rd.str(), q.definition = rd.str();
     q.t0 = rd.raw<double>(), q.t1 = rd.raw<double>(), q.value = rd.raw<double>();
     const auto g = rd.vec();
-    q.gradient = Eigen::Map<const Eigen::RowVectorXd>(g.data(), static_cast<Eigen::Index>(g.size()));
+    q.gradient =
+        Eigen::Map<const Eigen::RowVectorXd>(g.data(), static_cast<Eigen::Index>(g.size()));
     r.quadratures.push_back(std::move(q));
   }
   return r;
