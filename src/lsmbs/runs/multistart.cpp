@@ -228,6 +228,7 @@ nlohmann::json summary_json(const Case& cs, const OptimizationSpec& spec,
                    {{"starts", o.starts},
                     {"seed", o.seed},
                     {"jobs", o.jobs},
+                    {"ranks", mpi::world().size},
                     {"sampling", "uniform within the bounds (std::mt19937_64), feasible ones kept"},
                     {"candidates_evaluated", run.candidates}}}};
   nlohmann::json list = nlohmann::json::array();

@@ -55,7 +55,8 @@ nlohmann::json provenance(const Case& cs, const OptimizationSpec& spec,
   S["case_name"] = cs.name;
   S["options"] = {{"optimization", spec.to_json()},
                   {"generalized_alpha", nlohmann::json(cs.simulation)},
-                  {"resume", o.resume}};
+                  {"resume", o.resume},
+                  {"ranks", o.alone ? 1 : mpi::world().size}};  // not in the resume hash
   return S;
 }
 

@@ -216,7 +216,8 @@ SensitivityRun run_sensitivity(const Case& cs, const Vec& p, const SensitivityRu
   outcome_json(run, o, t, S);
   S["design"] = design_json(cs, p);
   S["options"] = {{"sensitivity", nlohmann::json(so)},
-                  {"generalized_alpha", nlohmann::json(cs.simulation)}};
+                  {"generalized_alpha", nlohmann::json(cs.simulation)},
+                  {"ranks", mpi::world().size}};
   S["counts"] = nlohmann::json(res.counts);
   S["primal"] = nlohmann::json(res.primal);
   S["warnings"] = res.warnings;
