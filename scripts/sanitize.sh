@@ -4,7 +4,8 @@
 # wrongly sized constraint Hessian that the Release build silently tolerated).
 #   scripts/sanitize.sh          every test (about 18 minutes of tests on 2 cores)
 #   scripts/sanitize.sh --ci     every unit test and the integration tests that run in seconds
-#                                under ASan (what .ci/run does: about 5 minutes incl. the build)
+#                                under ASan (a quick local check; about 25 minutes incl. the build
+#                                on a slow 2-core machine, so neither CI entry point runs it)
 #   scripts/sanitize.sh --full   every test, including the heavy ones --ci skips, and a report of
 #                                the run in verification/reports/sanitizer/full.md (commit, date,
 #                                result, failures, slowest tests); the scheduled run (.ci/scheduled,
