@@ -3,6 +3,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "lsmbs/runs/judge.hpp"
+#include "lsmbs/runs/shape.hpp"
 #include "lsmbs/runs/sweep.hpp"
 #include "python/support.hpp"
 
@@ -163,14 +165,19 @@ void bind_geometry(py::module_& m) {
                        py::arg("cell_types") = types, py::arg("quads") = quads,
                        py::arg("mu") = array(params.fields[static_cast<size_t>(body.field)]),
                        py::arg("phi") = array(phi), py::arg("mass") = mass,
-                       py::arg("mass_gradient") = array(grad));
+                       py::arg("mass_gradient") = array(grad),
+                       py::arg("shape") = json_to_python(shape_json(bd, p, params)),
+                       py::arg("resolution") = json_to_python(
+                           resolution_json(judge_resolution(mesh, bd.map->level_set(), values))));
         }
         return bodies;
       },
       py::arg("case").none(false), py::arg("design") = py::none(),
       "Per designed body: mesh nodes and cells (body frame; 'quads' as an array when all are "
       "quadrilaterals), μ_e, the nodal level set φ (material "
-      "where φ > 0), the mass and its gradient");
+      "where φ > 0), the mass and its gradient, the shape (for lsmbs.export: outline, features at "
+      "the design, region, node sets) and the resolution (ligaments, holes and pieces against "
+      "what the mesh resolves)");
 }
 
 // lsmbs.verify: the verification report of a case file.

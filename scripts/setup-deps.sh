@@ -12,6 +12,8 @@ packages=(
   clang-format
   pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-scipy python3-matplotlib
   python3-pandas python3-yaml python3-pil
+  # design export (DXF, SVG, STEP, body-fitted meshes: lsmbs.export, lsmbs export)
+  python3-ezdxf python3-gmsh
   # MPI (optional at build time: without it lsmbs builds, and the campaigns use local cores)
   libopenmpi-dev openmpi-bin
 )

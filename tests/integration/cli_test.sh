@@ -149,7 +149,7 @@ idat = b"".join(png[i + 8:i + 8 + struct.unpack(">I", png[i:i + 4])[0]] for i in
 raw = zlib.decompress(idat)
 assert w == 600 and png[25] == 2 and len(raw) == h * (3 * w + 1), (w, h, len(raw))  # RGB
 assert len(png) < len(raw) / 20, (len(png), len(raw))  # deflated by zlib (was stored blocks)
-assert s["files"] == ["plate.png", "plate.vtu", "summary.json"], s["files"]
+assert s["files"] == ["plate.png", "plate.vtu", "plate_shape.json", "summary.json"], s["files"]
 print("geometry ok: PNG", len(png), "bytes for", len(raw), "bytes of scanlines")
 PY
 "$exe" geometry "$case_file" -o "$tmp/nogeo" 2> "$tmp/err3.txt"; rc=$?

@@ -379,7 +379,7 @@ TEST(MethodsCoverage, MultiStartRunsFeasibleRandomStartsAndRanksThem) {
     std::getline(f, line);
     EXPECT_EQ(line,
               "start,exit_code,status,objective,max_violation,feasible,evaluations,wall_seconds,"
-              "stop_reason,kkt,converged,rank,initial.m1,initial.m2,final.m1,final.m2");
+              "stop_reason,kkt,converged,judgement,rank,initial.m1,initial.m2,final.m1,final.m2");
     std::vector<std::string> names;
     std::stringstream hs(line);
     for (std::string c; std::getline(hs, c, ',');) names.push_back(c);

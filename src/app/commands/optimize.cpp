@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 
 #include "app/commands/commands.hpp"
 #include "app/commands/common.hpp"
@@ -67,11 +68,25 @@ int multistart(const CommonArgs& c, const OptimizeArgs& a, const lsmbs::Case& cs
         R["median"].get<double>(), R["worst"].get<double>());
     if (run.lowest != run.best) {
       const auto& l = rows[run.lowest - 1];
-      std::printf(
-          "  start %d reached a lower objective, %.9g, but is ranked after it: it %s (%s)\n",
-          run.lowest, l.objective, l.tier() == 2 ? "was cut off" : "is not a KKT point",
-          l.stop_reason.c_str());
+      if (l.verdict_rank() > b.verdict_rank())
+        std::printf(
+            "  start %d reached a lower objective, %.9g, but is ranked after it: its "
+            "design is judged '%s' (%s)\n",
+            run.lowest, l.objective, l.verdict.c_str(), l.flags.front().c_str());
+      else
+        std::printf(
+            "  start %d reached a lower objective, %.9g, but is ranked after it: it %s (%s)\n",
+            run.lowest, l.objective, l.tier() == 2 ? "was cut off" : "is not a KKT point",
+            l.stop_reason.c_str());
     }
+    std::map<std::string, int> verdicts;
+    for (int k : run.order)
+      ++verdicts[rows[k - 1].verdict.empty() ? "not judged" : rows[k - 1].verdict];
+    std::string v;
+    for (const auto& [name, n] : verdicts)
+      v += (v.empty() ? "" : ", ") + std::to_string(n) + " " + name;
+    std::printf("  judgement of the feasible designs: %s (summary.json: starts[].flags)\n",
+                v.c_str());
     std::printf("  results in %s\n", c.out.c_str());
   }
   return run.exit_code();

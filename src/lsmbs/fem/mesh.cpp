@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <set>
 #include <string_view>
 #include <utility>
@@ -69,6 +70,34 @@ double Mesh2D::area() const {
   for (int e = 0; e < num_elements(); ++e)
     a += element_type(cells[e].type).shape->area(cell_nodes(e).data());
   return a;
+}
+
+std::vector<std::vector<int>> Mesh2D::boundary_loops() const {
+  std::map<std::pair<int, int>, int> count;  // undirected edge -> cells
+  for (const Cell& c : cells)
+    for (int k = 0; k < c.size(); ++k) {
+      const int a = c[k], b = c[(k + 1) % c.size()];
+      ++count[{std::min(a, b), std::max(a, b)}];
+    }
+  std::map<int, int> next;  // boundary edges a -> b as their cell orders them
+  for (const Cell& c : cells)
+    for (int k = 0; k < c.size(); ++k) {
+      const int a = c[k], b = c[(k + 1) % c.size()];
+      if (count[{std::min(a, b), std::max(a, b)}] == 1) next[a] = b;
+    }
+  std::vector<std::vector<int>> loops;
+  while (!next.empty()) {
+    std::vector<int> loop;
+    int a = next.begin()->first;
+    while (next.count(a)) {
+      loop.push_back(a);
+      const int b = next[a];
+      next.erase(a);
+      a = b;
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
 }
 
 std::array<Vec2, Cell::kMaxNodes> Mesh2D::cell_nodes(int e) const {

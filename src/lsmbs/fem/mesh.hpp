@@ -36,6 +36,10 @@ struct Mesh2D {
   double size() const;
   double area() const;
   Vec2 centroid(int e) const;
+  /// The closed loops of the mesh's boundary (cell edges of one cell only), as node indices in
+  /// the cells' order: the outer boundary counter-clockwise, holes clockwise. Corner nodes only
+  /// (a cell's nodes taken in order around it).
+  std::vector<std::vector<int>> boundary_loops() const;
 
   // Selectors (tolerance relative to the mesh size when tol < 0).
   std::vector<int> nodes_on_line_x(double x0, double tol = -1) const;

@@ -222,6 +222,8 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
 
 template double Feature::distance<double>(const Vec2&, const double*, double) const;
 template Dual Feature::distance<Dual>(const Vec2&, const Dual*, double) const;
+template void Feature::phi_grad<double>(const double&, const double&, const double*, double&,
+                                        double&, double&) const;
 
 double Feature::phi(const Vec2& x, const std::vector<double>& th) const {
   // sign and zero set of φ equal those of the normalized distance

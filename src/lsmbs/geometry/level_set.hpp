@@ -38,6 +38,8 @@ class LevelSet {
   LevelSet() = default;
   LevelSet(std::vector<Feature> features, LevelSetNode root, int num_variables);
   const std::vector<Feature>& features() const { return features_; }
+  /// The Boolean combination of the features.
+  const LevelSetNode& root() const { return root_; }
   int num_variables() const { return nv_; }
 
   /// Parameter values of every feature at design p (call once per design).

@@ -117,6 +117,16 @@ OptimizationSpec parse_optimization(const Case& cs) {
     s.max_evaluations = st->integer("max_evaluations", s.max_evaluations, 1);
     st->finish();
   }
+  if (auto j = r.optional_child("judge")) {
+    s.judge.enabled = j->boolean("enabled", s.judge.enabled);
+    s.judge.min_elements = j->positive("min_elements", s.judge.min_elements);
+    s.judge.ersatz = j->boolean("ersatz", s.judge.ersatz);
+    s.judge.ersatz_factor = j->positive("ersatz_factor", s.judge.ersatz_factor);
+    if (s.judge.ersatz_factor >= 1)
+      j->fail("ersatz_factor", "expected a factor in (0, 1) that makes μ_min smaller");
+    s.judge.ersatz_tolerance = j->positive("ersatz_tolerance", s.judge.ersatz_tolerance);
+    j->finish();
+  }
   s.inner_max_evaluations = r.integer("inner_max_evaluations", 0, 0);
   s.kkt_tolerance = r.positive("kkt_tolerance", s.kkt_tolerance);
   if (s.inner_max_evaluations > 0 && s.optimizer == "mma-svanberg")

@@ -35,7 +35,13 @@ nlohmann::json OptimizationSpec::to_json() const {
           {"inner_max_evaluations", inner_max_evaluations},
           {"kkt_tolerance", kkt_tolerance},
           {"move_limit", move_limit},
-          {"asymptote_init", asymptote_init}};
+          {"asymptote_init", asymptote_init},
+          {"judge",
+           {{"enabled", judge.enabled},
+            {"min_elements", judge.min_elements},
+            {"ersatz", judge.ersatz},
+            {"ersatz_factor", judge.ersatz_factor},
+            {"ersatz_tolerance", judge.ersatz_tolerance}}}};
 }
 
 DesignProblem::DesignProblem(const Study& cs, OptimizationSpec spec)

@@ -45,6 +45,15 @@ struct OptimizationSpec {
   /// wrong-signed reduced gradients at bounds are at most this, relative to ‖∇f‖∞ (kkt.hpp).
   /// A verdict of the result, not a stopping rule: a resumed run may change it.
   double kkt_tolerance = 1e-2;
+  /// How the final design is judged (runs/judge.hpp): what the fixed mesh resolves of it, and
+  /// whether its responses rest on the ersatz material of the void.
+  struct Judge {
+    bool enabled = true;
+    double min_elements = 2;        ///< parts narrower than this many element sizes are flagged
+    bool ersatz = true;             ///< re-simulate with μ_min · ersatz_factor
+    double ersatz_factor = 1e-3;    ///< 1000× less ersatz stiffness and mass
+    double ersatz_tolerance = 0.1;  ///< relative change of a response that flags the design
+  } judge;
   nlohmann::json to_json() const;
 };
 

@@ -4,8 +4,11 @@
 #include <filesystem>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/core/json_file.hpp"
 #include "lsmbs/io/design_picture.hpp"
 #include "lsmbs/io/output.hpp"
+#include "lsmbs/runs/judge.hpp"
+#include "lsmbs/runs/shape.hpp"
 
 namespace lsmbs {
 
@@ -48,6 +51,9 @@ nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params
                        {"mu_min", mu_min},
                        {"subgrid", bd.map->options().subgrid},
                        {"band", bd.map->options().band}};
+  // what the mesh resolves of the design (runs/judge.hpp)
+  jb["resolution"] = resolution_json(
+      judge_resolution(bd.body->mesh, bd.map->level_set(), bd.map->level_set().values(p)));
   if (o.out_dir.empty()) return jb;
   const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
   const std::string base = o.out_dir + "/" + stem;
@@ -58,9 +64,12 @@ nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params
     phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
   write_design_vtu(base + ".vtu", mesh, mu, phi);
   write_design_png(base + ".png", mesh, mu, mu_min, phi, o.image_width);
-  jb["files"] = {{"vtu", stem + ".vtu"}, {"png", stem + ".png"}};
+  // the shape as data for CAD and meshing (python/lsmbs/export.py)
+  write_json_atomic(base + "_shape.json", shape_json(bd, p, params));
+  jb["files"] = {{"vtu", stem + ".vtu"}, {"png", stem + ".png"}, {"shape", stem + "_shape.json"}};
   files.push_back(stem + ".vtu");
   files.push_back(stem + ".png");
+  files.push_back(stem + "_shape.json");
   return jb;
 }
 
@@ -98,6 +107,14 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
   S["bodies"] = bodies;
   S["warnings"] = nlohmann::json::array();
   if (auto w = d.features_outside(p); !w.empty()) S["warnings"].push_back(w);
+  for (const auto& b : bodies) {
+    const std::string who =
+        bodies.size() > 1 ? "body '" + b["body"].get<std::string>() + "': " : std::string();
+    const auto& r = b["resolution"];
+    if (const auto f = r["pieces_flag"].get<std::string>(); !f.empty())
+      S["warnings"].push_back(who + f);
+    for (const auto& f : r["flags"]) S["warnings"].push_back(who + f.get<std::string>());
+  }
   S["responses"] = nlohmann::json::object();
   for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
   S["units"] = {{"responses", nlohmann::json::object()}};

@@ -137,6 +137,9 @@ MultistartRow run_start(const Case& cs, const OptimizationSpec& spec, const Mult
     r.stop_reason = res.stop_reason;
     r.kkt_verdict = res.kkt ? res.kkt->to_json().value("verdict", "") : "";
     r.final_design = res.p;
+    if (run.judgement)
+      r.verdict = DesignJudgement::verdict_name(run.judgement->verdict()),
+      r.flags = run.judgement->flags();
   } catch (const Error& e) {  // this start's input (its folder, its checkpoint): it did not run
     replaced.restore();
     r.exit_code = 2;
@@ -153,7 +156,8 @@ MultistartRow run_start(const Case& cs, const OptimizationSpec& spec, const Mult
 void write_starts_csv(const std::string& file, const Design& d, const MultistartRun& run) {
   std::vector<std::string> header = {"start",         "exit_code", "status",      "objective",
                                      "max_violation", "feasible",  "evaluations", "wall_seconds",
-                                     "stop_reason",   "kkt",       "converged",   "rank"};
+                                     "stop_reason",   "kkt",       "converged",   "judgement",
+                                     "rank"};
   for (const auto& v : d.variables) header.push_back("initial." + v.name);
   for (const auto& v : d.variables) header.push_back("final." + v.name);
   std::ostringstream f;  // written whole (write_file_atomic: a full disk is an error, not a cut)
@@ -166,6 +170,7 @@ void write_starts_csv(const std::string& file, const Design& d, const Multistart
     f << r.start << "," << r.exit_code << "," << r.status << "," << g17(r.objective) << ","
       << g17(r.violation) << "," << (r.feasible ? 1 : 0) << "," << r.evaluations << "," << wall
       << "," << r.stop_reason << "," << r.kkt_verdict << "," << (r.converged ? 1 : 0) << ","
+      << r.verdict << ","
       << (rank == run.order.end() ? std::string() : std::to_string(rank - run.order.begin() + 1));
     for (Eigen::Index i = 0; i < r.initial.size(); ++i) f << "," << g17(r.initial[i]);
     for (Eigen::Index i = 0; i < r.final_design.size(); ++i) f << "," << g17(r.final_design[i]);
@@ -174,15 +179,19 @@ void write_starts_csv(const std::string& file, const Design& d, const Multistart
   write_file_atomic(file, f.str());
 }
 
-// The ranking: feasible, completed starts; converged ones first, then those that stopped on their
-// tolerance without meeting the KKT conditions, then those cut off (the evaluation limit); by
-// objective within each tier: a lower objective of a start that did not finish is not a result.
+// The ranking: feasible, completed starts; by the judgement's verdict (runs/judge.hpp): sound
+// designs, then unresolved ones, then those that are no structure (a lighter design that hangs on
+// void is not a better result);
+// converged ones first, then those that stopped on their tolerance without meeting the KKT
+// conditions, then those cut off (the evaluation limit); by objective within each tier: a lower
+// objective of a start that did not finish is not a result.
 void rank(MultistartRun& run) {
   for (const auto& r : run.rows)
     if (r.feasible) run.order.push_back(r.start);
   const auto& rows = run.rows;
   std::stable_sort(run.order.begin(), run.order.end(), [&](int a, int b) {
     const MultistartRow &ra = rows[a - 1], &rb = rows[b - 1];
+    if (ra.verdict_rank() != rb.verdict_rank()) return ra.verdict_rank() < rb.verdict_rank();
     return ra.tier() != rb.tier() ? ra.tier() < rb.tier() : ra.objective < rb.objective;
   });
   run.best = run.lowest = run.order.empty() ? -1 : run.order.front();
@@ -200,9 +209,11 @@ nlohmann::json ranking_json(const MultistartRun& run) {
   const MultistartRow& b = run.rows[run.best - 1];
   const size_t m = objs.size();
   return {{"rule",
-           "feasible starts; converged ones first (stopped on their tolerance at a KKT point), "
-           "then those that stopped on their tolerance without meeting the KKT conditions, then "
-           "those cut off (max_evaluations); by objective within each"},
+           "feasible starts; by the judgement of the final design: sound, then unresolved (parts "
+           "narrower than the mesh resolves), then not a structure (pieces, load paths through "
+           "void); then converged ones first (stopped on their tolerance at a KKT "
+           "point), then those that stopped on their tolerance without meeting the KKT "
+           "conditions, then those cut off (max_evaluations); by objective within each"},
           {"order", run.order},
           {"feasible_results", m},
           {"best", b.objective},
@@ -243,7 +254,9 @@ nlohmann::json summary_json(const Case& cs, const OptimizationSpec& spec,
                     {"evaluations", r.evaluations},
                     {"stop_reason", r.stop_reason},
                     {"kkt", r.kkt_verdict},
-                    {"converged", r.converged}});
+                    {"converged", r.converged},
+                    {"judgement", r.verdict},
+                    {"flags", r.flags}});
     if (!r.message.empty()) list.back()["message"] = r.message;
   }
   S["starts"] = list;
@@ -305,6 +318,8 @@ std::string row_bytes(const MultistartRow& r) {
                         {"converged", r.converged},
                         {"stop_reason", r.stop_reason},
                         {"kkt", r.kkt_verdict},
+                        {"judgement", r.verdict},
+                        {"flags", r.flags},
                         {"initial", vector(r.initial)},
                         {"final", vector(r.final_design)}}
       .dump();
@@ -317,6 +332,7 @@ MultistartRow row_from(const std::string& bytes) {
   r.violation = number(j["violation"]), r.wall = number(j["wall"]);
   r.evaluations = j["evaluations"], r.feasible = j["feasible"], r.converged = j["converged"];
   r.stop_reason = j["stop_reason"], r.kkt_verdict = j["kkt"];
+  r.verdict = j["judgement"], r.flags = j["flags"].get<std::vector<std::string>>();
   r.initial = vector(j["initial"]), r.final_design = vector(j["final"]);
   return r;
 }

@@ -50,6 +50,14 @@ struct MultistartRow {
   bool feasible = false, converged = false;
   std::string stop_reason, kkt_verdict;
   Vec initial, final_design;
+  /// The final design's verdict (runs/judge.hpp: sound, unresolved, not a structure; empty:
+  /// not judged) and its flags; unresolved designs rank after sound ones, and designs that are
+  /// no structure after both
+  std::string verdict;
+  std::vector<std::string> flags;
+  int verdict_rank() const {
+    return verdict == "not a structure" ? 2 : verdict == "unresolved" ? 1 : 0;
+  }
   /// 0 converged, 1 stopped on a tolerance without meeting the KKT conditions, 2 cut off
   int tier() const;
 };
@@ -59,7 +67,8 @@ struct MultistartRun {
   bool interrupted_in_screening = false;
   int candidates = 0;  ///< random designs evaluated to find the starts
   std::vector<MultistartRow> rows;
-  std::vector<int> order;  ///< feasible starts (1-based), best first (summary.json ranking)
+  std::vector<int> order;  ///< feasible starts (1-based), best first (summary.json ranking):
+                           ///< by the judgement's verdict, then by tier and objective
   int best = -1, lowest = -1;
   bool all_ran = false;  ///< every start exited 0
   nlohmann::json summary;

@@ -109,6 +109,8 @@ std::vector<std::string> warnings_of(const Case& cs, const OptimizeRun& run) {
   if (auto x = d.idle_variables(); !x.empty()) w.push_back(x);
   if (!cs.initial_state_note.empty()) w.push_back(cs.initial_state_note);
   if (auto x = d.coincident_features(res.p); !x.empty()) w.push_back("final design: " + x);
+  if (run.judgement)
+    for (const auto& f : run.judgement->flags()) w.push_back("final design: " + f);
   return w;
 }
 
@@ -152,6 +154,7 @@ nlohmann::json outcome_summary(const Case& cs, const OptimizationSpec& spec,
   S["units"] = units_json(prob.conditions());
   if (prob.conditions().several() || !prob.conditions().combinations.empty())
     S["conditions"] = conditions_json(cs, prob.conditions());
+  S["judgement"] = run.judgement ? run.judgement->to_json() : nlohmann::json(nullptr);
   return S;
 }
 
@@ -226,6 +229,14 @@ OptimizeRun run_optimize(const Case& cs, const OptimizationSpec& spec,
   // and the checkpoint keeps every one before it (--resume evaluates it again)
   run.result = optimize(prob, oo);
   const OptimizeResult& res = run.result;
+  // the final design judged: a structure the mesh resolves, no load path through void
+  if (spec.judge.enabled && !d.bodies.empty() && res.final.ok && !res.interrupted &&
+      res.failure.empty()) {
+    try {
+      run.judgement = judge_design(prob.conditions(), spec, res.p, executor);
+    } catch (const Interrupted&) {  // the optimization's result stands; unjudged
+    }
+  }
 
   run.warnings = warnings_of(cs, run);
   run.summary = outcome_summary(cs, spec, opt, run, prob);

@@ -14,6 +14,7 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/optimization/optimizer.hpp"
+#include "lsmbs/runs/judge.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 
 namespace lsmbs {
@@ -59,6 +60,9 @@ struct OptimizeRun {
   /// What the user should know: the optimizer's warnings and the design's (coincident features,
   /// features outside their body, idle variables, a start from a static equilibrium).
   std::vector<std::string> warnings;
+  /// The final design judged (runs/judge.hpp; spec.judge): none when judging is off, or the final
+  /// design could not be evaluated or was interrupted.
+  std::optional<DesignJudgement> judgement;
   nlohmann::json summary;  ///< summary.json's content (also when nothing is written)
   /// What `lsmbs optimize` exits with: 0 a complete run; 1 a numerical failure, a final design
   /// that could not be evaluated, or a refused gradient check; 130 interrupted.

@@ -1,0 +1,539 @@
+"""Export of a designed body to CAD and meshing formats, from the shape file that `lsmbs geometry`
+and `lsmbs optimize` write beside each design picture (``<body>_shape.json``: the mesh's outline,
+the level-set features with their values at the design, the Boolean region, the node sets, the
+thickness; src/lsmbs/runs/shape.hpp).
+
+    from lsmbs import export
+    files = export.export("out/final_design/plate_shape.json", "out/cad")
+    # {'dxf': ..., 'svg': ..., 'step': ..., 'msh': ...}
+
+    python3 scripts/export_design.py out/final_design/plate_shape.json -o out/cad
+
+Formats (CAD files in millimetres, the mesh in metres like lsmbs):
+  dxf   ezdxf: layer OUTLINE the body's outline (the fixed mesh's boundary loops), layer FEATURES
+        every feature as an exact entity where DXF has one (CIRCLE, ELLIPSE) and a closed SPLINE
+        through 256 boundary points for a super-ellipse, layer COMPONENT the boundary of the
+        Boolean result (LINE, ARC and ELLIPSE arcs where a feature's boundary is exact, else a
+        SPLINE through points of the curve);
+  svg   the same layers as groups (<polygon>, <circle>, <ellipse>, paths), written with
+        xml.etree;
+  step  Gmsh's OpenCASCADE kernel: the component's face (the outline less the holes, with the
+        region's Boolean operations as OCC Booleans) extruded by the thickness;
+  msh   a body-fitted Gmsh mesh (Gmsh 4.1 ASCII, quadrilaterals where the recombination finds
+        them, triangles elsewhere) of element size `size` (default: the fixed mesh's), with a
+        physical curve for each node set of the body whose nodes lie along a boundary curve of
+        the design; lsmbs reads it as an ordinary flexible body (body_fitted_case).
+A region combined with KS smoothing (ks > 0) is exported with the exact Boolean (the smoothing
+moves the boundary by at most ln(n)/ks, stated in the returned `notes`).
+"""
+import json
+import math
+import os
+import xml.etree.ElementTree as ET
+
+__all__ = ["load_shape", "feature_points", "write_dxf", "write_svg", "write_step", "write_msh",
+           "component_area", "export", "body_fitted_case"]
+
+MM = 1000.0  # CAD files: millimetres
+
+
+def load_shape(shape):
+    """The shape as a dict (a path to a ``*_shape.json`` file, or the dict itself)."""
+    if isinstance(shape, dict):
+        return shape
+    with open(os.fspath(shape)) as f:
+        return json.load(f)
+
+
+def _frame(p):
+    a = p.get("angle", 0.0)
+    return p["cx"], p["cy"], math.cos(a), math.sin(a)
+
+
+def feature_points(feature, n=256):
+    """n points of the feature's exact boundary (eqs. 41, 43), counter-clockwise, in metres."""
+    p, t = feature["params"], feature["type"]
+    cx, cy, c, s = _frame(p)
+    out = []
+    for k in range(n):
+        th = 2 * math.pi * k / n
+        if t == "circle":
+            u, v = p["r"] * math.cos(th), p["r"] * math.sin(th)
+        elif t == "ellipse":
+            u, v = p["a"] * p["d"] * math.cos(th), p["b"] * p["d"] * math.sin(th)
+        else:  # |u/a|^xi + |v/b|^eta = 1
+            ct, st = math.cos(th), math.sin(th)
+            u = p["a"] * math.copysign(abs(ct) ** (2 / p["xi"]), ct)
+            v = p["b"] * math.copysign(abs(st) ** (2 / p["eta"]), st)
+        out.append((cx + c * u - s * v, cy + s * u + c * v))
+    return out
+
+
+def _phi(feature, x, y):
+    """The feature's level-set function (positive outside its shape), for matching curves."""
+    p, t = feature["params"], feature["type"]
+    cx, cy, c, s = _frame(p)
+    u, v = c * (x - cx) + s * (y - cy), -s * (x - cx) + c * (y - cy)
+    if t == "circle":
+        return math.hypot(u, v) - p["r"]
+    if t == "ellipse":
+        return (math.hypot(u / p["a"], v / p["b"]) - p["d"]) * min(p["a"], p["b"])
+    return (abs(u / p["a"]) ** p["xi"] + abs(v / p["b"]) ** p["eta"] - 1) * min(p["a"], p["b"])
+
+
+def _semi_axes(feature):
+    """Centre, semi-axes (major, minor) and the major axis's direction of a circle or ellipse."""
+    p = feature["params"]
+    cx, cy, c, s = _frame(p)
+    if feature["type"] == "circle":
+        return (cx, cy), p["r"], p["r"], (1.0, 0.0)
+    a, b = p["a"] * p["d"], p["b"] * p["d"]
+    if a >= b:
+        return (cx, cy), a, b, (c, s)
+    return (cx, cy), b, a, (-s, c)
+
+
+# ----------------------------------------------------------------------------- OpenCASCADE
+def _occ_feature(gmsh, feature):
+    occ = gmsh.model.occ
+    t = feature["type"]
+    if t in ("circle", "ellipse"):
+        (cx, cy), ra, rb, (dx, dy) = _semi_axes(feature)
+        tag = occ.addDisk(cx, cy, 0, ra, rb)
+        ang = math.atan2(dy, dx)
+        if ang != 0:
+            occ.rotate([(2, tag)], cx, cy, 0, 0, 0, 1, ang)
+        return tag
+    pts = [occ.addPoint(x, y, 0) for x, y in feature_points(feature, 128)]
+    curve = occ.addSpline(pts + [pts[0]])  # first point repeated: a periodic spline
+    return occ.addPlaneSurface([occ.addCurveLoop([curve])])
+
+
+def _corners(loop):
+    """The loop without the points where it runs straight on (a mesh's boundary nodes along a
+    straight edge): one line per straight edge."""
+    n, out = len(loop), []
+    for k in range(n):
+        (ax, ay), (bx, by), (cx, cy) = loop[k - 1], loop[k], loop[(k + 1) % n]
+        cross = (bx - ax) * (cy - by) - (by - ay) * (cx - bx)
+        if abs(cross) > 1e-12 * math.hypot(bx - ax, by - ay) * math.hypot(cx - bx, cy - by):
+            out.append(loop[k])
+    return out or loop
+
+
+def _occ_outline(gmsh, shape):
+    occ = gmsh.model.occ
+    loops = []
+    for loop in (_corners(l) for l in shape["outline"]):
+        pts = [occ.addPoint(x, y, 0) for x, y in loop]
+        lines = [occ.addLine(pts[k], pts[(k + 1) % len(pts)]) for k in range(len(pts))]
+        area = 0.5 * sum(loop[k][0] * loop[(k + 1) % len(loop)][1] -
+                         loop[(k + 1) % len(loop)][0] * loop[k][1] for k in range(len(loop)))
+        loops.append((area, occ.addCurveLoop(lines)))
+    loops.sort(key=lambda al: -al[0])  # the outer loop (positive area) first
+    return occ.addPlaneSurface([l for _, l in loops])
+
+
+def _occ_region(gmsh, shape, node, domain, notes):
+    """OCC faces of the material of a region node, within a copy of the domain."""
+    occ = gmsh.model.occ
+    feats = shape["features"]
+
+    def copy():
+        return occ.copy([(2, domain)])
+
+    op = node["op"]
+    if op == "feature":
+        f = feats[node["feature"]]
+        tool = [(2, _occ_feature(gmsh, f))]
+        if f["hole"]:
+            return occ.cut(copy(), tool)[0]
+        return occ.intersect(copy(), tool)[0]
+    if op == "not":
+        inner = _occ_region(gmsh, shape, node["children"][0], domain, notes)
+        return occ.cut(copy(), inner)[0] if inner else copy()
+    if node.get("ks", 0) > 0:
+        notes.append("a %s combined by KS (ks = %g 1/m) is exported with the exact Boolean: the "
+                     "smoothing moves the boundary by at most ln(%d)/ks = %.3g m" % (
+                         op, node["ks"], len(node["children"]),
+                         math.log(len(node["children"])) / node["ks"]))
+    kids = node["children"]
+    if op == "and" and all(k["op"] == "feature" and feats[k["feature"]]["hole"] for k in kids):
+        tools = [(2, _occ_feature(gmsh, feats[k["feature"]])) for k in kids]  # the paper's eq. 4
+        return occ.cut(copy(), tools)[0] if tools else copy()
+    parts = [_occ_region(gmsh, shape, k, domain, notes) for k in kids]
+    acc = parts[0]
+    for p in parts[1:]:
+        if op == "and":
+            acc = occ.intersect(acc, p)[0] if acc and p else []
+        else:
+            acc = occ.fuse(acc, p)[0] if acc and p else (acc or p)
+    return acc
+
+
+def _component(gmsh, shape, notes):
+    """Builds the component's faces in the current Gmsh model; returns their tags."""
+    domain = _occ_outline(gmsh, shape)
+    faces = _occ_region(gmsh, shape, shape["region"], domain, notes)
+    gmsh.model.occ.remove([(2, domain)], recursive=True)
+    gmsh.model.occ.synchronize()
+    return [t for d, t in faces if d == 2]
+
+
+class _quiet_stdout:
+    """File descriptor 1 to /dev/null (output of C++ code that Gmsh's options do not silence)."""
+
+    def __enter__(self):
+        import sys
+        sys.stdout.flush()
+        self.saved = os.dup(1)
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.close(null)
+
+    def __exit__(self, *exc):
+        os.dup2(self.saved, 1)
+        os.close(self.saved)
+
+
+class _Gmsh:
+    """A Gmsh session (gmsh keeps one global state): quiet, one model."""
+
+    def __enter__(self):
+        import gmsh
+        self.gmsh = gmsh
+        gmsh.initialize(readConfigFiles=False)
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("lsmbs_design")
+        return gmsh
+
+    def __exit__(self, *exc):
+        self.gmsh.finalize()
+
+
+def component_area(shape):
+    """Area of the exported component [m²] (OpenCASCADE's exact area of the Boolean result)."""
+    shape = load_shape(shape)
+    with _Gmsh() as gmsh:
+        faces = _component(gmsh, shape, [])
+        return sum(gmsh.model.occ.getMass(2, f) for f in faces)
+
+
+def _curves(gmsh, faces, samples=64):
+    """The boundary curves of the faces: (kind, points) with points sampled along each."""
+    out = []
+    seen = set()
+    for _, c in gmsh.model.getBoundary([(2, f) for f in faces], combined=False, oriented=False):
+        c = abs(c)
+        if c in seen:
+            continue
+        seen.add(c)
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        ts = [lo[0] + (hi[0] - lo[0]) * k / samples for k in range(samples + 1)]
+        xyz = gmsh.model.getValue(1, c, ts)
+        pts = [(xyz[3 * k], xyz[3 * k + 1]) for k in range(len(ts))]
+        out.append((gmsh.model.getType(1, c), pts))
+    return out
+
+
+def _match(shape, pts, tol):
+    """The circle or ellipse feature whose exact boundary holds every point, or None."""
+    for f in shape["features"]:
+        if f["type"] in ("circle", "ellipse") and all(abs(_phi(f, x, y)) <= tol for x, y in pts):
+            return f
+    return None
+
+
+def _arc_params(f, pts):
+    """Start, end (counter-clockwise, radians of the ellipse's parameter) of an arc through pts."""
+    (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
+
+    def param(x, y):
+        u, v = dx * (x - cx) + dy * (y - cy), -dy * (x - cx) + dx * (y - cy)
+        return math.atan2(v / rb, u / ra)
+
+    t0, t1, tm = param(*pts[0]), param(*pts[-1]), param(*pts[len(pts) // 2])
+
+    def ccw(a, b):  # the counter-clockwise angle from a to b, in [0, 2π)
+        return (b - a) % (2 * math.pi)
+
+    if ccw(t0, tm) <= ccw(t0, t1):
+        return t0, t1
+    return t1, t0
+
+
+def _component_curves(shape, notes):
+    with _Gmsh() as gmsh:
+        faces = _component(gmsh, shape, notes)
+        return _curves(gmsh, faces)
+
+
+# ----------------------------------------------------------------------------- DXF
+def write_dxf(shape, path, notes=None):
+    """The DXF file (millimetres, $INSUNITS 4); returns the path."""
+    import ezdxf
+    shape = load_shape(shape)
+    notes = [] if notes is None else notes
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = 4
+    for name, color in (("OUTLINE", 8), ("FEATURES", 1), ("COMPONENT", 7)):
+        doc.layers.add(name, color=color)
+    msp = doc.modelspace()
+    for loop in shape["outline"]:
+        msp.add_lwpolyline([(x * MM, y * MM) for x, y in loop], close=True,
+                           dxfattribs={"layer": "OUTLINE"})
+    for f in shape["features"]:
+        _dxf_feature(msp, f, "FEATURES")
+    tol = 1e-6 * max(1e-3, shape.get("element_size", 1e-3))
+    for kind, pts in _component_curves(shape, notes):
+        _dxf_curve(msp, shape, kind, pts, tol)
+    doc.saveas(os.fspath(path))
+    return os.fspath(path)
+
+
+def _dxf_feature(msp, f, layer):
+    at = {"layer": layer}
+    if f["type"] == "circle":
+        p = f["params"]
+        msp.add_circle((p["cx"] * MM, p["cy"] * MM), p["r"] * MM, dxfattribs=at)
+    elif f["type"] == "ellipse":
+        (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
+        msp.add_ellipse((cx * MM, cy * MM), (ra * dx * MM, ra * dy * MM), rb / ra,
+                        dxfattribs=at)
+    else:
+        pts = [(x * MM, y * MM) for x, y in feature_points(f)]
+        msp.add_spline_control_frame(pts + [pts[0]], dxfattribs=at)
+
+
+def _dxf_curve(msp, shape, kind, pts, tol):
+    at = {"layer": "COMPONENT"}
+    closed = math.dist(pts[0], pts[-1]) <= tol * 10
+    if kind == "Line":
+        msp.add_line((pts[0][0] * MM, pts[0][1] * MM), (pts[-1][0] * MM, pts[-1][1] * MM),
+                     dxfattribs=at)
+        return
+    f = _match(shape, pts, tol * 10) if kind in ("Circle", "Ellipse") else None
+    if f is not None and closed:
+        _dxf_feature(msp, f, "COMPONENT")
+        return
+    if f is not None:
+        t0, t1 = _arc_params(f, pts)
+        (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
+        if f["type"] == "circle":
+            msp.add_arc((cx * MM, cy * MM), ra * MM, math.degrees(t0), math.degrees(t1),
+                        dxfattribs=at)
+        else:
+            msp.add_ellipse((cx * MM, cy * MM), (ra * dx * MM, ra * dy * MM), rb / ra,
+                            start_param=t0, end_param=t1, dxfattribs=at)
+        return
+    msp.add_spline_control_frame([(x * MM, y * MM) for x, y in pts], dxfattribs=at)
+
+
+# ----------------------------------------------------------------------------- SVG
+def write_svg(shape, path, notes=None):
+    """The SVG file (user units = millimetres, y up as in the body's frame); returns the path."""
+    shape = load_shape(shape)
+    notes = [] if notes is None else notes
+    xs = [x for loop in shape["outline"] for x, _ in loop]
+    ys = [y for loop in shape["outline"] for _, y in loop]
+    pad = 0.02 * max(max(xs) - min(xs), max(ys) - min(ys))
+    x0, y0 = (min(xs) - pad) * MM, (min(ys) - pad) * MM
+    w, h = (max(xs) - min(xs) + 2 * pad) * MM, (max(ys) - min(ys) + 2 * pad) * MM
+    ET.register_namespace("", "http://www.w3.org/2000/svg")
+    svg = ET.Element("{http://www.w3.org/2000/svg}svg", {
+        "width": "%gmm" % w, "height": "%gmm" % h, "viewBox": "%g %g %g %g" % (x0, -y0 - h, w, h)})
+    ET.SubElement(svg, "title").text = "%s (lsmbs design export, mm)" % shape.get("body", "")
+    flip = ET.SubElement(svg, "g", {"transform": "scale(1,-1)", "fill": "none",
+                                    "stroke-width": "%g" % (0.002 * max(w, h))})
+    outline = ET.SubElement(flip, "g", {"id": "OUTLINE", "stroke": "#888888"})
+    for loop in shape["outline"]:
+        ET.SubElement(outline, "polygon",
+                      {"points": " ".join("%.6g,%.6g" % (x * MM, y * MM) for x, y in loop)})
+    feats = ET.SubElement(flip, "g", {"id": "FEATURES", "stroke": "#cc0000"})
+    for f in shape["features"]:
+        _svg_feature(feats, f)
+    comp = ET.SubElement(flip, "g", {"id": "COMPONENT", "stroke": "#000000"})
+    tol = 1e-6 * max(1e-3, shape.get("element_size", 1e-3))
+    for kind, pts in _component_curves(shape, notes):
+        _svg_curve(comp, shape, kind, pts, tol)
+    ET.ElementTree(svg).write(os.fspath(path), xml_declaration=True, encoding="utf-8")
+    return os.fspath(path)
+
+
+def _svg_feature(g, f, attrs=None):
+    attrs = dict(attrs or {}, id=f["name"])
+    if f["type"] == "circle":
+        p = f["params"]
+        ET.SubElement(g, "circle", dict(attrs, cx="%.9g" % (p["cx"] * MM),
+                                         cy="%.9g" % (p["cy"] * MM), r="%.9g" % (p["r"] * MM)))
+    elif f["type"] == "ellipse":
+        (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
+        ET.SubElement(g, "ellipse", dict(
+            attrs, cx="%.9g" % (cx * MM), cy="%.9g" % (cy * MM), rx="%.9g" % (ra * MM),
+            ry="%.9g" % (rb * MM), transform="rotate(%.9g %.9g %.9g)" % (
+                math.degrees(math.atan2(dy, dx)), cx * MM, cy * MM)))
+    else:
+        pts = feature_points(f)
+        d = "M " + " L ".join("%.6g %.6g" % (x * MM, y * MM) for x, y in pts) + " Z"
+        ET.SubElement(g, "path", dict(attrs, d=d))
+
+
+def _svg_curve(g, shape, kind, pts, tol):
+    closed = math.dist(pts[0], pts[-1]) <= tol * 10
+    f = _match(shape, pts, tol * 10) if kind in ("Circle", "Ellipse") else None
+    if f is not None and closed:
+        _svg_feature(g, f, {"class": "component"})
+        return
+    d = "M %.6g %.6g" % (pts[0][0] * MM, pts[0][1] * MM)
+    if kind == "Line":
+        d += " L %.6g %.6g" % (pts[-1][0] * MM, pts[-1][1] * MM)
+    elif f is not None:  # an exact elliptic arc from the first point to the last
+        (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
+        t0, t1 = _arc_params(f, pts)
+        forward = math.dist(pts[0], _ellipse_point(f, t0)) <= math.dist(pts[0], _ellipse_point(f, t1))
+        span = (t1 - t0) % (2 * math.pi)
+        d += " A %.9g %.9g %.9g %d %d %.6g %.6g" % (
+            ra * MM, rb * MM, math.degrees(math.atan2(dy, dx)), 1 if span > math.pi else 0,
+            1 if forward else 0, pts[-1][0] * MM, pts[-1][1] * MM)
+    else:
+        d += "".join(" L %.6g %.6g" % (x * MM, y * MM) for x, y in pts[1:])
+    ET.SubElement(g, "path", {"d": d})
+
+
+def _ellipse_point(f, t):
+    (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
+    u, v = ra * math.cos(t), rb * math.sin(t)
+    return (cx + dx * u - dy * v, cy + dy * u + dx * v)
+
+
+# ----------------------------------------------------------------------------- STEP, MSH
+def write_step(shape, path, notes=None):
+    """The STEP solid (millimetres): the component's face extruded by the thickness."""
+    # built in millimetres (OpenCASCADE's dilate would turn circles and ellipses into splines)
+    shape = _scaled(load_shape(shape), MM)
+    with _Gmsh() as gmsh:
+        faces = _component(gmsh, shape, [] if notes is None else notes)
+        occ = gmsh.model.occ
+        occ.extrude([(2, f) for f in faces], 0, 0, shape["thickness"])
+        occ.synchronize()
+        with _quiet_stdout():  # OpenCASCADE's STEP writer prints its statistics
+            gmsh.write(os.fspath(path))
+    return os.fspath(path)
+
+
+def _scaled(shape, k):
+    """The shape with every length times k (the outline, the features' centres and sizes, the
+    thickness, the node sets)."""
+    lengths = {"cx", "cy", "a", "b", "r"}
+    s = dict(shape)
+    s["outline"] = [[[k * x, k * y] for x, y in loop] for loop in shape["outline"]]
+    s["features"] = [dict(f, params={n: (k * v if n in lengths else v)
+                                     for n, v in f["params"].items()}) for f in shape["features"]]
+    s["node_sets"] = {n: [[k * x, k * y] for x, y in pts] for n, pts in shape["node_sets"].items()}
+    s["thickness"] = k * shape["thickness"]
+    s["element_size"] = k * shape["element_size"]
+    return s
+
+
+def _node_set_curves(gmsh, faces, points, tol):
+    """The boundary curves of the faces along which a node set lies: every sampled point of the
+    curve within tol of the set's polyline of nodes (nearest-node distance)."""
+    hits = []
+    for _, c in gmsh.model.getBoundary([(2, f) for f in faces], combined=False, oriented=False):
+        c = abs(c)
+        if c in hits:
+            continue
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        ts = [lo[0] + (hi[0] - lo[0]) * k / 16 for k in range(17)]
+        xyz = gmsh.model.getValue(1, c, ts)
+        if all(min(math.dist((xyz[3 * k], xyz[3 * k + 1]), q) for q in points) <= tol
+               for k in range(len(ts))):
+            hits.append(c)
+    return hits
+
+
+def write_msh(shape, path, size=None, notes=None):
+    """A body-fitted mesh (Gmsh 4.1 ASCII, metres); returns (path, {node set: curves found})."""
+    shape = load_shape(shape)
+    h = size or shape["element_size"]
+    with _Gmsh() as gmsh:
+        faces = _component(gmsh, shape, [] if notes is None else notes)
+        opt = gmsh.option.setNumber
+        opt("Mesh.MeshSizeMax", h)
+        opt("Mesh.MeshSizeMin", h / 4)
+        opt("Mesh.MeshSizeFromCurvature", 12)  # about 12 elements around a full circle
+        opt("Mesh.Algorithm", 6)  # frontal-Delaunay (8, for quadrilaterals, crashes Gmsh 4.8)
+        opt("Mesh.RecombineAll", 1)
+        opt("Mesh.ElementOrder", 1)
+        opt("Mesh.MshFileVersion", 4.1)
+        opt("Mesh.Binary", 0)
+        found = {}
+        for name, pts in sorted(shape["node_sets"].items()):
+            pts = [tuple(p) for p in pts]
+            gap = max((min(math.dist(p, q) for q in pts if q != p) for p in pts), default=h)
+            curves = _node_set_curves(gmsh, faces, pts, 0.6 * gap + 1e-9)
+            found[name] = curves
+            if curves:
+                g = gmsh.model.addPhysicalGroup(1, curves)
+                gmsh.model.setPhysicalName(1, g, name)
+        s = gmsh.model.addPhysicalGroup(2, faces)
+        gmsh.model.setPhysicalName(2, s, "component")
+        gmsh.model.mesh.generate(2)
+        gmsh.write(os.fspath(path))
+    return os.fspath(path), found
+
+
+def export(shape, out_dir, formats=("dxf", "svg", "step", "msh"), size=None):
+    """Writes the formats into out_dir (named after the body); returns {format: path, 'notes':
+    [...], 'node_sets': {...}}."""
+    shape = load_shape(shape)
+    os.makedirs(os.fspath(out_dir), exist_ok=True)
+    stem = os.path.join(os.fspath(out_dir), shape.get("body", "design"))
+    out, notes = {}, []
+    for fmt in formats:
+        if fmt == "dxf":
+            out["dxf"] = write_dxf(shape, stem + ".dxf", notes)
+        elif fmt == "svg":
+            out["svg"] = write_svg(shape, stem + ".svg", notes)
+        elif fmt == "step":
+            out["step"] = write_step(shape, stem + ".step", notes)
+        elif fmt == "msh":
+            out["msh"], out["node_sets"] = write_msh(shape, stem + ".msh", size, notes)
+        else:
+            raise ValueError("format %r: expected dxf, svg, step or msh" % fmt)
+    out["notes"] = sorted(set(notes))
+    return out
+
+
+def body_fitted_case(case, body, msh, out):
+    """A copy of the case file `case` in which `body` is meshed by the body-fitted `msh` (full
+    material where the design has material: no design section, no optimization), written to
+    `out`; mesh and table paths are made absolute. Returns the path."""
+    with open(os.fspath(case)) as f:
+        doc = json.load(f)
+    base = os.path.dirname(os.path.abspath(os.fspath(case)))
+    for b in doc["bodies"]:
+        mesh = b.get("mesh")
+        if b["name"] == body:
+            b["mesh"] = {"type": "gmsh", "file": os.path.abspath(os.fspath(msh)), "scale": 1.0}
+        elif isinstance(mesh, dict) and "file" in mesh:
+            mesh["file"] = os.path.join(base, mesh["file"])
+    doc.pop("design", None)
+    doc.pop("optimization", None)
+    _absolute_files(doc, base)
+    with open(os.fspath(out), "w") as f:
+        json.dump(doc, f, indent=1)
+    return os.fspath(out)
+
+
+def _absolute_files(node, base):
+    """Relative "file" entries (tables, initial states) made absolute against the case's folder."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            if k == "file" and isinstance(v, str) and not os.path.isabs(v):
+                node[k] = os.path.join(base, v)
+            else:
+                _absolute_files(v, base)
+    elif isinstance(node, list):
+        for v in node:
+            _absolute_files(v, base)

@@ -1,0 +1,81 @@
+#include "lsmbs/runs/shape.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lsmbs/fem/element_types.hpp"
+
+namespace lsmbs {
+namespace {
+
+nlohmann::json point(const Vec2& x) { return nlohmann::json::array({x.x(), x.y()}); }
+
+nlohmann::json node_json(const LevelSetNode& n) {
+  switch (n.op) {
+    case LevelSetNode::Op::kFeature:
+      return {{"op", "feature"}, {"feature", n.feature}};
+    case LevelSetNode::Op::kNot:
+      return {{"op", "not"}, {"children", nlohmann::json::array({node_json(n.children[0])})}};
+    default: {
+      nlohmann::json c = nlohmann::json::array();
+      for (const auto& k : n.children) c.push_back(node_json(k));
+      return {{"op", n.op == LevelSetNode::Op::kAnd ? "and" : "or"}, {"ks", n.ks}, {"children", c}};
+    }
+  }
+}
+
+const char* type_name(Feature::Type t) {
+  return t == Feature::Type::kCircle    ? "circle"
+         : t == Feature::Type::kEllipse ? "ellipse"
+                                        : "super_ellipse";
+}
+
+}  // namespace
+
+nlohmann::json shape_json(const BodyDesign& b, const Vec& p, const ModelParams& params) {
+  const FlexibleBody& body = *b.body;
+  const Mesh2D& mesh = body.mesh;
+  nlohmann::json outline = nlohmann::json::array();
+  for (const auto& loop : mesh.boundary_loops()) {
+    nlohmann::json l = nlohmann::json::array();
+    for (int k : loop) l.push_back(point(mesh.nodes[static_cast<size_t>(k)]));
+    outline.push_back(l);
+  }
+  const LevelSet& ls = b.map->level_set();
+  nlohmann::json features = nlohmann::json::array();
+  for (const Feature& f : ls.features()) {
+    nlohmann::json par = nlohmann::json::object();
+    const auto names = Feature::parameter_names(f.type());
+    const auto v = f.values(p);
+    for (size_t i = 0; i < names.size() && i < v.size(); ++i) par[names[i]] = v[i];
+    features.push_back(
+        {{"name", f.name()}, {"type", type_name(f.type())}, {"hole", f.hole()}, {"params", par}});
+  }
+  nlohmann::json sets = nlohmann::json::object();
+  for (const auto& [name, nodes] : mesh.node_sets) {
+    nlohmann::json s = nlohmann::json::array();
+    for (int k : nodes) s.push_back(point(mesh.nodes[static_cast<size_t>(k)]));
+    sets[name] = s;
+  }
+  std::vector<double> h;
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    h.push_back(std::sqrt(element_type(mesh.cells[static_cast<size_t>(e)].type)
+                              .shape->area(mesh.cell_nodes(e).data())));
+  std::nth_element(h.begin(), h.begin() + static_cast<long>(h.size() / 2), h.end());
+  const auto scalar = [&](int i) { return params.scalars[static_cast<size_t>(i)]; };
+  return {{"body", body.name},
+          {"frame", "the body's mesh frame; lengths in m"},
+          {"outline", outline},
+          {"features", features},
+          {"region", node_json(ls.root())},
+          {"node_sets", sets},
+          {"thickness", scalar(body.thickness_param)},
+          {"material",
+           {{"E", scalar(body.E_param)},
+            {"nu", scalar(body.nu_param)},
+            {"rho", scalar(body.rho_param)}}},
+          {"element_size", h.empty() ? 0.0 : h[h.size() / 2]},
+          {"mu_min", b.map->options().mu_min}};
+}
+
+}  // namespace lsmbs
