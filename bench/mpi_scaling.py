@@ -21,7 +21,9 @@ Cost model of one evaluation on K ranks (conditions assigned longest first, runs
                receives every condition's result (responses and gradients, B bytes each) from its
                rank: C broadcasts, about C (alpha log2 K + beta B) (alpha, beta: latency and inverse
                bandwidth of the network; on one machine below a millisecond in total).
-Every time is the median of --runs whole-process runs (wall clock, time.monotonic).
+Every time is the median of --runs whole-process runs (wall clock, time.monotonic). Like the
+serial run (taskset to one core), each rank has one core (`mpirun --bind-to core`) while K does
+not exceed the cores; K = 3 on two cores shares them (--oversubscribe).
 """
 import argparse
 import json
@@ -102,11 +104,17 @@ def main():
     out = pathlib.Path(a.out or tempfile.mkdtemp(prefix="lsmbs_mpi_bench_"))
     out.mkdir(parents=True, exist_ok=True)
     mpi = [a.mpirun, "--allow-run-as-root", "--oversubscribe", "--bind-to", "none"]
+    cores = os.cpu_count() or 1
+
+    def ranks(k):  # K ranks on K cores, one each, as the serial run has one; more: shared
+        bind = ["--bind-to", "core"] if k <= cores else ["--oversubscribe", "--bind-to", "none"]
+        return [a.mpirun, "--allow-run-as-root", *bind, "-np", str(k)]
+
     one_core = ["taskset", "-c", "0"]
     files = cases(out)
     report = {"runs": a.runs, "cases": {}}
     try:
-        launch = {k: median_time([*mpi, "-np", str(k), lsmbs, "--version"], a.runs) for k in (1, 2, 3)}
+        launch = {k: median_time([*ranks(k), lsmbs, "--version"], a.runs) for k in (1, 2, 3)}
         report["T_launch"] = launch
         for name, (f, case) in ([] if a.no_conditions else files.items()):
             sens = lambda d: ["sensitivity", str(f), "-o", str(out / d), "-q", "--overwrite", "--threads", "1"]
@@ -144,7 +152,7 @@ def main():
                 for k in sorted(range(len(t)), key=lambda k: -steps[k]):  # longest first
                     load[load.index(min(load))] += t[k]
                 predicted = launch[K] + fixed + max(load)
-                measured = median_time([*mpi, "-np", str(K), lsmbs, *sens("%s_K%d" % (name, K))], a.runs)
+                measured = median_time([*ranks(K), lsmbs, *sens("%s_K%d" % (name, K))], a.runs)
                 row["K"][K] = {"measured": measured, "predicted": predicted,
                                "efficiency": serial / (K * measured),
                                "predicted_efficiency": serial / (K * predicted)}

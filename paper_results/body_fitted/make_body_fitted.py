@@ -38,7 +38,7 @@ CASES = {
             "response": "average_tip_deviation",
             "fixed": [("data/robot_arm/robot_arm_holes.json", [], "120 × 10 quads, h = 5 mm"),
                       ("data/robot_arm/robot_arm_holes.json",
-                       ["/bodies/plate/mesh/elements=[240,20]"], "240 × 20 quads, h = 2.5 mm")]},
+                       ["/bodies/2/mesh/elements=[240,20]"], "240 × 20 quads, h = 2.5 mm")]},
     "rod1": {"run": "slider_crank_1hole", "body": "rod", "mass": "rod_mass",
              "response": "max_elongation",
              "fixed": [("data/slider_crank/slider_crank_1hole_coarse.json", [], "rod_coarse.msh"),

@@ -1,5 +1,9 @@
 #include "lsmbs/runs/mpi.hpp"
 
+#ifdef __linux__
+#include <sched.h>
+#endif
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -56,6 +60,16 @@ int conditions_at_once(int sensitivity_threads) {
 
 int local_threads() {
   const int cores = std::max(1u, std::thread::hardware_concurrency());
+#ifdef __linux__
+  // a launcher that binds each rank to its cores (mpirun --bind-to core, srun --cpu-bind) has
+  // already shared them out: the process's own CPUs are this rank's
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) {
+    const int mine = CPU_COUNT(&set);
+    if (mine > 0 && mine < cores) return mine;
+  }
+#endif
   int local = env_int("OMPI_COMM_WORLD_LOCAL_SIZE");
   if (local <= 0) local = env_int("SLURM_NTASKS_PER_NODE");
   if (local <= 0) local = 1;

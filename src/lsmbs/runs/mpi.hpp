@@ -40,8 +40,10 @@ const World& world();
 /// Ends MPI now (idempotent): a command that ends normally calls it before it exits.
 void finalize();
 
-/// The cores of this machine over the ranks on it (OMPI_COMM_WORLD_LOCAL_SIZE,
-/// SLURM_NTASKS_PER_NODE; at least 1): how many threads one rank runs at a time.
+/// How many threads one rank runs at a time: the CPUs the process is bound to when the launcher
+/// bound it to fewer than the machine has (mpirun --bind-to core, srun --cpu-bind; Linux), else
+/// the cores of this machine over the ranks on it (OMPI_COMM_WORLD_LOCAL_SIZE,
+/// SLURM_NTASKS_PER_NODE; at least 1).
 int local_threads();
 /// The executor of service conditions over the ranks, `threads` at a time on each (0:
 /// local_threads()); without MPI (or with one rank) the thread executor.
