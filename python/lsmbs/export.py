@@ -122,16 +122,22 @@ def _corners(loop):
 
 
 def _occ_outline(gmsh, shape):
+    """The body's face: its outer loop less its inner loops (OCC cut: a face made of several
+    wires at once came out with the holes' areas added on the connecting rod's mesh)."""
     occ = gmsh.model.occ
-    loops = []
+    faces = []
     for loop in (_corners(l) for l in shape["outline"]):
         pts = [occ.addPoint(x, y, 0) for x, y in loop]
         lines = [occ.addLine(pts[k], pts[(k + 1) % len(pts)]) for k in range(len(pts))]
         area = 0.5 * sum(loop[k][0] * loop[(k + 1) % len(loop)][1] -
                          loop[(k + 1) % len(loop)][0] * loop[k][1] for k in range(len(loop)))
-        loops.append((area, occ.addCurveLoop(lines)))
-    loops.sort(key=lambda al: -al[0])  # the outer loop (positive area) first
-    return occ.addPlaneSurface([l for _, l in loops])
+        faces.append((area, occ.addPlaneSurface([occ.addCurveLoop(lines)])))
+    faces.sort(key=lambda af: -af[0])  # the outer loop (positive area) first
+    outer, holes = faces[0][1], [(2, t) for _, t in faces[1:]]
+    if not holes:
+        return outer
+    (dim, tag), = occ.cut([(2, outer)], holes)[0]
+    return tag
 
 
 def _occ_region(gmsh, shape, node, domain, notes):

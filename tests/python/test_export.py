@@ -82,6 +82,23 @@ def test_exact_entities_areas_and_volume(tmp_path):
     assert v == pytest.approx(exact * 0.002 * 1e9, rel=1e-9)
 
 
+def test_a_mesh_with_holes_keeps_them(tmp_path):
+    """A body whose mesh has holes (the rod's bores): the outline's inner loops, clockwise, are
+    cut from the outer one (a face built of all the loops at once had their areas added)."""
+    shape = plate_shape([{"name": "h", "type": "circle", "hole": True,
+                          "params": {"cx": 0.15, "cy": 0.025, "r": 0.01}}])
+    bore = [[0.04, 0.015], [0.04, 0.035], [0.06, 0.035], [0.06, 0.015]]  # clockwise
+    shape["outline"].append(bore)
+    exact = 0.2 * 0.05 - 0.02 * 0.02 - math.pi * 0.01 ** 2
+    assert export.component_area(shape) == pytest.approx(exact, rel=1e-9)
+    shape["node_sets"]["bore"] = [[0.04, 0.015 + 0.005 * k] for k in range(5)] + \
+        [[0.04 + 0.005 * k, 0.035] for k in range(1, 5)] + \
+        [[0.06, 0.035 - 0.005 * k] for k in range(1, 5)] + \
+        [[0.06 - 0.005 * k, 0.015] for k in range(1, 4)]
+    out = export.export(shape, tmp_path, ("msh",))
+    assert len(out["node_sets"]["bore"]) == 4  # the bore's four edges
+
+
 def test_robot_arm_design_exports_and_simulates_body_fitted(tmp_path):
     case = os.path.join(ROOT, "data/robot_arm/robot_arm_holes.json")
     cs = lsmbs.load_case(case)

@@ -39,6 +39,39 @@ std::string percent(double x) {
   return b;
 }
 
+// Each judged response as mapped (a) and with the weaker void (b), flagged beyond the tolerance.
+void compare(const std::vector<ResponseSensitivity>& a, const std::vector<ResponseSensitivity>& b,
+             const OptimizationSpec& spec, DesignJudgement& J) {
+  const double factor = spec.judge.ersatz_factor;
+  for (const auto& [name, bound] : judged_responses(spec)) {
+    const auto ia = std::find_if(a.begin(), a.end(), [&](const auto& r) { return r.name == name; });
+    const auto ib = std::find_if(b.begin(), b.end(), [&](const auto& r) { return r.name == name; });
+    if (ia == a.end() || ib == b.end() || ia->values.empty()) continue;
+    DesignJudgement::Response R;
+    R.name = name;
+    double scale = bound, diff = 0;
+    R.value = R.weak = -INFINITY;
+    for (size_t s = 0; s < ia->values.size() && s < ib->values.size(); ++s) {
+      scale = std::max(scale, std::abs(ia->values[s]));
+      diff = std::max(diff, std::abs(ib->values[s] - ia->values[s]));
+      R.value = std::max(R.value, ia->values[s]);
+      R.weak = std::max(R.weak, ib->values[s]);
+    }
+    R.change = scale > 0 ? diff / scale : diff;
+    R.flagged = !(R.change <= spec.judge.ersatz_tolerance);
+    if (R.flagged) {
+      char v[96];
+      std::snprintf(v, sizeof v, "%.6g to %.6g", R.value, R.weak);
+      J.structure_flags.push_back("response '" + name + "' changes by " + percent(R.change) + " (" +
+                                  v + ") when the void's ersatz material is 1/" +
+                                  std::to_string(long(std::lround(1 / factor))) +
+                                  " as stiff: a load path runs through void (tolerance " +
+                                  percent(spec.judge.ersatz_tolerance) + ")");
+    }
+    J.responses.push_back(R);
+  }
+}
+
 void ersatz_check(const Conditions& c, const OptimizationSpec& spec, const Vec& p,
                   const ConditionExecutor& run, DesignJudgement& J) {
   const double factor = spec.judge.ersatz_factor;
@@ -91,34 +124,7 @@ void ersatz_check(const Conditions& c, const OptimizationSpec& spec, const Vec& 
                                           "): the design rests on the void");
     return;
   }
-  const auto a = gather(c, as_mapped), b = gather(c, weak);
-  for (const auto& [name, bound] : judged_responses(spec)) {
-    const auto ia = std::find_if(a.begin(), a.end(), [&](const auto& r) { return r.name == name; });
-    const auto ib = std::find_if(b.begin(), b.end(), [&](const auto& r) { return r.name == name; });
-    if (ia == a.end() || ib == b.end() || ia->values.empty()) continue;
-    DesignJudgement::Response R;
-    R.name = name;
-    double scale = bound, diff = 0;
-    R.value = R.weak = -INFINITY;
-    for (size_t s = 0; s < ia->values.size() && s < ib->values.size(); ++s) {
-      scale = std::max(scale, std::abs(ia->values[s]));
-      diff = std::max(diff, std::abs(ib->values[s] - ia->values[s]));
-      R.value = std::max(R.value, ia->values[s]);
-      R.weak = std::max(R.weak, ib->values[s]);
-    }
-    R.change = scale > 0 ? diff / scale : diff;
-    R.flagged = !(R.change <= spec.judge.ersatz_tolerance);
-    if (R.flagged) {
-      char v[96];
-      std::snprintf(v, sizeof v, "%.6g to %.6g", R.value, R.weak);
-      J.structure_flags.push_back("response '" + name + "' changes by " + percent(R.change) + " (" +
-                                  v + ") when the void's ersatz material is 1/" +
-                                  std::to_string(long(std::lround(1 / factor))) +
-                                  " as stiff: a load path runs through void (tolerance " +
-                                  percent(spec.judge.ersatz_tolerance) + ")");
-    }
-    J.responses.push_back(R);
-  }
+  compare(gather(c, as_mapped), gather(c, weak), spec, J);
 }
 
 nlohmann::json point(const Vec2& x) { return nlohmann::json::array({x.x(), x.y()}); }
