@@ -13,6 +13,9 @@ Cases (design from the run's summary.json):
   rod1  slider_crank_1hole (rod.msh) and slider_crank_1hole_coarse (rod_coarse.msh) at the
         fine run's optimum; elongation
   rod3  slider_crank_3holes and slider_crank_3holes_coarse at the fine run's optimum; elongation
+  arm_length_scale  the best start of robot_arm_length_scale (the multi-start with the length-scale
+        constraints), as arm
+  arm_robust  robot_arm_robust (the robust formulation's optimum), as arm; the nominal design
 """
 import argparse
 import importlib.util
@@ -39,6 +42,10 @@ CASES = {
             "fixed": [("data/robot_arm/robot_arm_holes.json", [], "120 × 10 quads, h = 5 mm"),
                       ("data/robot_arm/robot_arm_holes.json",
                        ["/bodies/2/mesh/elements=[240,20]"], "240 × 20 quads, h = 2.5 mm")]},
+    "arm_length_scale": {"run": "robot_arm_length_scale", "body": "plate", "mass": "plate_mass",
+                         "response": "average_tip_deviation", "fixed": "arm"},
+    "arm_robust": {"run": "robot_arm_robust", "body": "plate", "mass": "plate_mass",
+                   "response": "average_tip_deviation", "fixed": "arm"},
     "rod1": {"run": "slider_crank_1hole", "body": "rod", "mass": "rod_mass",
              "response": "max_elongation",
              "fixed": [("data/slider_crank/slider_crank_1hole_coarse.json", [], "rod_coarse.msh"),
@@ -76,7 +83,13 @@ def main():
     for key, c in CASES.items():
         if a.only and key != a.only:
             continue
-        S = json.loads((HERE.parent / c["run"] / "summary.json").read_text())
+        if isinstance(c["fixed"], str):
+            c = {**c, "fixed": CASES[c["fixed"]]["fixed"]}
+        folder = HERE.parent / c["run"]
+        S = json.loads((folder / "summary.json").read_text())
+        if "ranking" in S:  # a multi-start: its best start
+            folder = folder / ("start_%d" % S["ranking"]["best_start"])
+            S = json.loads((folder / "summary.json").read_text())
         design = S["final"]["design"]
         sets = ["%s=%.17g" % kv for kv in sorted(design.items())]
         rows = []
@@ -112,7 +125,7 @@ def main():
         for row in rows:
             row["mass_error"] = row["mass"] / ref["mass"] - 1
             row["response_error"] = row["response"] / ref["response"] - 1
-        results[key] = {"run": c["run"], "design": design, "response": c["response"], "rows": rows}
+        results[key] = {"run": str(folder.relative_to(HERE.parent)), "design": design, "response": c["response"], "rows": rows}
         print(key, json.dumps(rows, indent=1))
     if a.only:
         prev = HERE / "results.json"

@@ -291,3 +291,41 @@ TEST(Conditions, TheCommandLineReportsEveryConditionsResponses) {
   const json H = json::parse(std::ifstream(dir + "/r/conditions/heavy/summary.json"));
   EXPECT_EQ(H["responses"]["x_end"], S["responses"]["heavy.x_end"]);
 }
+
+// A condition may set a body's level-set offset, and only that of the design: a variant of the
+// design (the robust formulation's eroded one). Its mass is its own, reported under its name, and
+// smaller than the nominal design's by the material a grown hole removes; its gradients are
+// central differences of whole runs like every other condition's.
+TEST(Conditions, AnErodedVariantOfTheDesignHasItsOwnMass) {
+  json j = json::parse(
+      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/examples/getting_started/flexible_arm.json"));
+  j["simulation"]["t_end"] = 0.1;
+  j["bodies"][1]["mesh"]["elements"] = {20, 2};
+  j["conditions"] = {{{"name", "eroded"}, {"set", {{"/design/geometry/0/offset", 0.002}}}},
+                     {{"name", "nominal"}}};
+  const Case cs = load_case_json(j, "<test>", std::string(LSMBS_SOURCE_DIR) + "/examples");
+  const Conditions c = conditions_of(cs);
+  EXPECT_EQ(c.response_names(),
+            (std::vector<std::string>{"eroded.arm_mass", "eroded.rms_deflection", "arm_mass",
+                                      "nominal.rms_deflection"}));
+  SensitivityOptions o;
+  const Vec p = cs.design->initial();
+  const auto r = compute_sensitivities(c, p, o, thread_executor(2));
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_LT(named(r.responses, "eroded.arm_mass").values[0],
+            named(r.responses, "arm_mass").values[0]);
+  GradientCheckOptions g;
+  const auto check = check_gradients(c, p, r.responses, g, thread_executor(2));
+  ASSERT_TRUE(check.ok) << check.message;
+  EXPECT_LT(check.worst, g.warn) << check.report();
+  // any other value of the design is refused
+  j["conditions"][0]["set"] = {{"/design/geometry/0/subgrid", 4}};
+  try {
+    load_case_json(j, "<test>", std::string(LSMBS_SOURCE_DIR) + "/examples");
+    ADD_FAILURE() << "a condition set the design's subgrid";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("it may set only /design/geometry/<entry>/offset"),
+              std::string::npos)
+        << e.what();
+  }
+}

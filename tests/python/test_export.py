@@ -99,6 +99,35 @@ def test_a_mesh_with_holes_keeps_them(tmp_path):
     assert len(out["node_sets"]["bore"]) == 4  # the bore's four edges
 
 
+def test_a_non_design_ring_is_material_once(tmp_path):
+    """A region OR-ed with a non-design ring around a bore (the rod's rings): the ring's material
+    counts once. The hole overlaps the ring's disc: area = plate − bore − (hole − hole ∩ disc),
+    with the lens of two circles in closed form (OpenCASCADE's fuse had returned the ring and the
+    region whole, overlapping)."""
+    shape = plate_shape([{"name": "h", "type": "circle", "hole": True,
+                          "params": {"cx": 0.08, "cy": 0.025, "r": 0.012}},
+                         {"name": "ring", "type": "circle", "hole": False,
+                          "params": {"cx": 0.05, "cy": 0.025, "r": 0.02}}])
+    shape["region"] = {"op": "or", "ks": 0, "children": [
+        {"op": "and", "ks": 0, "children": [{"op": "feature", "feature": 0}]},
+        {"op": "feature", "feature": 1}]}
+    bore = [[0.05 + 0.008 * math.cos(-2 * math.pi * k / 64),
+             0.025 + 0.008 * math.sin(-2 * math.pi * k / 64)] for k in range(64)]  # clockwise
+    shape["outline"].append(bore)
+    bore_area = 0.5 * 64 * 0.008 ** 2 * math.sin(2 * math.pi / 64)  # the 64-gon
+
+    def lens(r1, r2, d):  # area of the intersection of two discs whose centres are d apart
+        a1 = r1 ** 2 * math.acos((d * d + r1 * r1 - r2 * r2) / (2 * d * r1))
+        a2 = r2 ** 2 * math.acos((d * d + r2 * r2 - r1 * r1) / (2 * d * r2))
+        return a1 + a2 - 0.5 * math.sqrt((-d + r1 + r2) * (d + r1 - r2) * (d - r1 + r2) *
+                                         (d + r1 + r2))
+    exact = 0.2 * 0.05 - bore_area - (math.pi * 0.012 ** 2 - lens(0.012, 0.02, 0.03))
+    assert export.component_area(shape) == pytest.approx(exact, rel=1e-9)
+    out = export.export(shape, tmp_path, ("dxf", "step"))
+    doc = ezdxf.readfile(out["dxf"])
+    assert doc.modelspace().query("*[layer=='COMPONENT']")  # one outline, read back
+
+
 def test_robot_arm_design_exports_and_simulates_body_fitted(tmp_path):
     case = os.path.join(ROOT, "data/robot_arm/robot_arm_holes.json")
     cs = lsmbs.load_case(case)

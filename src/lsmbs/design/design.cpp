@@ -67,6 +67,7 @@ void Design::add_geometry(const FlexibleBody& body, std::vector<Feature> feature
   LevelSetNode root = LevelSetNode::all_of(static_cast<int>(features.size()));
   BodyDesign bd;
   bd.body = &body;
+  bd.num_design_features = static_cast<int>(features.size());
   bd.map = std::make_unique<DesignMap>(body.mesh,
                                        LevelSet(std::move(features), std::move(root), size()), o);
   bodies.push_back(std::move(bd));
@@ -157,6 +158,7 @@ void Design::add_geometry(const FlexibleBody& body, GeometrySpec spec) {
   }
   BodyDesign bd;
   bd.body = &body;
+  bd.num_design_features = nd;
   bd.map = std::make_unique<DesignMap>(
       body.mesh, LevelSet(std::move(feats), std::move(root), size()), spec.options);
   // A feature wholly outside its body changes nothing. One that no design variable moves never

@@ -22,6 +22,9 @@ struct DesignVariable {
 struct BodyDesign {
   const FlexibleBody* body = nullptr;
   std::unique_ptr<DesignMap> map;
+  /// Features [0, num_design_features) of the level set are design features, the others
+  /// non-design regions (GeometrySpec::non_design).
+  int num_design_features = 0;
 };
 
 /// The level-set geometry of one flexible body (docs/case-format.md, "design"): design features

@@ -31,6 +31,12 @@ struct MappingOptions {
   double mu_min = 1e-3;
   int subgrid = 8;    ///< sub-cells per element edge in cut elements
   double band = 0.5;  ///< ε in units of the sub-cell size (median element size / subgrid)
+  /// [m] the level set offset by this length: material where D > offset. > 0: the eroded design
+  /// (holes grown by it), < 0: the dilated one; the robust formulation's variants of the design
+  /// (docs/designs.md). The distances are refined to third order out to it (Feature::distance):
+  /// exact for ellipses and circles, to the accuracy of three Newton projections for
+  /// super-ellipses.
+  double offset = 0;
 
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;

@@ -141,7 +141,7 @@ void ellipse_closest_first_quadrant(double e0, double e1, double y0, double y1, 
 }  // namespace
 
 template <class T>
-T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
+T Feature::distance(const Vec2& x, const T* th, double refine_within, int foot_iterations) const {
   const T x0(x.x()), y0(x.y());
   T phi, gx, gy;
   if (type_ == Type::kEllipse) {
@@ -198,6 +198,21 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
       phi_grad(px, py, th, phi, gx, gy);
       g2 = gx * gx + gy * gy + T(1e-30);
     }
+    for (int it = 0; it < foot_iterations; ++it) {
+      // along the tangent to the foot of x, then back onto φ = 0
+      const T gn = sqrt(g2), tx = -gy / gn, ty = gx / gn;
+      const T along = (x0 - px) * tx + (y0 - py) * ty;
+      px = px + along * tx;
+      py = py + along * ty;
+      for (int k = 0; k < 2; ++k) {
+        phi_grad(px, py, th, phi, gx, gy);
+        g2 = gx * gx + gy * gy + T(1e-30);
+        px = px - phi * gx / g2;
+        py = py - phi * gy / g2;
+      }
+      phi_grad(px, py, th, phi, gx, gy);
+      g2 = gx * gx + gy * gy + T(1e-30);
+    }
     const T g = sqrt(g2);
     // signed distance along the normal at the projected point (− φ/|∇φ|: residual of the
     // projection), with the sign of φ(x), which is exact: far from a slender feature three
@@ -220,10 +235,12 @@ T Feature::distance(const Vec2& x, const T* th, double refine_within) const {
   return hole_ ? D : -D;
 }
 
-template double Feature::distance<double>(const Vec2&, const double*, double) const;
-template Dual Feature::distance<Dual>(const Vec2&, const Dual*, double) const;
+template double Feature::distance<double>(const Vec2&, const double*, double, int) const;
+template Dual Feature::distance<Dual>(const Vec2&, const Dual*, double, int) const;
 template void Feature::phi_grad<double>(const double&, const double&, const double*, double&,
                                         double&, double&) const;
+template void Feature::phi_grad<Dual>(const Dual&, const Dual&, const Dual*, Dual&, Dual&,
+                                      Dual&) const;
 
 double Feature::phi(const Vec2& x, const std::vector<double>& th) const {
   // sign and zero set of φ equal those of the normalized distance

@@ -44,8 +44,13 @@ class Feature {
   /// refine_within).
   /// The refinement removes the O(D²) bias of D₀ (e.g. D₀ ≈ s − 2s²/R for a ξ = 5
   /// super-ellipse) that would otherwise shift a smoothed boundary by a fraction of the band.
+  /// With foot_iterations > 0 the projected point is moved that many times along the tangent
+  /// towards the foot of x and projected again (twice) onto φ = 0: alternating projections that
+  /// converge to the closest point of a convex curve, so that the distance is exact also far
+  /// from the boundary (a level set offset by several elements, MappingOptions::offset).
   template <class T>
-  T distance(const Vec2& x, const T* theta, double refine_within = 0) const;
+  T distance(const Vec2& x, const T* theta, double refine_within = 0,
+             int foot_iterations = 0) const;
   /// φ and ∇φ at a (possibly parameter-dependent) point.
   template <class T>
   void phi_grad(const T& x, const T& y, const T* theta, T& phi, T& gx, T& gy) const;

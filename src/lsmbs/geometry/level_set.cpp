@@ -41,10 +41,10 @@ double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v
     case LevelSetNode::Op::kFeature: {
       const Feature& f = features_[n.feature];
       const auto& th = v.theta[n.feature];
-      if (!grad) return f.distance<double>(x, th.data(), refine_within_);
+      if (!grad) return f.distance<double>(x, th.data(), refine_within_, foot_iterations_);
       Dual t[kMaxFeatureParams];
       for (size_t i = 0; i < th.size(); ++i) t[i] = Dual::variable(th[i], static_cast<int>(i));
-      const Dual D = f.distance<Dual>(x, t, refine_within_);
+      const Dual D = f.distance<Dual>(x, t, refine_within_, foot_iterations_);
       for (size_t i = 0; i < th.size(); ++i) {
         const auto& b = f.params()[i];
         if (b.variable >= 0) grad[b.variable] += D.d[i] * b.scale;

@@ -58,6 +58,9 @@ class LevelSet {
   /// Distances below this are refined to third order (see Feature::distance); the mapping
   /// sets it to a multiple of its smoothing band.
   void set_refine_within(double d) { refine_within_ = d; }
+  /// Foot-point iterations of the refined distances (Feature::distance): 0 for the mapping of the
+  /// design itself, more where the level set is used away from its zero contour (an offset).
+  void set_foot_iterations(int n) { foot_iterations_ = n; }
 
  private:
   double eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, double* grad,
@@ -66,6 +69,7 @@ class LevelSet {
   LevelSetNode root_;
   int nv_ = 0;
   double refine_within_ = 0;
+  int foot_iterations_ = 0;
   std::vector<std::vector<int>> feat_vars_;
 };
 

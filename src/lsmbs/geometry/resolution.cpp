@@ -7,6 +7,8 @@
 #include <map>
 #include <numbers>
 
+#include "lsmbs/geometry/sampling.hpp"
+
 namespace lsmbs {
 namespace {
 
@@ -15,57 +17,6 @@ namespace {
 // angle has its feet 90° apart at the corner's bisector). Above it, a wedge of material sharper
 // than about 45° counts as narrow there.
 constexpr double kOppositeCos = -0.7;
-
-// The sampling grid over the mesh's bounding box; a point is inside when a cell covers it.
-struct Grid {
-  Vec2 lo = Vec2::Zero();
-  double s = 0;
-  int nx = 0, ny = 0;
-  std::vector<char> inside;
-  Vec2 point(int i, int j) const { return lo + s * Vec2(i + 0.5, j + 0.5); }
-  int index(int i, int j) const { return j * nx + i; }
-  bool covers(const Vec2& x) const {
-    const int i = static_cast<int>(std::floor((x.x() - lo.x()) / s));
-    const int j = static_cast<int>(std::floor((x.y() - lo.y()) / s));
-    return i >= 0 && j >= 0 && i < nx && j < ny && inside[static_cast<size_t>(index(i, j))];
-  }
-};
-
-// Whether x lies in the convex polygon P (counter-clockwise), boundary included.
-bool in_polygon(const Vec2& x, const std::array<Vec2, Cell::kMaxNodes>& P, int n) {
-  for (int k = 0; k < n; ++k) {
-    const Vec2 a = P[static_cast<size_t>(k)], b = P[static_cast<size_t>((k + 1) % n)];
-    const Vec2 e = b - a, r = x - a;
-    if (e.x() * r.y() - e.y() * r.x() < -1e-12 * e.squaredNorm()) return false;
-  }
-  return true;
-}
-
-Grid make_grid(const Mesh2D& mesh, double spacing) {
-  Grid g;
-  Vec2 lo = mesh.nodes.front(), hi = lo;
-  for (const Vec2& x : mesh.nodes) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  g.lo = lo;
-  g.s = spacing;
-  g.nx = std::max(1, static_cast<int>(std::ceil((hi.x() - lo.x()) / spacing)));
-  g.ny = std::max(1, static_cast<int>(std::ceil((hi.y() - lo.y()) / spacing)));
-  g.inside.assign(static_cast<size_t>(g.nx) * g.ny, 0);
-  for (int e = 0; e < mesh.num_elements(); ++e) {
-    const auto P = mesh.cell_nodes(e);
-    const int n = mesh.cells[static_cast<size_t>(e)].size();
-    Vec2 a = P[0], b = P[0];
-    for (int k = 1; k < n; ++k)
-      a = a.cwiseMin(P[static_cast<size_t>(k)]), b = b.cwiseMax(P[static_cast<size_t>(k)]);
-    const int i0 = std::max(0, static_cast<int>(std::floor((a.x() - lo.x()) / spacing - 0.5)));
-    const int j0 = std::max(0, static_cast<int>(std::floor((a.y() - lo.y()) / spacing - 0.5)));
-    const int i1 = std::min(g.nx - 1, static_cast<int>(std::ceil((b.x() - lo.x()) / spacing)));
-    const int j1 = std::min(g.ny - 1, static_cast<int>(std::ceil((b.y() - lo.y()) / spacing)));
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i)
-        if (in_polygon(g.point(i, j), P, n)) g.inside[static_cast<size_t>(g.index(i, j))] = 1;
-  }
-  return g;
-}
 
 // The mesh's outer edges (of every boundary loop).
 std::vector<std::pair<Vec2, Vec2>> outer_edges(const Mesh2D& mesh) {
@@ -177,23 +128,11 @@ std::string ResolutionReport::pieces_flag() const {
 ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const LevelSet::Values& v,
                                   const ResolutionOptions& o) {
   ResolutionReport R;
-  std::vector<double> h;
-  for (int e = 0; e < mesh.num_elements(); ++e) {
-    const auto P = mesh.cell_nodes(e);
-    const int n = mesh.cells[static_cast<size_t>(e)].size();
-    double a = 0;  // shoelace
-    for (int k = 0; k < n; ++k) {
-      const Vec2 p = P[static_cast<size_t>(k)], q = P[static_cast<size_t>((k + 1) % n)];
-      a += p.x() * q.y() - p.y() * q.x();
-    }
-    h.push_back(std::sqrt(std::abs(a) / 2));
-  }
-  if (h.empty()) return R;
-  std::nth_element(h.begin(), h.begin() + static_cast<long>(h.size() / 2), h.end());
-  R.element_size = h[h.size() / 2];
+  if (mesh.num_elements() == 0) return R;
+  R.element_size = median_element_size(mesh);
   R.spacing = R.element_size / std::max(1, o.samples_per_element);
   R.threshold = o.min_elements * R.element_size;
-  const Grid g = make_grid(mesh, R.spacing);
+  const SampleGrid g = make_sample_grid(mesh, R.spacing);
   const auto edges = outer_edges(mesh);
   const auto& F = ls.features();
   const int nf = static_cast<int>(F.size()), outer = nf;
@@ -289,7 +228,7 @@ ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const 
 
   // connected pieces of material (4-neighbours, by a stack fill) on a grid 4× finer: material
   // joined by a flange narrower than its spacing (h/16) counts as cut
-  const Grid fine = make_grid(mesh, R.spacing / 4);
+  const SampleGrid fine = make_sample_grid(mesh, R.spacing / 4);
   std::vector<char> solid(fine.inside.size(), 0);
   for (int j = 0; j < fine.ny; ++j)
     for (int i = 0; i < fine.nx; ++i) {

@@ -64,6 +64,9 @@ struct Case : Study {
 /// The studies a run of the case evaluates: its conditions, or the case itself, with the
 /// combinations of their responses.
 Conditions conditions_of(const Case& cs);
+/// Whether the condition sets a value of the design (/design/geometry/<entry>/offset): a variant
+/// of the design, whose state-independent responses (its mass) are its own.
+bool is_design_variant(const CaseCondition& c);
 
 /// provenance() of a run of `cs` (its file and hash) with the files it reads (input_files).
 nlohmann::json case_provenance(const std::string& command, const Case& cs);

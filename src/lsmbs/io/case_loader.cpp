@@ -666,6 +666,7 @@ struct Loader : KindReader {
     mo.subgrid = g.integer("subgrid", mo.subgrid, 1);
     if (mo.subgrid > 64) g.fail("subgrid", "expected at most 64 sub-cells per edge");
     mo.band = g.positive("band", mo.band);
+    mo.offset = g.number("offset", mo.offset);
     g.finish();
     at_design(
         g, [&] { d.add_geometry(fb, std::move(spec)); }, &entries);
@@ -794,6 +795,15 @@ bool condition_may_set(const std::string& first_token) {
          first_token != "combined" && first_token != "name" && first_token != "description";
 }
 
+// /design/geometry/<entry>/offset: the level set of a body offset (eroded or dilated design).
+bool design_offset_pointer(const std::string& key) {
+  const std::string head = "/design/geometry/", tail = "/offset";
+  if (key.size() <= head.size() + tail.size() || key.rfind(head, 0) != 0) return false;
+  if (key.compare(key.size() - tail.size(), tail.size(), tail) != 0) return false;
+  const std::string entry = key.substr(head.size(), key.size() - head.size() - tail.size());
+  return !entry.empty() && entry.find('/') == std::string::npos;
+}
+
 // "combined": [{"name", "aggregate": "sum" | "ks" | "max", "of": [names] or a response name
 // (every condition's), "weights" (sum), "ks" (ks)}]
 std::vector<ResponseCombination> read_combined(const JsonReader& root,
@@ -877,9 +887,16 @@ std::unique_ptr<Case> load_condition(const nlohmann::json& base, const JsonReade
       if (key.empty() || key[0] != '/')
         s->fail("'" + key + "': expected a JSON pointer into the case (/forces/payload/mass)");
       const std::string first = key.substr(1, key.find('/', 1) - 1);
-      if (!condition_may_set(first))
+      if (first == "design" && design_offset_pointer(key)) {
+        // the one value of the design a condition may set: a variant of the design (robust
+        // formulation), the same variables
+      } else if (!condition_may_set(first))
         s->fail(key, "a condition changes the model, its loads, options and outputs; /" + first +
-                         " is one for all conditions");
+                         " is one for all conditions" +
+                         (first == "design" ? std::string(" (of the design it may set only "
+                                                          "/design/geometry/<entry>/offset: an "
+                                                          "eroded or dilated variant)")
+                                            : std::string()));
       const std::string indexed = indexed_pointer_at(doc, key, *s);
       doc[nlohmann::json::json_pointer(indexed)] = value;
       set.emplace_back(indexed, key);
@@ -929,7 +946,12 @@ Case load_case_json(const nlohmann::json& j, const std::string& file_label,
     for (const auto& [f, sha] : k.cs->input_files) cs.input_files[f] = sha;
     // a response that does not depend on the motion (a mass) is evaluated once, in the first
     // condition (Conditions::reported)
-    if (!cs.conditions.empty()) {
+    // … except in a variant of the design (a condition that sets /design/…/offset), whose mass is
+    // its own
+    const bool variant = is_design_variant(k);
+    bool plain_before = false;
+    for (const auto& e : cs.conditions) plain_before |= !is_design_variant(e);
+    if (!variant && plain_before) {
       std::vector<ResponseSpec> kept;
       for (size_t r = 0; r < k.cs->responses.size(); ++r)
         if (!Conditions::state_independent(*k.cs, r)) kept.push_back(k.cs->responses[r]);
@@ -976,6 +998,12 @@ nlohmann::json current_document(const Case& cs) {
   return doc;
 }
 
+bool is_design_variant(const CaseCondition& c) {
+  for (const auto& s : c.set)
+    if (s.rfind("/design/", 0) == 0) return true;
+  return false;
+}
+
 Conditions conditions_of(const Case& cs) {
   if (cs.conditions.empty()) {
     Conditions c = Conditions::single(cs);
@@ -986,6 +1014,7 @@ Conditions conditions_of(const Case& cs) {
   for (const auto& k : cs.conditions) {
     c.names.push_back(k.name);
     c.studies.push_back(k.cs.get());
+    c.design_variant.push_back(is_design_variant(k) ? 1 : 0);
   }
   c.combinations = cs.combined;
   return c;

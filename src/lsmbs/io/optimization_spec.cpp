@@ -127,6 +127,18 @@ OptimizationSpec parse_optimization(const Case& cs) {
     s.judge.ersatz_tolerance = j->positive("ersatz_tolerance", s.judge.ersatz_tolerance);
     j->finish();
   }
+  if (auto l = r.optional_child("length_scale")) {
+    auto& L = s.length_scale;
+    L.enabled = l->boolean("enabled", true);
+    L.min_size = l->positive("min_size", L.min_size);
+    L.min_ligament = l->non_negative("min_ligament", L.min_ligament);
+    L.min_edge = l->non_negative("min_edge", L.min_edge);
+    L.min_member = l->non_negative("min_member", L.min_member);
+    L.no_cut = l->non_negative("no_cut", L.no_cut);
+    L.tolerance = l->positive("tolerance", L.tolerance);
+    if (L.tolerance >= 1) l->fail("tolerance", "expected a fraction of each bound in (0, 1)");
+    l->finish();
+  }
   s.inner_max_evaluations = r.integer("inner_max_evaluations", 0, 0);
   s.kkt_tolerance = r.positive("kkt_tolerance", s.kkt_tolerance);
   if (s.inner_max_evaluations > 0 && s.optimizer == "mma-svanberg")

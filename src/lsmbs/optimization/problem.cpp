@@ -1,5 +1,7 @@
 #include "lsmbs/optimization/problem.hpp"
 
+#include <nlopt.h>
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -10,6 +12,7 @@
 #include <thread>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/geometry/sampling.hpp"
 #include "lsmbs/records/json.hpp"
 
 namespace lsmbs {
@@ -41,7 +44,15 @@ nlohmann::json OptimizationSpec::to_json() const {
             {"min_elements", judge.min_elements},
             {"ersatz", judge.ersatz},
             {"ersatz_factor", judge.ersatz_factor},
-            {"ersatz_tolerance", judge.ersatz_tolerance}}}};
+            {"ersatz_tolerance", judge.ersatz_tolerance}}},
+          {"length_scale", length_scale.enabled
+                               ? nlohmann::json{{"min_size", length_scale.min_size},
+                                                {"min_ligament", length_scale.min_ligament},
+                                                {"min_edge", length_scale.min_edge},
+                                                {"min_member", length_scale.min_member},
+                                                {"no_cut", length_scale.no_cut},
+                                                {"tolerance", length_scale.tolerance}}
+                               : nlohmann::json(nullptr)}};
 }
 
 DesignProblem::DesignProblem(const Study& cs, OptimizationSpec spec)
@@ -148,6 +159,177 @@ DesignProblem::DesignProblem(Conditions conditions, OptimizationSpec spec, Condi
     constraint_scale_.insert(constraint_scale_.end(), static_cast<size_t>(count), c.normalizer());
   }
   expanded_ = std::move(expanded);
+  num_response_constraints_ = num_constraints_;
+  if (spec_.length_scale.enabled) add_length_scales();
+}
+
+void DesignProblem::add_length_scales() {
+  const auto& L = spec_.length_scale;
+  const Design& d = design();
+  if (d.bodies.empty())
+    throw SetupError("optimization.length_scale",
+                     "the design has no level-set geometry to constrain (design.geometry)");
+  for (const BodyDesign& b : d.bodies) {
+    const double h = median_element_size(b.body->mesh);
+    const double size = L.min_size >= 0 ? L.min_size : spec_.judge.min_elements * h;
+    auto pick = [&](double v) { return v >= 0 ? v : size; };
+    LengthScaleOptions o;
+    o.min_ligament = pick(L.min_ligament), o.min_edge = pick(L.min_edge);
+    o.min_member = pick(L.min_member), o.no_cut = L.no_cut;
+    o.tolerance = L.tolerance;
+    if (auto msg = o.validate(); !msg.empty()) throw SetupError("optimization.length_scale", msg);
+    const LevelSet& ls = b.map->level_set();
+    // the member size of a super-ellipse is 2 min(a, b) only for exponents ≥ 2 (convex, its
+    // nearest boundary point from the centre on an axis); its exponents are affine in the
+    // variables: checked at the bounds
+    for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i) {
+      const Feature& f = ls.features()[static_cast<size_t>(i)];
+      if (f.type() != Feature::Type::kSuperEllipse) continue;
+      for (int k : {4, 5}) {
+        const ParamBinding& pb = f.params()[static_cast<size_t>(k)];
+        const double lo =
+            pb.variable < 0 ? pb.offset : std::min(pb.value(d.lower()), pb.value(d.upper()));
+        if (lo < 2)
+          throw SetupError("optimization.length_scale",
+                           "min_member: feature '" + f.name() + "' has an exponent below 2 (" +
+                               std::to_string(lo) +
+                               ") within the design bounds, where its width is not 2 min(a, b); "
+                               "set min_member to 0 or keep xi, eta >= 2");
+      }
+    }
+    BodyLengthScale bl;
+    bl.body = b.body->name;
+    bl.measures = std::make_unique<lsmbs::LengthScale>(b.body->mesh, ls, b.num_design_features, o);
+    const auto names = bl.measures->names();
+    const auto values = bl.measures->evaluate(d.initial());  // the bounds, in the names' order
+    for (size_t k = 0; k < names.size(); ++k) {
+      constraint_names_.push_back("-length_scale." + bl.body + "." + names[k]);
+      constraint_upper_.push_back(-values[k].bound);
+      constraint_scale_.push_back(values[k].bound);
+    }
+    num_constraints_ += static_cast<int>(names.size());
+    length_scales_.push_back(std::move(bl));
+  }
+}
+
+double DesignProblem::geometric_violation(const Vec& p, Vec* g, Mat* J) const {
+  std::vector<double> v, b;
+  std::vector<Vec> grads;
+  for (const auto& bl : length_scales_)
+    for (const auto& c : bl.measures->evaluate(p)) {
+      v.push_back(c.value), b.push_back(c.bound), grads.push_back(c.gradient);
+    }
+  double worst = v.empty() ? 0.0 : -INFINITY;
+  if (g) g->resize(static_cast<Eigen::Index>(v.size()));
+  if (J) J->resize(static_cast<Eigen::Index>(v.size()), p.size());
+  for (size_t k = 0; k < v.size(); ++k) {  // (δ − value)/δ ≤ 0
+    const double s = (b[k] - v[k]) / b[k];
+    worst = std::max(worst, s);
+    if (g) (*g)[static_cast<Eigen::Index>(k)] = s;
+    if (J) J->row(static_cast<Eigen::Index>(k)) = -grads[k].transpose() / b[k];
+  }
+  return worst;
+}
+
+Vec DesignProblem::admissible_start(const Vec& p0, double* violation) const {
+  if (length_scales_.empty()) {
+    if (violation) *violation = 0;
+    return p0;
+  }
+  const Design& d = design();
+  const Vec lo = d.lower(), hi = d.upper(), range = hi - lo;
+  const int n = static_cast<int>(p0.size());
+  int m = 0;
+  for (const auto& bl : length_scales_) m += static_cast<int>(bl.measures->names().size());
+  struct Data {
+    const DesignProblem* self;
+    Vec p0, range;
+  } data{this, p0, range};
+  auto objective = [](unsigned nn, const double* x, double* grad, void* f) -> double {
+    const auto& D = *static_cast<Data*>(f);
+    double s = 0;
+    for (unsigned i = 0; i < nn; ++i) {
+      const double r = (x[i] - D.p0[i]) / D.range[i];
+      s += r * r;
+      if (grad) grad[i] = 2 * r / D.range[i];
+    }
+    return s;
+  };
+  auto constraints = [](unsigned mm, double* result, unsigned nn, const double* x, double* grad,
+                        void* f) {
+    const auto& D = *static_cast<Data*>(f);
+    const Vec p = Eigen::Map<const Vec>(x, nn);
+    Vec g;
+    Mat J;
+    D.self->geometric_violation(p, &g, grad ? &J : nullptr);
+    for (unsigned k = 0; k < mm; ++k) {
+      result[k] = g[k];
+      if (grad)
+        for (unsigned i = 0; i < nn; ++i) grad[k * nn + i] = J(k, i);
+    }
+  };
+  nlopt_opt opt = nlopt_create(NLOPT_LD_SLSQP, static_cast<unsigned>(n));
+  nlopt_set_lower_bounds(opt, lo.data());
+  nlopt_set_upper_bounds(opt, hi.data());
+  nlopt_set_min_objective(opt, objective, &data);
+  const std::vector<double> tol(static_cast<size_t>(m), 1e-6);
+  nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(m), constraints, &data, tol.data());
+  nlopt_set_xtol_rel(opt, 1e-8);
+  nlopt_set_maxeval(opt, 300);
+  std::vector<double> x(p0.data(), p0.data() + n);
+  double f = 0;
+  nlopt_optimize(opt, x.data(), &f);
+  nlopt_destroy(opt);
+  Vec p = Eigen::Map<const Vec>(x.data(), n);
+  for (int i = 0; i < n; ++i) p[i] = std::clamp(p[i], lo[i], hi[i]);
+  const double v = geometric_violation(p, nullptr, nullptr);
+  const double v0 = geometric_violation(p0, nullptr, nullptr);
+  if (violation) *violation = std::min(v, v0);
+  return v <= v0 ? p : p0;
+}
+
+double DesignProblem::response_violation(const Evaluation& e) const {
+  if (!e.ok) return NAN;
+  double v = num_response_constraints_ == 0 ? 0.0 : -INFINITY;
+  for (int j = 0; j < num_response_constraints_; ++j) {
+    const size_t k = static_cast<size_t>(j);
+    v = std::max(v, (e.constraints[k] - e.upper[k]) / e.scale[k]);
+  }
+  return v;
+}
+
+nlohmann::json DesignProblem::length_scale_json(const Vec& p) const {
+  if (length_scales_.empty()) return nullptr;
+  nlohmann::json J = nlohmann::json::object();
+  for (const auto& bl : length_scales_) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& c : bl.measures->evaluate(p))
+      a.push_back({{"name", c.name()},
+                   {"kind", c.kind},
+                   {"features",
+                    c.second.empty() ? nlohmann::json{c.first} : nlohmann::json{c.first, c.second}},
+                   {"value", c.value},
+                   {"bound", c.bound},
+                   {"satisfied", c.value >= c.bound},
+                   {"error_bound", c.error_bound},
+                   {"at", {c.at.x(), c.at.y()}}});
+    J[bl.body] = {{"spacing", bl.measures->spacing()}, {"constraints", a}};
+  }
+  return J;
+}
+
+void DesignProblem::evaluate_length_scales(Evaluation& e, int& row) const {
+  // state-independent: the same exact gradient whatever the sensitivity method; as a lower bound
+  // value ≥ δ in the optimizer's form −value ≤ −δ
+  for (const auto& bl : length_scales_)
+    for (const auto& c : bl.measures->evaluate(e.p)) {
+      e.constraints.push_back(-c.value);
+      e.upper.push_back(-c.bound);
+      e.scale.push_back(c.bound);
+      e.constraint_gradient.row(row) = -c.gradient.transpose();
+      e.max_violation = std::max(e.max_violation, (-c.value + c.bound) / c.bound);
+      ++row;
+    }
 }
 
 void DesignProblem::seed(const Evaluation& e) {
@@ -200,7 +382,7 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
     const auto& r = response(constraint_index_[j]);
     const auto& spec = expanded_[j];
     const double ub = spec.upper, sign = spec.lower ? -1.0 : 1.0, sc = spec.normalizer();
-    for (size_t k = 0; k < r.values.size() && row < num_constraints_; ++k, ++row) {
+    for (size_t k = 0; k < r.values.size() && row < num_response_constraints_; ++k, ++row) {
       const double g = sign * r.values[k];
       e.constraints.push_back(g);
       e.upper.push_back(ub);
@@ -209,11 +391,12 @@ const Evaluation& DesignProblem::evaluate(const Vec& p) {
       e.max_violation = std::max(e.max_violation, (g - ub) / sc);
     }
   }
-  if (row != num_constraints_ && e.ok) {  // a failed run's own message says when and why
+  if (row != num_response_constraints_ && e.ok) {  // a failed run's own message says when and why
     e.ok = false;
     e.message = "a per-step constraint produced " + std::to_string(row) + " values instead of " +
-                std::to_string(num_constraints_) + " (the run did not reach t_end?)";
+                std::to_string(num_response_constraints_) + " (the run did not reach t_end?)";
   }
+  if (e.ok) evaluate_length_scales(e, row);
   if (!e.ok) {  // the aggregates of a run that stopped early are not the responses of this design:
                 // NaN everywhere, in the shapes of a complete evaluation (m constraints)
     e.objective = NAN;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "lsmbs/geometry/length_scale.hpp"
 #include "lsmbs/sensitivity/conditions.hpp"
 #include "lsmbs/sensitivity/gradient_check.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
@@ -54,6 +55,17 @@ struct OptimizationSpec {
     double ersatz_factor = 1e-3;    ///< 1000× less ersatz stiffness and mass
     double ersatz_tolerance = 0.1;  ///< relative change of a response that flags the design
   } judge;
+  /// Length-scale constraints on every designed body (geometry/length_scale.hpp): each
+  /// measure ≥ its bound δ [m], appended to the constraints. A bound < 0 takes min_size; a
+  /// min_size < 0 is judge.min_elements element sizes of the body (what the judgement calls
+  /// resolved); 0 turns a kind off.
+  struct LengthScale {
+    bool enabled = false;
+    double min_size = -1;
+    double min_ligament = -1, min_edge = -1, min_member = -1;
+    double no_cut = 0;  ///< off by default: min_edge > 0 keeps every feature off the edges
+    double tolerance = 0.05;
+  } length_scale;
   nlohmann::json to_json() const;
 };
 
@@ -96,6 +108,15 @@ class DesignProblem {
   /// per-step response's window (the step of gradients.csv).
   const std::vector<std::string>& constraint_names() const { return constraint_names_; }
   const Evaluation& evaluate(const Vec& p);
+  /// Without length-scale constraints p0 itself; with them, the design nearest to p0 (in the
+  /// variables scaled to [0, 1]) that keeps them, found without simulating (NLopt SLSQP on the
+  /// geometric constraints alone, at most 300 evaluations): a random start of a multi-start made
+  /// geometrically admissible. `violation` receives the largest scaled violation left (≤ 0:
+  /// admissible).
+  Vec admissible_start(const Vec& p0, double* violation = nullptr) const;
+  /// The largest scaled violation of the responses' constraints alone (the length-scale
+  /// constraints left out; 0 without any), NaN for a failed evaluation.
+  double response_violation(const Evaluation& e) const;
   long simulations() const { return simulations_; }
   long cache_hits() const { return cache_hits_; }
   /// Seeds the cache (resume from a checkpoint).
@@ -106,6 +127,10 @@ class DesignProblem {
   const Study& study() const { return conditions_.first(); }
   const Conditions& conditions() const { return conditions_; }
   const Design& design() const { return *conditions_.first().design; }
+  /// The length-scale measures at p (spec.length_scale; null when off): per body, each
+  /// constraint's kind, features, value, bound δ, aggregation error bound [m] and where it is
+  /// smallest.
+  nlohmann::json length_scale_json(const Vec& p) const;
   /// Evaluates the conditions of the problem (for its gradient check: check_problem_gradients).
   const ConditionExecutor& executor() const { return run_; }
 
@@ -123,6 +148,19 @@ class DesignProblem {
       constraint_upper_;  // the bound of each scalar constraint (per-step: each step)
   std::vector<double> constraint_scale_;  // … and its normalizer
   std::vector<std::string> constraint_names_;
+  /// The length-scale constraints of each designed body (spec.length_scale), after the
+  /// responses' constraints in the order of `names()`.
+  struct BodyLengthScale {
+    std::string body;
+    std::unique_ptr<lsmbs::LengthScale> measures;
+  };
+  std::vector<BodyLengthScale> length_scales_;
+  int num_response_constraints_ = 0;
+  void add_length_scales();
+  void evaluate_length_scales(Evaluation& e, int& row) const;
+  /// The largest of the length-scale constraints' scaled violations (δ − value)/δ at p; g and J
+  /// receive each one and its gradient.
+  double geometric_violation(const Vec& p, Vec* g, Mat* J) const;
   std::map<std::vector<double>, Evaluation> cache_;
   Evaluation interrupted_;  // the last interrupted evaluation (not cached)
   long simulations_ = 0, cache_hits_ = 0;

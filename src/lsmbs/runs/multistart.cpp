@@ -62,7 +62,11 @@ std::vector<Vec> stored_starts(const std::string& plan_file, const MultistartOpt
   return starts;
 }
 
-// Draws random designs within the bounds until `o.starts` are feasible (at most 20 per start).
+// Draws random designs within the bounds until `o.starts` are feasible (at most 20 per start):
+// their responses meet the constraints. With length-scale constraints each random design is first
+// moved to the nearest one that keeps them (DesignProblem::admissible_start, no simulation): a
+// random layout of holes rarely keeps them (none of 80 on the robot arm), and an optimizer started
+// far outside them stopped infeasible.
 // False when interrupted.
 bool screen(const Case& cs, const OptimizationSpec& spec, const MultistartOptions& o,
             std::vector<Vec>& starts, int& candidates) {
@@ -77,13 +81,25 @@ bool screen(const Case& cs, const OptimizationSpec& spec, const MultistartOption
     for (int i = 0; i < n; ++i)
       p[i] = d.variables[i].lower + u(gen) * (d.variables[i].upper - d.variables[i].lower);
     ++candidates;
+    double geometric = 0;
+    p = prob.admissible_start(p, &geometric);
+    if (geometric > 1e-3) {  // SLSQP ends within its tolerance: the optimizer takes the rest
+      char line[160];
+      std::snprintf(line, sizeof line,
+                    "multi-start: candidate %d skipped: no design near it keeps the length-scale "
+                    "constraints (violation %.3e)",
+                    candidates, geometric);
+      say(o, line);
+      continue;
+    }
     const Evaluation& e = prob.evaluate(p);
     if (e.interrupted || interrupted()) return false;  // not infeasible: not judged at all
-    const bool kept = e.ok && e.max_violation <= 0;
+    const double violation = prob.response_violation(e);
+    const bool kept = e.ok && violation <= 0;
     if (kept) starts.push_back(p);
     char line[160];
     std::snprintf(line, sizeof line, "multi-start: candidate %d %s (max violation %.3e)",
-                  candidates, kept ? "feasible, kept" : "infeasible, skipped", e.max_violation);
+                  candidates, kept ? "feasible, kept" : "infeasible, skipped", violation);
     say(o, line);
   }
   if (static_cast<int>(starts.size()) < o.starts)
@@ -234,14 +250,17 @@ nlohmann::json summary_json(const Case& cs, const OptimizationSpec& spec,
   S["status"] = interrupted()                 ? "interrupted"
                 : run.all_ran && run.best > 0 ? "complete"
                                               : "partial";
-  S["options"] = {{"optimization", spec.to_json()},
-                  {"multistart",
-                   {{"starts", o.starts},
-                    {"seed", o.seed},
-                    {"jobs", o.jobs},
-                    {"ranks", mpi::world().size},
-                    {"sampling", "uniform within the bounds (std::mt19937_64), feasible ones kept"},
-                    {"candidates_evaluated", run.candidates}}}};
+  S["options"] = {
+      {"optimization", spec.to_json()},
+      {"multistart",
+       {{"starts", o.starts},
+        {"seed", o.seed},
+        {"jobs", o.jobs},
+        {"ranks", mpi::world().size},
+        {"sampling",
+         "uniform within the bounds (std::mt19937_64), moved to the nearest design that keeps the "
+         "length-scale constraints if any, kept when the responses meet the constraints"},
+        {"candidates_evaluated", run.candidates}}}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& r : run.rows) {
     list.push_back({{"start", r.start},

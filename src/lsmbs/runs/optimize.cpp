@@ -155,6 +155,7 @@ nlohmann::json outcome_summary(const Case& cs, const OptimizationSpec& spec,
   if (prob.conditions().several() || !prob.conditions().combinations.empty())
     S["conditions"] = conditions_json(cs, prob.conditions());
   S["judgement"] = run.judgement ? run.judgement->to_json() : nlohmann::json(nullptr);
+  S["length_scale"] = prob.length_scale_json(res.p);
   return S;
 }
 

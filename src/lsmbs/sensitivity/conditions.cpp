@@ -51,12 +51,15 @@ bool Conditions::state_independent(const Study& s, size_t r) {
 }
 
 bool Conditions::reported(size_t k, size_t r) const {
-  return k == 0 || !state_independent(*studies[k], r);
+  if (variant(k) || !state_independent(*studies[k], r)) return true;
+  size_t first_plain = 0;
+  while (first_plain < studies.size() && variant(first_plain)) ++first_plain;
+  return k == first_plain;
 }
 
 std::string Conditions::response_name(size_t k, size_t r) const {
   const std::string& base = studies[k]->responses[r].name;
-  if (names[k].empty() || state_independent(*studies[k], r)) return base;
+  if (names[k].empty() || (state_independent(*studies[k], r) && !variant(k))) return base;
   return names[k] + "." + base;
 }
 

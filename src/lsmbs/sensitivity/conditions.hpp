@@ -39,6 +39,12 @@ struct Conditions {
   std::vector<std::string> names;     ///< one per study; a single unnamed study: {""}
   std::vector<const Study*> studies;  ///< the same design variables in each
   std::vector<ResponseCombination> combinations;
+  /// Per study, whether it evaluates a variant of the design (an offset level set: the robust
+  /// formulation's eroded or dilated design); empty: none. A variant reports every response under
+  /// its condition's name, a mass too; the unprefixed state-independent responses are those of
+  /// the first study that is not a variant.
+  std::vector<char> design_variant;
+  bool variant(size_t k) const { return k < design_variant.size() && design_variant[k]; }
 
   /// A single study (no prefix on its responses, no combinations).
   static Conditions single(const Study& s);
@@ -48,7 +54,8 @@ struct Conditions {
   /// The response names in the order gather() returns them: each condition's (state-independent
   /// ones once, unprefixed, from the first condition), then the combinations.
   std::vector<std::string> response_names() const;
-  /// Whether response r of condition k is reported (state-independent responses: condition 0 only).
+  /// Whether response r of condition k is reported (state-independent responses: once, from the
+  /// first condition that is not a design variant, and from every variant).
   bool reported(size_t k, size_t r) const;
   /// The name condition k's response r is reported under.
   std::string response_name(size_t k, size_t r) const;

@@ -429,3 +429,53 @@ TEST(DesignMap, CutElementsAreThoseABoundaryCrosses) {
   EXPECT_GT(counts.band, crossed) << "the band is wider than the cut elements";
   EXPECT_LT(counts.band, mesh.num_elements());
 }
+
+// The level set offset by δ (MappingOptions::offset, the robust formulation's eroded design):
+// a circular hole of radius r offset by δ is the hole of radius r + δ (μ and ∂μ/∂p to
+// round-off), and a convex hole grows by its outer parallel body, whose area is Steiner's
+// A + P δ + π δ² (P: the perimeter), here for a ξ = η = 5 super-ellipse (a = 15 mm, δ = 5 mm:
+// +0.15 % on 5 mm elements, +0.05 % on 2.5 mm, +0.03 % on 1.25 mm; the shape itself, without
+// offset, +0.13 %; without the foot-point iterations of the offset distances the error stayed at
+// +0.44 % under refinement).
+TEST(DesignMap, AnOffsetLevelSetIsTheParallelShape) {
+  const Mesh2D mesh = arm_mesh(0.005);
+  const double delta = 0.005;
+  auto circle = [&](double offset) {
+    Feature c("c", Feature::Type::kCircle, {var(0), constant(0.004), var(1)}, true);
+    MappingOptions o;
+    o.offset = offset;
+    return DesignMap(mesh, LevelSet({c}, and_of(1), 2), o);
+  };
+  Vec mu_a, mu_b;
+  SpMat d_a, d_b;
+  circle(delta).map((Vec(2) << 0.41, 0.011).finished(), mu_a, &d_a);
+  circle(0).map((Vec(2) << 0.41, 0.011 + delta).finished(), mu_b, &d_b);
+  EXPECT_LT((mu_a - mu_b).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((Mat(d_a) - Mat(d_b)).cwiseAbs().maxCoeff(), 1e-9 * Mat(d_b).cwiseAbs().maxCoeff());
+
+  const double a = 0.015, xi = 5;
+  Feature se("s", Feature::Type::kSuperEllipse,
+             {constant(0.5), constant(0.0), constant(a), constant(a), constant(xi), constant(xi),
+              constant(0.2)},
+             true);
+  double P = 0;  // perimeter from 20 000 points of the curve
+  const int n = 20000;
+  Vec2 prev(a, 0);
+  for (int k = 1; k <= n; ++k) {
+    const double t = 2 * M_PI * k / n, c = std::cos(t), s = std::sin(t);
+    const Vec2 x(a * std::copysign(std::pow(std::abs(c), 2 / xi), c),
+                 a * std::copysign(std::pow(std::abs(s), 2 / xi), s));
+    P += (x - prev).norm();
+    prev = x;
+  }
+  MappingOptions o;
+  o.offset = delta;
+  DesignMap m(mesh, LevelSet({se}, and_of(1), 0), o);
+  Vec mu;
+  m.map(Vec(), mu);
+  const double A = void_area(m, mu);
+  const double ref = super_ellipse_area(a, a, xi, xi) + P * delta + M_PI * delta * delta;
+  std::printf("eroded super-ellipse: void %.6e vs Steiner %.6e (%+.3f %%)\n", A, ref,
+              100 * (A / ref - 1));
+  EXPECT_NEAR(A / ref, 1, 0.003);
+}
