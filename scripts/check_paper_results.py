@@ -6,7 +6,13 @@ evaluations and the final design with the stored ones. Writes a table (Markdown)
 a stored result differs from the re-run beyond --rtol (0 when all agree, 2 for bad arguments).
 
     python3 scripts/check_paper_results.py --lsmbs build/src/lsmbs [--only robot_arm_mma,...]
-        [--rtol 1e-6] [--report paper_results/freshness.md]
+        [--rtol 1e-6] [--report paper_results/freshness.md] [--write]
+
+--write regenerates instead: each folder is re-run in place (`--overwrite`: the files its
+summary.json lists are replaced, nothing else), then the tables made from the folders
+(robot_arm_tables.py → <folder>/tables.md, slider_crank_tables.py → slider_crank_tables.md). The
+table still says what changed against the stored result. README's numbers are then to be read off
+the new tables.
 
 Long (every shipped optimization, about an hour on two cores): .ci/scheduled runs it. A folder
 whose command is not `lsmbs optimize` (or has no summary.json) is listed as not checked.
@@ -71,12 +77,26 @@ def compare(stored, fresh, rtol):
     return diffs
 
 
+def remake_tables(lsmbs):
+    """The tables made from the folders (paper_results/README.md says which)."""
+    pr = ROOT / "paper_results"
+    for name in ("robot_arm_mma", "robot_arm_ccsaq"):
+        if (pr / name / "summary.json").is_file():
+            subprocess.run([sys.executable, str(pr / "robot_arm_tables.py"), str(pr / name),
+                            str(pr / name / "tables.md")], cwd=ROOT, check=True)
+    subprocess.run([sys.executable, str(pr / "slider_crank_tables.py"), str(pr / "slider_crank_1hole"),
+                    str(pr / "slider_crank_3holes"), str(pr / "slider_crank_tables.md"),
+                    "--lsmbs", lsmbs], cwd=ROOT, check=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--lsmbs", required=True)
     ap.add_argument("--only", default="", help="comma-separated folder names")
     ap.add_argument("--rtol", type=float, default=1e-6)
     ap.add_argument("--report", default=None, help="write the Markdown table here too")
+    ap.add_argument("--write", action="store_true",
+                    help="regenerate: re-run each folder in place and remake the tables")
     a = ap.parse_args()
     lsmbs = pathlib.Path(a.lsmbs)
     if not lsmbs.is_file():
@@ -105,10 +125,12 @@ def main():
         if cmd is None:
             rows.append((folder.name, "not checked", "its command is not `lsmbs optimize`", ""))
             continue
+        if a.write:  # in place: the stored command's own output folder
+            cmd[cmd.index("-o") + 1] = str(folder)
         t0 = time.monotonic()
         p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
         wall = "%.0f s" % (time.monotonic() - t0)
-        fresh_file = scratch / folder.name / "summary.json"
+        fresh_file = (folder if a.write else scratch / folder.name) / "summary.json"
         if not fresh_file.is_file():
             rows.append((folder.name, "failed", "exit %d: %s" % (p.returncode, p.stderr.strip()[-200:]), wall))
             stale += 1
@@ -117,6 +139,8 @@ def main():
         stale += bool(diffs)
         rows.append((folder.name, "differs" if diffs else "same", "; ".join(diffs), wall))
         print("%-40s %s %s" % (folder.name, rows[-1][1], rows[-1][2]), flush=True)
+    if a.write:
+        remake_tables(str(lsmbs.resolve()))
     lines = ["# Stored results against a re-run", "",
              "`python3 scripts/check_paper_results.py --lsmbs build/src/lsmbs` at commit %s "
              "(relative tolerance %g)." % (commit, a.rtol), "",

@@ -1,11 +1,13 @@
 #include "lsmbs/runs/geometry.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
 #include "lsmbs/io/design_picture.hpp"
+#include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/runs/judge.hpp"
 #include "lsmbs/runs/shape.hpp"
@@ -75,6 +77,31 @@ nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params
 
 }  // namespace
 
+namespace {
+
+// The length-scale constraints of the case's optimization section at p (null without them), and
+// a warning for each one the design violates.
+nlohmann::json length_scale_report(const Case& cs, const Vec& p, nlohmann::json& warnings) {
+  const auto& raw = cs.raw;
+  if (!raw.contains("optimization") || !raw["optimization"].contains("length_scale"))
+    return nullptr;
+  const DesignProblem prob(conditions_of(cs), parse_optimization(cs));
+  nlohmann::json J = prob.length_scale_json(p);
+  if (J.is_null()) return J;
+  for (const auto& [body, b] : J.items())
+    for (const auto& c : b["constraints"])
+      if (!c["satisfied"].get<bool>()) {
+        char w[200];
+        std::snprintf(w, sizeof w, "body '%s': length scale %s is %.4g mm, below its %.4g mm",
+                      body.c_str(), c["name"].get<std::string>().c_str(),
+                      c["value"].get<double>() * 1e3, c["bound"].get<double>() * 1e3);
+        warnings.push_back(w);
+      }
+  return J;
+}
+
+}  // namespace
+
 nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptions& o) {
   if (auto msg = o.validate(); !msg.empty()) throw Error("geometry option " + msg);
   if (!cs.design)
@@ -115,6 +142,7 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
       S["warnings"].push_back(who + f);
     for (const auto& f : r["flags"]) S["warnings"].push_back(who + f.get<std::string>());
   }
+  S["length_scale"] = length_scale_report(cs, p, S["warnings"]);
   S["responses"] = nlohmann::json::object();
   for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
   S["units"] = {{"responses", nlohmann::json::object()}};
