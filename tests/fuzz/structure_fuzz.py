@@ -475,7 +475,19 @@ def finite(v):
 
 
 def history_reaches_t_end(summary, out):
-    """A complete simulation's history.csv ends at t_end (not before, not after)."""
+    """A complete simulation's history.csv ends at t_end (not before, not after); a case with
+    service conditions: each condition's run in OUT/conditions/<name>/."""
+    runs = glob.glob(os.path.join(out, "conditions", "*", "summary.json"))
+    if "options" not in summary and runs:
+        for f in sorted(runs):
+            try:
+                sub = json.load(open(f))
+            except (OSError, ValueError) as e:
+                return f"exit 0, complete, but {f} unreadable ({e!r})"
+            why = history_reaches_t_end(sub, os.path.dirname(f))
+            if why:
+                return why + " (condition %s)" % os.path.basename(os.path.dirname(f))
+        return None
     try:
         o = summary["options"]
         sim = o.get("generalized_alpha") or o.get("idas") or {}
