@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "lsmbs/geometry/sampling.hpp"
 
@@ -65,8 +66,9 @@ T shape_distance(const Feature& f, const Vec2& x, const T* th, const QuarterArc*
   const double ang = value(th[6]), c = std::cos(ang), sn = std::sin(ang);
   const double dx = x.x() - value(th[0]), dy = x.y() - value(th[1]);
   const double u = c * dx + sn * dy, v = c * dy - sn * dx;
-  const QuarterArc own = arc ? QuarterArc(0, 0, 1, 1) : QuarterArc(a, b, xi, eta);
-  Vec2 foot = (arc ? *arc : own).foot(Vec2(std::abs(u), std::abs(v)));
+  std::optional<QuarterArc> own;  // tabulated only when the caller has no table of this design
+  if (!arc) own.emplace(a, b, xi, eta);
+  Vec2 foot = (arc ? *arc : *own).foot(Vec2(std::abs(u), std::abs(v)));
   foot = Vec2(std::copysign(foot.x(), u), std::copysign(foot.y(), v));
   const bool inside = std::pow(std::abs(u / a), xi) + std::pow(std::abs(v / b), eta) < 1;
   const double dist = (Vec2(u, v) - foot).norm();
@@ -198,6 +200,9 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
   const int nf = static_cast<int>(F.size());
   const LevelSet::Values V = ls_->values(p);
   const double cap = 3 * std::max({o_.min_ligament, o_.min_edge, o_.no_cut});
+  std::vector<QuarterArc> arcs;  // each feature's tabulated curve at p, once per evaluation
+  for (int i = 0; i < nf; ++i)
+    arcs.push_back(arc_of(F[static_cast<size_t>(i)], V.theta[static_cast<size_t>(i)]));
   // s_i at every sample within `cap` of feature i's disc (+∞ beyond: no constraint needs it)
   auto distances = [&](const std::vector<Sample>& S) {
     std::vector<std::vector<double>> d(static_cast<size_t>(nf));
@@ -209,7 +214,7 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
       di.assign(S.size(), kInf);
       if (cap <= 0) continue;
       const Feature& f = F[static_cast<size_t>(i)];
-      const QuarterArc arc = arc_of(f, th);
+      const QuarterArc& arc = arcs[static_cast<size_t>(i)];
       for (size_t k = 0; k < S.size(); ++k)
         if ((S[k].x - c).norm() - R < cap)
           di[k] = shape_distance<double>(f, S[k].x, th.data(), &arc);
@@ -225,8 +230,7 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
     const auto& th = V.theta[static_cast<size_t>(i)];
     std::array<Dual, kMaxFeatureParams> t;
     for (size_t m = 0; m < th.size(); ++m) t[m] = Dual::variable(th[m], static_cast<int>(m));
-    const QuarterArc arc = arc_of(f, th);
-    const Dual s = shape_distance<Dual>(f, x, t.data(), &arc);
+    const Dual s = shape_distance<Dual>(f, x, t.data(), &arcs[static_cast<size_t>(i)]);
     for (size_t m = 0; m < th.size(); ++m) {
       const ParamBinding& b = f.params()[m];
       if (b.variable >= 0) grad[b.variable] += weight * s.d[m] * b.scale;
