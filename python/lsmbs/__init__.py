@@ -120,6 +120,7 @@ from .builder import (  # noqa: E402,F401
     Variable,
     at,
     at_global,
+    bspline,
     circle,
     constant,
     ellipse,

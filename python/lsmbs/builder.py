@@ -37,6 +37,7 @@ from . import _lsmbs
 __all__ = [
     "ModelBuilder", "Variable", "ground", "at", "at_global", "node", "nearest", "rectangle",
     "gmsh", "trapezoid", "ramp", "constant", "table", "ellipse", "super_ellipse", "circle",
+    "bspline",
 ]
 
 
@@ -554,6 +555,15 @@ def _convert(key, value, what):
         return _point(value, what, allow_ground_word=True)
     if t == "feature parameter":
         return _param(value, what)
+    if key["name"] == "control_points":  # a B-spline's [[x, y], …], each a feature parameter
+        if hasattr(value, "tolist"):
+            value = value.tolist()
+        pts = []
+        for i, p in enumerate(value):
+            if not isinstance(p, (list, tuple)) or len(p) != 2:
+                raise TypeError(f"{what}[{i}]: expected a control point [x, y]")
+            pts.append([_param(c, f"{what}[{i}]") for c in p])
+        return pts
     return _plain(value, what)  # a time law, a table, an object the kind reads itself
 
 

@@ -11,12 +11,13 @@ thickness; src/lsmbs/runs/shape.hpp).
 
 Formats (CAD files in millimetres, the mesh in metres like lsmbs):
   dxf   ezdxf: layer OUTLINE the body's outline (the fixed mesh's boundary loops), layer FEATURES
-        every feature as an exact entity where DXF has one (CIRCLE, ELLIPSE) and a closed SPLINE
+        every feature as an exact entity where DXF has one (CIRCLE, ELLIPSE, the B-spline
+        feature's own SPLINE: its control points, degree 3, uniform knots) and a closed SPLINE
         through 256 boundary points for a super-ellipse, layer COMPONENT the boundary of the
         Boolean result (LINE, ARC and ELLIPSE arcs where a feature's boundary is exact, else a
         SPLINE through points of the curve);
-  svg   the same layers as groups (<polygon>, <circle>, <ellipse>, paths), written with
-        xml.etree;
+  svg   the same layers as groups (<polygon>, <circle>, <ellipse>, paths; a B-spline feature as
+        its exact cubic Bézier segments), written with xml.etree;
   step  Gmsh's OpenCASCADE kernel: the component's face (the outline less the holes, with the
         region's Boolean operations as OCC Booleans) extruded by the thickness;
   msh   a body-fitted Gmsh mesh (Gmsh 4.1 ASCII, quadrilaterals where the recombination finds
@@ -31,7 +32,7 @@ import math
 import os
 import xml.etree.ElementTree as ET
 
-__all__ = ["load_shape", "feature_points", "write_dxf", "write_svg", "write_step", "write_msh",
+__all__ = ["load_shape", "feature_points", "bezier_segments", "bspline_area", "write_dxf", "write_svg", "write_step", "write_msh",
            "component_area", "export", "body_fitted_case"]
 
 MM = 1000.0  # CAD files: millimetres
@@ -50,9 +51,54 @@ def _frame(p):
     return p["cx"], p["cy"], math.cos(a), math.sin(a)
 
 
+def bezier_segments(feature):
+    """A closed uniform cubic B-spline feature as its cubic Bézier segments, exactly: per span k
+    (control points P_k … P_k+3) B0 = (P0 + 4 P1 + P2)/6, B1 = (2 P1 + P2)/3, B2 = (P1 + 2 P2)/3,
+    B3 = (P1 + 4 P2 + P3)/6 (B3 of one span is B0 of the next)."""
+    P = feature["control_points"]
+    n = len(P)
+    segs = []
+    for k in range(n):
+        p0, p1, p2, p3 = (P[(k + i) % n] for i in range(4))
+        segs.append([tuple((a + 4 * b + c) / 6 for a, b, c in zip(p0, p1, p2)),
+                     tuple((2 * b + c) / 3 for b, c in zip(p1, p2)),
+                     tuple((b + 2 * c) / 3 for b, c in zip(p1, p2)),
+                     tuple((b + 4 * c + d) / 6 for b, c, d in zip(p1, p2, p3))])
+    return segs
+
+
+def bspline_area(control_points):
+    """The area inside the closed uniform cubic B-spline of the control points [[x, y], …],
+    exactly: ½∮(x dy − y dx) over its Bézier segments (a polynomial of degree 5 in each:
+    3-point Gauss–Legendre is exact)."""
+    segs = bezier_segments({"control_points": control_points})
+    g = [(-math.sqrt(0.6), 5 / 9), (0.0, 8 / 9), (math.sqrt(0.6), 5 / 9)]
+    area = 0.0
+    for B in segs:
+        for x, w in g:
+            u = 0.5 * (x + 1)
+            b = ((1 - u) ** 3, 3 * u * (1 - u) ** 2, 3 * u * u * (1 - u), u ** 3)
+            db = (-3 * (1 - u) ** 2, 3 * (1 - u) ** 2 - 6 * u * (1 - u), 6 * u * (1 - u) - 3 * u * u,
+                  3 * u * u)
+            c = [sum(bi * q[i] for bi, q in zip(b, B)) for i in (0, 1)]
+            d = [sum(bi * q[i] for bi, q in zip(db, B)) for i in (0, 1)]
+            area += 0.25 * w * (c[0] * d[1] - c[1] * d[0])
+    return abs(area)
+
+
 def feature_points(feature, n=256):
-    """n points of the feature's exact boundary (eqs. 41, 43), counter-clockwise, in metres."""
+    """n points of the feature's exact boundary (eqs. 41, 43; a B-spline's curve), in metres:
+    counter-clockwise, a B-spline's in the order of its control points."""
     p, t = feature["params"], feature["type"]
+    if t == "bspline":
+        segs = bezier_segments(feature)
+        out = []
+        for k in range(n):
+            s = len(segs) * k / n
+            b, u = segs[int(s)], s - int(s)
+            w = ((1 - u) ** 3, 3 * u * (1 - u) ** 2, 3 * u * u * (1 - u), u ** 3)
+            out.append(tuple(sum(wi * q[i] for wi, q in zip(w, b)) for i in range(2)))
+        return out
     cx, cy, c, s = _frame(p)
     out = []
     for k in range(n):
@@ -104,6 +150,14 @@ def _occ_feature(gmsh, feature):
         if ang != 0:
             occ.rotate([(2, tag)], cx, cy, 0, 0, 0, 1, ang)
         return tag
+    if t == "bspline":  # exact: its Bézier segments, sharing their end points
+        segs = bezier_segments(feature)
+        ends = [occ.addPoint(b[0][0], b[0][1], 0) for b in segs]
+        curves = []
+        for k, b in enumerate(segs):
+            inner = [occ.addPoint(x, y, 0) for x, y in b[1:3]]
+            curves.append(occ.addBezier([ends[k]] + inner + [ends[(k + 1) % len(segs)]]))
+        return occ.addPlaneSurface([occ.addCurveLoop(curves)])
     pts = [occ.addPoint(x, y, 0) for x, y in feature_points(feature, 128)]
     curve = occ.addSpline(pts + [pts[0]])  # first point repeated: a periodic spline
     return occ.addPlaneSurface([occ.addCurveLoop([curve])])
@@ -309,6 +363,11 @@ def _dxf_feature(msp, f, layer):
         (cx, cy), ra, rb, (dx, dy) = _semi_axes(f)
         msp.add_ellipse((cx * MM, cy * MM), (ra * dx * MM, ra * dy * MM), rb / ra,
                         dxfattribs=at)
+    elif f["type"] == "bspline":
+        # the periodic curve as an open B-spline: the control points with the first three
+        # repeated, uniform knots 0 … n + 6 (its domain [3, n + 3] is the closed curve)
+        P = [(x * MM, y * MM) for x, y in f["control_points"]]
+        msp.add_open_spline(P + P[:3], degree=3, knots=list(range(len(P) + 7)), dxfattribs=at)
     else:
         pts = [(x * MM, y * MM) for x, y in feature_points(f)]
         msp.add_spline_control_frame(pts + [pts[0]], dxfattribs=at)
@@ -381,6 +440,11 @@ def _svg_feature(g, f, attrs=None):
             attrs, cx="%.9g" % (cx * MM), cy="%.9g" % (cy * MM), rx="%.9g" % (ra * MM),
             ry="%.9g" % (rb * MM), transform="rotate(%.9g %.9g %.9g)" % (
                 math.degrees(math.atan2(dy, dx)), cx * MM, cy * MM)))
+    elif f["type"] == "bspline":
+        segs = bezier_segments(f)
+        d = "M %.9g %.9g" % (segs[0][0][0] * MM, segs[0][0][1] * MM) + "".join(
+            " C " + " ".join("%.9g %.9g" % (x * MM, y * MM) for x, y in b[1:]) for b in segs)
+        ET.SubElement(g, "path", dict(attrs, d=d + " Z"))
     else:
         pts = feature_points(f)
         d = "M " + " L ".join("%.6g %.6g" % (x * MM, y * MM) for x, y in pts) + " Z"
@@ -436,8 +500,13 @@ def _scaled(shape, k):
     lengths = {"cx", "cy", "a", "b", "r"}
     s = dict(shape)
     s["outline"] = [[[k * x, k * y] for x, y in loop] for loop in shape["outline"]]
-    s["features"] = [dict(f, params={n: (k * v if n in lengths else v)
-                                     for n, v in f["params"].items()}) for f in shape["features"]]
+    s["features"] = []
+    for f in shape["features"]:
+        g = dict(f, params={n: (k * v if n in lengths or f["type"] == "bspline" else v)
+                            for n, v in f["params"].items()})
+        if "control_points" in f:
+            g["control_points"] = [[k * x, k * y] for x, y in f["control_points"]]
+        s["features"].append(g)
     s["node_sets"] = {n: [[k * x, k * y] for x, y in pts] for n, pts in shape["node_sets"].items()}
     s["thickness"] = k * shape["thickness"]
     s["element_size"] = k * shape["element_size"]

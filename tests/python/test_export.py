@@ -152,3 +152,39 @@ def test_robot_arm_design_exports_and_simulates_body_fitted(tmp_path):
     assert mass == pytest.approx(rho * t * exact, rel=5e-3)
     # and the fixed mesh's mass of the same design, within what its mapping resolves (5 %)
     assert mass == pytest.approx(g["mass"], rel=5e-2)
+
+
+def test_a_bspline_feature_is_exported_as_its_exact_curve(tmp_path):
+    # a dented loop of 9 control points (concave parts), its curve inside the plate
+    P = []
+    for k in range(9):
+        t = 2 * math.pi * k / 9
+        r = 0.012 * (1 + 0.3 * math.cos(3 * t))
+        P.append([0.1 + 1.6 * r * math.cos(t), 0.025 + r * math.sin(t)])
+    feats = [{"name": "free", "type": "bspline", "hole": True, "degree": 3, "control_points": P,
+              "params": {("x" if i % 2 == 0 else "y") + str(i // 2 + 1): P[i // 2][i % 2]
+                         for i in range(18)}}]
+    shape = plate_shape(feats)
+    exact = 0.2 * 0.05 - export.bspline_area(P)
+    # OpenCASCADE's area of the outline less the Bézier segments' face
+    assert export.component_area(shape) == pytest.approx(exact, rel=1e-9)
+    out = export.export(shape, tmp_path, ("dxf", "svg", "step"))
+    # ezdxf reads back a SPLINE whose curve is the feature's: its points against ours
+    (spl,) = ezdxf.readfile(out["dxf"]).modelspace().query("SPLINE[layer=='FEATURES']")
+    tool = spl.construction_tool()
+    assert tool.degree == 3 and len(tool.control_points) == 12
+    ours = export.feature_points(feats[0], 90)
+    for k, (x, y) in enumerate(ours):  # span s of ours is span s of the open spline, from t = 3
+        p = tool.point(3 + 9 * k / 90)
+        assert (p[0], p[1]) == pytest.approx((x * 1000, y * 1000), abs=1e-9)
+    svg = open(out["svg"]).read()
+    assert svg.count(" C ") == 9  # one cubic Bézier per span
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        vols = gmsh.model.occ.importShapes(out["step"])
+        gmsh.model.occ.synchronize()
+        v = sum(gmsh.model.occ.getMass(d, t) for d, t in vols if d == 3)
+    finally:
+        gmsh.finalize()
+    assert v == pytest.approx(exact * 1e6 * 2.0, rel=1e-7)

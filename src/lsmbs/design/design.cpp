@@ -133,11 +133,30 @@ void Design::add_geometry(const FlexibleBody& body, GeometrySpec spec) {
   std::vector<double> lo, hi;
   for (const Feature& f : feats) {
     parameter_range(*this, f, lo, hi);
-    for (const auto* th : {&lo, &hi})
-      if (auto msg = f.check(*th); !msg.empty())
-        throw SetupError(
-            "design.geometry",
-            "feature '" + f.name() + "' is degenerate within the design bounds: " + msg, f.name());
+    // a B-spline's control points at their bounds are no curve: it is checked at the initial
+    // design (a simple closed curve); within the bounds it may come to cross itself, where its
+    // distance stays defined (the nearest point's side) and `lsmbs geometry` says so
+    if (f.type() == Feature::Type::kBSpline) {
+      if (auto msg = f.check(f.values(initial())); !msg.empty())
+        throw SetupError("design.geometry",
+                         "feature '" + f.name() + "' at the initial design: " + msg, f.name());
+    } else {
+      for (const auto* th : {&lo, &hi})
+        if (auto msg = f.check(*th); !msg.empty())
+          throw SetupError(
+              "design.geometry",
+              "feature '" + f.name() + "' is degenerate within the design bounds: " + msg,
+              f.name());
+    }
+    if (f.type() == Feature::Type::kBSpline) {
+      // the curve lies in its control points' hull: within the box of their bounds
+      Vec2 a(lo[0], lo[1]), b(hi[0], hi[1]);
+      for (size_t i = 2; i + 1 < lo.size(); i += 2)
+        a = a.cwiseMin(Vec2(lo[i], lo[i + 1])), b = b.cwiseMax(Vec2(hi[i], hi[i + 1]));
+      reach.push_back(0);
+      centres.push_back({a, b});
+      continue;
+    }
     reach.push_back(f.type() == Feature::Type::kCircle    ? hi[2]
                     : f.type() == Feature::Type::kEllipse ? hi[4] * std::max(hi[2], hi[3])
                                                           : std::hypot(hi[2], hi[3]));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/fem/element_types.hpp"
@@ -59,7 +60,7 @@ std::vector<int> DesignMap::features_outside_mesh(const Vec& p) const {
     const Feature& F = features[f];
     bool reaches = false;
     for (int e = 0; e < num_elements() && !reaches; ++e) {
-      const double d = F.distance<double>(mesh_->centroid(e), vals.theta[f].data());
+      const double d = ls_.feature_distance(static_cast<int>(f), mesh_->centroid(e), vals, nullptr);
       // the distance from the shape: positive outside it, for holes and solid features alike
       reaches = (F.hole() ? d : -d) <= radius_[e];
     }
@@ -79,27 +80,36 @@ bool DesignMap::disc_can_reach_mesh(const Vec2& lo, const Vec2& hi, double radiu
 
 void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts) const {
   const int ne = num_elements(), nv = ls_.num_variables();
+  const int nf = static_cast<int>(ls_.features().size());
   const auto vals = ls_.values(p);
   mu.resize(ne);
   std::vector<Eigen::Triplet<double>> trip;
-  std::vector<double> grad(nv), acc(nv);
+  LevelSet::Gradient grad;
+  std::vector<double> acc(static_cast<size_t>(nv), 0.0);
+  std::vector<int> touched;
+  std::vector<double> frozen(static_cast<size_t>(nf));
+  std::vector<bool> exact(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f)
+    exact[static_cast<size_t>(f)] =
+        ls_.features()[static_cast<size_t>(f)].exact_distance(vals.theta[static_cast<size_t>(f)]);
   const double cut_dist = kTailBands * eps_;
   const int n = opt_.subgrid;
   // the level set D − offset (MappingOptions::offset)
-  auto level = [&](const Vec2& x, double* grad) {
-    return ls_.evaluate(x, vals, grad) - opt_.offset;
+  auto level = [&](const Vec2& x, LevelSet::Gradient* g, const double* fz) {
+    return ls_.evaluate(x, vals, g, fz) - opt_.offset;
   };
   int cut = 0, band = 0;
+  long frozen_pairs = 0;
   std::vector<CellSample> samples;
   for (int e = 0; e < ne; ++e) {
     const Cell& q = mesh_->cells[static_cast<size_t>(e)];
     // classification
     const Vec2 c = mesh_->centroid(e);
-    const double dc = level(c, nullptr);
+    const double dc = level(c, nullptr, nullptr);
     double dmin = std::abs(dc);
     bool uniform = true;
     for (int k : q) {
-      const double d = level(mesh_->nodes[k], nullptr);
+      const double d = level(mesh_->nodes[k], nullptr, nullptr);
       if ((d > 0) != (dc > 0)) uniform = false;
       dmin = std::min(dmin, std::abs(d));
     }
@@ -111,15 +121,28 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts) con
     // a boundary crosses the element when its samples (corners, centre, sub-cell centres) are
     // on both sides of it
     bool inside = dc > 0, outside = dc <= 0;
-    for (int k : q) (level(mesh_->nodes[k], nullptr) > 0 ? inside : outside) = true;
+    for (int k : q) (level(mesh_->nodes[k], nullptr, nullptr) > 0 ? inside : outside) = true;
+    // Features far from the element are frozen at their centre value on its sub-cells: a feature
+    // whose distance is exact (Feature::exact_distance: it changes by at most |Δx|) and exceeds,
+    // at the centre, twice the element's circumradius + the logistic's tail (+ the offset) keeps
+    // its sign over the element and stays beyond the tail, so wherever it is the active child of
+    // an exact min/max, H* is 0 or 1 and H*' is 0 to e^-30. (A child of a KS and/or weighs in at
+    // every distance: never frozen.) The cost per sub-cell then grows with the features near
+    // the element only (the test FrozenFarFeaturesChangeNothing compares with freezing off).
+    for (int f = 0; f < nf; ++f) {
+      double& fz = frozen[static_cast<size_t>(f)];
+      fz = std::numeric_limits<double>::quiet_NaN();
+      if (!freeze_far_features_ || !exact[static_cast<size_t>(f)] || ls_.smoothed(f)) continue;
+      const double d = ls_.feature_distance(f, c, vals, nullptr);
+      if (std::abs(d) > 2 * radius_[e] + cut_dist + std::abs(opt_.offset)) fz = d, ++frozen_pairs;
+    }
     // sub-cell integration over the cell, midpoint rule per sub-cell (CellShape::samples)
     samples.clear();
     element_type(q.type).shape->samples(mesh_->cell_nodes(e).data(), n, samples);
     double H = 0, W = 0;
-    std::fill(acc.begin(), acc.end(), 0.0);
     for (const CellSample& smp : samples) {
       const double w = smp.w;
-      const double D = level(smp.x, dmu_dp ? grad.data() : nullptr);
+      const double D = level(smp.x, dmu_dp ? &grad : nullptr, frozen.data());
       (D > 0 ? inside : outside) = true;
       const double z = D / eps_;
       // logistic H*(D) and its derivative, written to stay finite for large |z|
@@ -129,14 +152,25 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts) con
       H += w * h;
       W += w;
       if (dmu_dp)
-        for (int k = 0; k < nv; ++k) acc[k] += w * dh * grad[k];
+        for (const auto& [k, g] : grad) {
+          double& a = acc[static_cast<size_t>(k)];
+          if (a == 0) touched.push_back(k);
+          a += w * dh * g;
+        }
     }
     cut += inside && outside;
     const double s = (1 - opt_.mu_min) / W;
     mu[e] = opt_.mu_min + s * H;
-    if (dmu_dp)
-      for (int k = 0; k < nv; ++k)
-        if (acc[k] != 0) trip.emplace_back(e, k, s * acc[k]);
+    if (dmu_dp) {
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      for (int k : touched) {
+        double& a = acc[static_cast<size_t>(k)];
+        if (a != 0) trip.emplace_back(e, k, s * a);
+        a = 0;
+      }
+      touched.clear();
+    }
   }
   if (dmu_dp) {
     // Entries below 1e-12 of their column's largest come from the logistic's far tail (e^-27):
@@ -151,7 +185,7 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts) con
     dmu_dp->resize(ne, nv);
     dmu_dp->setFromTriplets(kept.begin(), kept.end());
   }
-  if (counts) *counts = MapCounts{cut, band};
+  if (counts) *counts = MapCounts{cut, band, frozen_pairs};
 }
 
 }  // namespace lsmbs

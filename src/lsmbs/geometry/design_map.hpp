@@ -25,6 +25,9 @@ struct MapCounts {
   /// Elements integrated on the sub-grid: those within their circumradius + 30 ε of a boundary,
   /// the cut ones included (the cost of the mapping).
   int band = 0;
+  /// (feature, element) pairs of the band whose feature was frozen at its centre value (far
+  /// from the element: not evaluated on the sub-cells).
+  long frozen = 0;
 };
 
 struct MappingOptions {
@@ -65,12 +68,16 @@ class DesignMap {
   /// [lo, hi] can overlap an element (the test of features_outside_mesh, taken over every such
   /// shape): false means no value of the design variables within their bounds brings it in.
   bool disc_can_reach_mesh(const Vec2& lo, const Vec2& hi, double radius) const;
+  /// Whether map() freezes the features far from an element at their value at its centre (the
+  /// default; false evaluates every feature everywhere, for the test that compares the two).
+  void set_freeze_far_features(bool on) { freeze_far_features_ = on; }
 
  private:
   const Mesh2D* mesh_;
   LevelSet ls_;
   MappingOptions opt_;
   double eps_ = 0;
+  bool freeze_far_features_ = true;
   std::vector<double> area_, radius_;
 };
 

@@ -1,6 +1,10 @@
 #include "lsmbs/geometry/feature.hpp"
 
 #include <cmath>
+#include <stdexcept>
+#include <type_traits>
+
+#include "lsmbs/geometry/bspline.hpp"
 
 namespace lsmbs {
 
@@ -11,7 +15,16 @@ const std::vector<std::string>& Feature::parameter_names(Type t) {
   static const std::vector<std::string> ellipse = {"cx", "cy", "a", "b", "d", "angle"};
   static const std::vector<std::string> super = {"cx", "cy", "a", "b", "xi", "eta", "angle"};
   static const std::vector<std::string> circle = {"cx", "cy", "r"};
-  return t == Type::kEllipse ? ellipse : t == Type::kSuperEllipse ? super : circle;
+  static const std::vector<std::string> none;
+  return t == Type::kEllipse        ? ellipse
+         : t == Type::kSuperEllipse ? super
+         : t == Type::kCircle       ? circle
+                                    : none;
+}
+
+std::string Feature::parameter_name(size_t i) const {
+  if (type_ == Type::kBSpline) return (i % 2 ? "y" : "x") + std::to_string(i / 2 + 1);
+  return parameter_names(type_).at(i);
 }
 
 Feature::Type Feature::parse_type(const std::string& s, bool* ok) {
@@ -19,6 +32,7 @@ Feature::Type Feature::parse_type(const std::string& s, bool* ok) {
   if (s == "ellipse") return Type::kEllipse;
   if (s == "super_ellipse") return Type::kSuperEllipse;
   if (s == "circle") return Type::kCircle;
+  if (s == "bspline") return Type::kBSpline;
   *ok = false;
   return Type::kCircle;
 }
@@ -27,6 +41,19 @@ std::vector<double> Feature::values(const Vec& p) const {
   std::vector<double> v;
   for (const auto& b : params_) v.push_back(b.value(p));
   return v;
+}
+
+bool Feature::exact_distance(const std::vector<double>& th) const {
+  switch (type_) {
+    case Type::kCircle:
+    case Type::kBSpline:
+      return true;
+    case Type::kEllipse:
+      return th[2] * th[4] > 0 && th[3] * th[4] > 0;
+    case Type::kSuperEllipse:
+      return false;
+  }
+  return false;
 }
 
 std::string Feature::check(const std::vector<double>& th) const {
@@ -44,6 +71,10 @@ std::string Feature::check(const std::vector<double>& th) const {
     case Type::kCircle:
       if (!(th[2] >= 0)) return "radius r must be non-negative";
       break;
+    case Type::kBSpline:
+      if (th.size() % 2 || th.size() < 8)
+        return "a closed B-spline needs at least 4 control points";
+      return ClosedBSpline(th.data(), static_cast<int>(th.size() / 2)).check();
   }
   return {};
 }
@@ -51,6 +82,15 @@ std::string Feature::check(const std::vector<double>& th) const {
 template <class T>
 void Feature::phi_grad(const T& px, const T& py, const T* th, T& phi, T& gx, T& gy) const {
   using std::abs;
+  if (type_ == Type::kBSpline) {
+    if constexpr (std::is_same_v<T, double>) {
+      const auto foot = ClosedBSpline(th, static_cast<int>(params_.size() / 2)).closest({px, py});
+      phi = foot.distance, gx = foot.normal.x(), gy = foot.normal.y();
+      return;
+    } else {
+      throw std::logic_error("Feature::phi_grad<Dual> of a B-spline (LevelSet evaluates it)");
+    }
+  }
   const T dx = px - th[0], dy = py - th[1];
   T u = dx, v = dy;
   T c(1.0), s(0.0);
@@ -88,6 +128,8 @@ void Feature::phi_grad(const T& px, const T& py, const T* th, T& phi, T& gx, T& 
       gv = v / r;
       break;
     }
+    case Type::kBSpline:  // returned above
+      break;
   }
   gx = c * gu - s * gv;  // back to the global frame: ∇_x = R(angle) ∇_u
   gy = s * gu + c * gv;
@@ -144,6 +186,10 @@ template <class T>
 T Feature::distance(const Vec2& x, const T* th, double refine_within, int foot_iterations) const {
   const T x0(x.x()), y0(x.y());
   T phi, gx, gy;
+  if (type_ == Type::kBSpline) {  // exact already; outside the hot loops (LevelSet has its own)
+    phi_grad(x0, y0, th, phi, gx, gy);
+    return hole_ ? phi : -phi;
+  }
   if (type_ == Type::kEllipse) {
     // eq. (41): the exact Euclidean distance to the ellipse with semi-axes a·d, b·d. Its
     // derivative with respect to every parameter θ follows from the closest point y* alone

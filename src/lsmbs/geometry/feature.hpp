@@ -4,6 +4,8 @@
 //   ellipse (eq. 41):        φ = √((u/a)² + (v/b)²) − d          params cx, cy, a, b, d, angle
 //   super-ellipse (eq. 43):  φ = |u/a|^ξ + |v/b|^η − 1           params cx, cy, a, b, xi, eta,
 //   angle circle:                  φ = √(u² + v²) − r                   params cx, cy, r
+//   closed B-spline:         the exact signed distance to the curve   params x1, y1, …, xn, yn
+//                            (its n ≥ 4 control points; ClosedBSpline)
 // with (u, v) = R(−angle)(x − c). A feature with hole = false is a solid inclusion (−φ).
 // Each parameter is a constant or an affine function of one design variable,
 // value = offset + scale · p_k, so linked and symmetric features are direct (Table 2).
@@ -23,16 +25,24 @@ struct ParamBinding {
 
 class Feature {
  public:
-  enum class Type { kEllipse, kSuperEllipse, kCircle };
+  enum class Type { kEllipse, kSuperEllipse, kCircle, kBSpline };
   Feature(std::string name, Type type, std::vector<ParamBinding> params, bool hole);
 
+  /// The parameters' names of a type with a fixed number of them (empty for a B-spline).
   static const std::vector<std::string>& parameter_names(Type t);
+  /// The name of parameter i of this feature ("cx", …; "x3", "y3" for a B-spline's third point).
+  std::string parameter_name(size_t i) const;
   static Type parse_type(const std::string& s, bool* ok);
   const std::string& name() const { return name_; }
   Type type() const { return type_; }
   bool hole() const { return hole_; }
   const std::vector<ParamBinding>& params() const { return params_; }
 
+  /// Whether distance() is the exact Euclidean signed distance at θ, so that it changes by at
+  /// most |Δx| (circles, ellipses with a·d, b·d > 0, B-splines). A super-ellipse's is not: deep
+  /// inside, φ/|∇φ| overestimates it without bound, and far outside it underestimates it by up to
+  /// the exponent.
+  bool exact_distance(const std::vector<double>& theta) const;
   /// Empty if the parameter values θ describe a valid feature, else what is wrong.
   std::string check(const std::vector<double>& theta) const;
   std::vector<double> values(const Vec& p) const;
@@ -51,7 +61,10 @@ class Feature {
   template <class T>
   T distance(const Vec2& x, const T* theta, double refine_within = 0,
              int foot_iterations = 0) const;
-  /// φ and ∇φ at a (possibly parameter-dependent) point.
+  /// A B-spline's distance is not written over Dual: LevelSet evaluates it through its curve
+  /// (ClosedBSpline), built once per design, with its sparse exact derivatives.
+  /// φ and ∇φ at a (possibly parameter-dependent) point; for a B-spline (T = double only) φ is
+  /// its signed distance and ∇φ the outward normal at the closest point.
   template <class T>
   void phi_grad(const T& x, const T& y, const T* theta, T& phi, T& gx, T& gy) const;
   /// Raw φ (for pictures and checks).

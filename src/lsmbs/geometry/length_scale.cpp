@@ -94,6 +94,8 @@ double reach(const Feature& f, const std::vector<double>& th) {
       return th[4] * std::max(th[2], th[3]);
     case Feature::Type::kSuperEllipse:
       return std::hypot(th[2], th[3]);
+    case Feature::Type::kBSpline:  // refused by the problem (no length scale of B-splines)
+      break;
   }
   return kInf;
 }

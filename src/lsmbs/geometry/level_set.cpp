@@ -15,82 +15,143 @@ LevelSet::LevelSet(std::vector<Feature> features, LevelSetNode root, int nv)
         vars.push_back(b.variable);
     feat_vars_.push_back(vars);
   }
+  smoothed_.assign(features_.size(), false);
+  const auto mark = [this](const LevelSetNode& n, bool under_ks, const auto& self) -> void {
+    if (n.op == LevelSetNode::Op::kFeature) {
+      if (n.feature >= 0 && n.feature < static_cast<int>(smoothed_.size()) && under_ks)
+        smoothed_[static_cast<size_t>(n.feature)] = true;
+      return;
+    }
+    for (const auto& c : n.children) self(c, under_ks || n.ks > 0, self);
+  };
+  mark(root_, false, mark);
 }
 
 LevelSet::Values LevelSet::values(const Vec& p) const {
   Values v;
-  for (const auto& f : features_) v.theta.push_back(f.values(p));
+  v.curves.resize(features_.size());
+  for (size_t f = 0; f < features_.size(); ++f) {
+    v.theta.push_back(features_[f].values(p));
+    if (features_[f].type() == Feature::Type::kBSpline)
+      v.curves[f] = ClosedBSpline(v.theta[f].data(), static_cast<int>(v.theta[f].size() / 2));
+  }
   return v;
 }
 
-double LevelSet::evaluate(const Vec2& x, const Values& v, double* grad) const {
-  if (grad) std::fill(grad, grad + nv_, 0.0);
-  return eval_node(root_, x, v, grad);
+double LevelSet::evaluate(const Vec2& x, const Values& v, Gradient* grad,
+                          const double* frozen) const {
+  if (grad) grad->clear();
+  return eval_node(root_, x, v, grad, frozen);
 }
 
+double LevelSet::feature_distance(int fi, const Vec2& x, const Values& v, Gradient* grad) const {
+  const Feature& f = features_[static_cast<size_t>(fi)];
+  const auto& th = v.theta[static_cast<size_t>(fi)];
+  const double sign = f.hole() ? 1.0 : -1.0;
+  if (f.type() == Feature::Type::kBSpline) {
+    // the exact distance and ∂D/∂P_j = −N_j(t*) n(t*) (ClosedBSpline): four control points
+    const auto foot = v.curves[static_cast<size_t>(fi)].closest(x);
+    if (grad) {
+      std::array<int, 4> idx;
+      std::array<double, 4> N;
+      v.curves[static_cast<size_t>(fi)].basis(foot.t, idx, N);
+      for (size_t j = 0; j < 4; ++j)
+        for (int c = 0; c < 2; ++c) {
+          const auto& b = f.params()[static_cast<size_t>(2 * idx[j] + c)];
+          if (b.variable >= 0)
+            grad->emplace_back(b.variable, -sign * N[j] * foot.normal[c] * b.scale);
+        }
+    }
+    return sign * foot.distance;
+  }
+  if (!grad) return f.distance<double>(x, th.data(), refine_within_, foot_iterations_);
+  Dual t[kMaxFeatureParams];
+  for (size_t i = 0; i < th.size(); ++i) t[i] = Dual::variable(th[i], static_cast<int>(i));
+  const Dual D = f.distance<Dual>(x, t, refine_within_, foot_iterations_);
+  for (size_t i = 0; i < th.size(); ++i) {
+    const auto& b = f.params()[i];
+    if (b.variable >= 0) grad->emplace_back(b.variable, D.d[i] * b.scale);
+  }
+  return D.v;
+}
+
+namespace {
+
+// Whether two sparse gradients differ by more than 1e-9 of their largest entry.
+bool gradients_differ(const LevelSet::Gradient& a, const LevelSet::Gradient& b, int nv) {
+  std::vector<double> diff(static_cast<size_t>(nv)), size(static_cast<size_t>(nv));
+  for (const auto& [k, g] : a) diff[static_cast<size_t>(k)] += g;
+  for (const auto& [k, g] : b) diff[static_cast<size_t>(k)] -= g;
+  double dmax = 0, smax = 0;
+  for (const auto* s : {&a, &b})
+    for (const auto& [k, g] : *s) smax = std::max(smax, std::abs(g));
+  for (double d : diff) dmax = std::max(dmax, std::abs(d));
+  return dmax > 1e-9 * smax;
+}
+
+}  // namespace
+
 bool LevelSet::tie_at(const Vec2& x, const Values& v, double tol) const {
-  std::vector<double> grad(static_cast<size_t>(std::max(nv_, 1)));
+  Gradient grad;
   bool tie = false;
-  eval_node(root_, x, v, grad.data(), &tol, &tie);
+  eval_node(root_, x, v, &grad, nullptr, &tol, &tie);
   return tie;
 }
 
-double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, double* grad,
-                           const double* tie_tol, bool* tie) const {
+double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, Gradient* grad,
+                           const double* frozen, const double* tie_tol, bool* tie) const {
   switch (n.op) {
-    case LevelSetNode::Op::kFeature: {
-      const Feature& f = features_[n.feature];
-      const auto& th = v.theta[n.feature];
-      if (!grad) return f.distance<double>(x, th.data(), refine_within_, foot_iterations_);
-      Dual t[kMaxFeatureParams];
-      for (size_t i = 0; i < th.size(); ++i) t[i] = Dual::variable(th[i], static_cast<int>(i));
-      const Dual D = f.distance<Dual>(x, t, refine_within_, foot_iterations_);
-      for (size_t i = 0; i < th.size(); ++i) {
-        const auto& b = f.params()[i];
-        if (b.variable >= 0) grad[b.variable] += D.d[i] * b.scale;
-      }
-      return D.v;
-    }
+    case LevelSetNode::Op::kFeature:
+      if (frozen && !std::isnan(frozen[n.feature])) return frozen[n.feature];
+      return feature_distance(n.feature, x, v, grad);
     case LevelSetNode::Op::kNot: {
-      const double d = eval_node(n.children[0], x, v, grad, tie_tol, tie);
+      const size_t from = grad ? grad->size() : 0;
+      const double d = eval_node(n.children[0], x, v, grad, frozen, tie_tol, tie);
       if (grad)
-        for (int k = 0; k < nv_; ++k) grad[k] = -grad[k];
+        for (size_t k = from; k < grad->size(); ++k) (*grad)[k].second = -(*grad)[k].second;
       return -d;
     }
     case LevelSetNode::Op::kAnd:
     case LevelSetNode::Op::kOr: {
+      // the children's values first; derivatives only of the active child (exact min/max) or
+      // of the children with a weight (KS)
       const double sign = n.op == LevelSetNode::Op::kAnd ? 1.0 : -1.0;  // OR = −AND(−D)
       const size_t m = n.children.size();
-      std::vector<double> d(m);
-      std::vector<std::vector<double>> g(grad ? m : 0, std::vector<double>(nv_));
-      for (size_t i = 0; i < m; ++i)
-        d[i] = sign * eval_node(n.children[i], x, v, grad ? g[i].data() : nullptr, tie_tol, tie);
-      const size_t imin = static_cast<size_t>(std::min_element(d.begin(), d.end()) - d.begin());
-      if (tie && grad && n.ks <= 0)
-        for (size_t i = 0; i < m; ++i) {
-          if (i == imin || d[i] - d[imin] > *tie_tol) continue;
-          double diff = 0, size = 0;
-          for (int k = 0; k < nv_; ++k) {
-            diff = std::max(diff, std::abs(g[i][k] - g[imin][k]));
-            size = std::max({size, std::abs(g[i][k]), std::abs(g[imin][k])});
-          }
-          if (diff > 1e-9 * size) *tie = true;
-        }
-      double out = d[imin];
-      if (n.ks > 0) {
-        double s = 0;
-        std::vector<double> w(m);
-        for (size_t i = 0; i < m; ++i) s += (w[i] = std::exp(-n.ks * (d[i] - d[imin])));
-        out = d[imin] - std::log(s) / n.ks;
-        if (grad)
-          for (size_t i = 0; i < m; ++i)
-            for (int k = 0; k < nv_; ++k) grad[k] += w[i] / s * g[i][k];  // g carry sign below
-      } else if (grad) {
-        for (int k = 0; k < nv_; ++k) grad[k] = g[imin][k];
+      double dmin = std::numeric_limits<double>::infinity();
+      size_t imin = 0;
+      for (size_t i = 0; i < m; ++i) {
+        const double d = sign * eval_node(n.children[i], x, v, nullptr, frozen, tie_tol, tie);
+        if (d < dmin) dmin = d, imin = i;
       }
-      // g[i] are derivatives of the children's (unsigned) values; d[i] = sign · child.
-      // ∂(sign·out)/∂p = Σ w_i ∂child_i/∂p, so the sign cancels: out_signed = sign·out.
-      return sign * out;
+      if (n.ks <= 0) {
+        if (grad) eval_node(n.children[imin], x, v, grad, frozen, tie_tol, tie);
+        if (tie && grad) {  // a second child as low with another derivative: a kink
+          Gradient gi, gmin;
+          eval_node(n.children[imin], x, v, &gmin, frozen);
+          for (size_t i = 0; i < m && !*tie; ++i) {
+            if (i == imin) continue;
+            gi.clear();
+            const double d = sign * eval_node(n.children[i], x, v, &gi, frozen);
+            if (d - dmin <= *tie_tol && gradients_differ(gi, gmin, nv_)) *tie = true;
+          }
+        }
+        return sign * dmin;
+      }
+      // KSmin(D) = m − (1/ks) ln Σ exp(−ks (D_i − m)); ∂/∂p = Σ w_i/s ∂D_i/∂p. The children's
+      // derivatives are of their unsigned values, d_i = sign · child: the sign cancels
+      double s = 0;
+      for (size_t i = 0; i < m; ++i) {
+        const double d = sign * eval_node(n.children[i], x, v, nullptr, frozen);
+        s += std::exp(-n.ks * (d - dmin));
+      }
+      if (grad)
+        for (size_t i = 0; i < m; ++i) {
+          const size_t from = grad->size();
+          const double d = sign * eval_node(n.children[i], x, v, grad, frozen, tie_tol, tie);
+          const double w = std::exp(-n.ks * (d - dmin)) / s;
+          for (size_t k = from; k < grad->size(); ++k) (*grad)[k].second *= w;
+        }
+      return sign * (dmin - std::log(s) / n.ks);
     }
   }
   return 0;

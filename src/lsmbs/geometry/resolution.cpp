@@ -7,6 +7,7 @@
 #include <map>
 #include <numbers>
 
+#include "lsmbs/geometry/bspline.hpp"
 #include "lsmbs/geometry/sampling.hpp"
 
 namespace lsmbs {
@@ -43,6 +44,10 @@ double edge_distance(const Vec2& x, const std::vector<std::pair<Vec2, Vec2>>& ed
 
 // n points of the feature's exact boundary (eqs. 41, 43) at parameter values th.
 std::vector<Vec2> boundary_polygon(const Feature& f, const double* th, int n) {
+  if (f.type() == Feature::Type::kBSpline) {
+    const ClosedBSpline curve(th, static_cast<int>(f.params().size() / 2));
+    return curve.polygon(std::max(1, n / curve.size()));
+  }
   const bool ell = f.type() == Feature::Type::kEllipse,
              sup = f.type() == Feature::Type::kSuperEllipse;
   const double ang = ell ? th[5] : sup ? th[6] : 0, c = std::cos(ang), s = std::sin(ang);
@@ -140,6 +145,23 @@ ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const 
   const double refine = 2 * R.threshold;
   const double tol = 1.5 * R.spacing;
 
+  // a feature's distance (refined within `refine`) and its normal ∇φ/|∇φ|; a B-spline's from
+  // the curve the level set built once for this design
+  const auto distance = [&](int f, const Vec2& x, double refine_within) {
+    const Feature& Ff = F[static_cast<size_t>(f)];
+    if (Ff.type() == Feature::Type::kBSpline) return ls.feature_distance(f, x, v, nullptr);
+    return Ff.distance<double>(x, v.theta[static_cast<size_t>(f)].data(), refine_within);
+  };
+  const auto gradient = [&](int f, const Vec2& x, double& gx, double& gy) {
+    const Feature& Ff = F[static_cast<size_t>(f)];
+    if (Ff.type() == Feature::Type::kBSpline) {
+      const auto foot = v.curves[static_cast<size_t>(f)].closest(x);
+      gx = foot.normal.x(), gy = foot.normal.y();
+      return;
+    }
+    double phi;
+    Ff.phi_grad<double>(x.x(), x.y(), v.theta[static_cast<size_t>(f)].data(), phi, gx, gy);
+  };
   std::map<std::pair<int, int>, NarrowPart> ligaments;
   std::vector<std::vector<Vec2>> inside(static_cast<size_t>(nf));  // grid points in each hole
   std::vector<Near> near(static_cast<size_t>(nf + 1));
@@ -150,20 +172,17 @@ ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const 
       const double D = ls.evaluate(x, v, nullptr);
       if (D <= 0) {  // void: the holes it is in (their depth below, from their polygons)
         for (int f = 0; f < nf; ++f)
-          if (F[static_cast<size_t>(f)].hole() &&
-              F[static_cast<size_t>(f)].distance<double>(
-                  x, v.theta[static_cast<size_t>(f)].data()) < 0)
+          if (F[static_cast<size_t>(f)].hole() && distance(f, x, 0) < 0)
             inside[static_cast<size_t>(f)].push_back(x);
         continue;
       }
       int m = 0;  // the boundaries near x that bound void there
       for (int f = 0; f < nf; ++f) {
         const Feature& Ff = F[static_cast<size_t>(f)];
-        const double* th = v.theta[static_cast<size_t>(f)].data();
-        const double d = Ff.distance<double>(x, th, refine);
+        const double d = distance(f, x, refine);
         if (std::abs(d) > R.threshold * 4) continue;  // far: no narrow part with it here
-        double phi, gx, gy;
-        Ff.phi_grad<double>(x.x(), x.y(), th, phi, gx, gy);
+        double gx, gy;
+        gradient(f, x, gx, gy);
         const double gn = std::hypot(gx, gy);
         if (!(gn > 0)) continue;
         // ∇φ points into φ > 0; a solid feature's distance is of −φ
@@ -214,7 +233,7 @@ ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const 
         moved = false;
         for (const Vec2& d : {Vec2(step, 0), Vec2(-step, 0), Vec2(0, step), Vec2(0, -step)}) {
           const Vec2 y = p.at + d;
-          if (!g.covers(y) || Ff.distance<double>(y, th) >= 0) continue;
+          if (!g.covers(y) || distance(f, y, 0) >= 0) continue;
           if (const double dy = polygon_distance(y, P); dy > depth)
             depth = dy, p.at = y, moved = true;
         }

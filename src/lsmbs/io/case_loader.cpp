@@ -532,8 +532,11 @@ struct Loader : KindReader {
 
   // ---------------------------------------------------------------- design
   ParamBinding binding(const JsonReader& r, const std::string& key, const Design& d) {
+    return binding(r.child(key), d);
+  }
+
+  ParamBinding binding(const JsonReader& v, const Design& d) {
     ParamBinding b;
-    const JsonReader v = r.child(key);
     auto var = [&](const JsonReader& at, const std::string& name) {
       const int k = d.variable_index(name);
       if (k < 0) at.fail("unknown design variable '" + name + "'");
@@ -614,6 +617,20 @@ struct Loader : KindReader {
     bool ok = false;
     const auto type = Feature::parse_type(ts, &ok);
     std::vector<ParamBinding> ps;
+    if (type == Feature::Type::kBSpline) {
+      // control points [[x, y], …]: each coordinate a number or a variable binding
+      const auto points = f.items("control_points", true);
+      if (points.size() < 4)
+        f.fail("control_points", "expected at least 4 control points [x, y] of a closed curve");
+      for (const auto& pt : points) {
+        if (!pt.is_array() || pt.size() != 2)
+          pt.fail(
+              "expected a control point [x, y] (each a number, a variable name or "
+              "{\"variable\", \"scale\", \"offset\"})");
+        ps.push_back(binding(pt.at(0), d));
+        ps.push_back(binding(pt.at(1), d));
+      }
+    }
     for (const KindKey& key : find_kind("features", ts)->keys) {
       if (key.type != KeyType::kParameter) continue;
       if (!key.required && !f.has(key.name))

@@ -510,6 +510,16 @@ std::vector<ModelKind> features() {
        {par("cx", "centre x [m]"), par("cy", "centre y [m]"), par("r", "radius [m]"), hole,
         non_design},
        nullptr},
+      {"features",
+       "bspline",
+       "a closed uniform cubic B-spline through its control points' hull; the exact signed "
+       "distance to the curve",
+       {{"control_points", K::kJson, true, true, "",
+         "[[x, y], …] at least 4, in order; each coordinate a number, a variable name or "
+         "{variable, scale, offset} [m]"},
+        hole,
+        non_design},
+       nullptr},
   };
 }
 

@@ -25,9 +25,10 @@ nlohmann::json node_json(const LevelSetNode& n) {
 }
 
 const char* type_name(Feature::Type t) {
-  return t == Feature::Type::kCircle    ? "circle"
-         : t == Feature::Type::kEllipse ? "ellipse"
-                                        : "super_ellipse";
+  return t == Feature::Type::kCircle         ? "circle"
+         : t == Feature::Type::kEllipse      ? "ellipse"
+         : t == Feature::Type::kSuperEllipse ? "super_ellipse"
+                                             : "bspline";
 }
 
 }  // namespace
@@ -45,11 +46,17 @@ nlohmann::json shape_json(const BodyDesign& b, const Vec& p, const ModelParams& 
   nlohmann::json features = nlohmann::json::array();
   for (const Feature& f : ls.features()) {
     nlohmann::json par = nlohmann::json::object();
-    const auto names = Feature::parameter_names(f.type());
     const auto v = f.values(p);
-    for (size_t i = 0; i < names.size() && i < v.size(); ++i) par[names[i]] = v[i];
-    features.push_back(
-        {{"name", f.name()}, {"type", type_name(f.type())}, {"hole", f.hole()}, {"params", par}});
+    for (size_t i = 0; i < v.size(); ++i) par[f.parameter_name(i)] = v[i];
+    nlohmann::json entry = {
+        {"name", f.name()}, {"type", type_name(f.type())}, {"hole", f.hole()}, {"params", par}};
+    if (f.type() == Feature::Type::kBSpline) {  // closed, uniform, cubic (ClosedBSpline)
+      nlohmann::json pts = nlohmann::json::array();
+      for (size_t i = 0; i + 1 < v.size(); i += 2) pts.push_back({v[i], v[i + 1]});
+      entry["control_points"] = pts;
+      entry["degree"] = 3;
+    }
+    features.push_back(entry);
   }
   nlohmann::json sets = nlohmann::json::object();
   for (const auto& [name, nodes] : mesh.node_sets) {

@@ -479,3 +479,151 @@ TEST(DesignMap, AnOffsetLevelSetIsTheParallelShape) {
               100 * (A / ref - 1));
   EXPECT_NEAR(A / ref, 1, 0.003);
 }
+
+namespace {
+
+// A closed B-spline feature whose 2n control-point coordinates are variables 0 … 2n − 1 (or
+// constants when `variables` is false): n points on the ellipse (cx + a cos t, cy + b sin t).
+Feature bspline_feature(const std::string& name, int n, double cx, double cy, double a, double b,
+                        bool variables, Vec* p, int first = 0) {
+  std::vector<ParamBinding> ps;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / n;
+    const double x = cx + a * std::cos(t) + 0.1 * a * std::sin(3 * t), y = cy + b * std::sin(t);
+    for (double c : {x, y}) {
+      if (variables) {
+        const int k = first + static_cast<int>(ps.size());
+        (*p)[k] = c;
+        ps.push_back(var(k));
+      } else {
+        ps.push_back(constant(c));
+      }
+    }
+  }
+  return Feature(name, Feature::Type::kBSpline, ps, true);
+}
+
+// The area inside a closed uniform cubic B-spline, exactly: ½∮(x dy − y dx) over its Bézier
+// segments (a polynomial of degree 5 per segment: 3-point Gauss–Legendre is exact).
+double bspline_area(const Feature& f, const std::vector<double>& th) {
+  const int n = static_cast<int>(th.size() / 2);
+  auto P = [&](int i) { return Vec2(th[2 * ((i % n + n) % n)], th[2 * ((i % n + n) % n) + 1]); };
+  const double g[3] = {-std::sqrt(0.6), 0, std::sqrt(0.6)}, w[3] = {5. / 9, 8. / 9, 5. / 9};
+  double area = 0;
+  for (int k = 0; k < n; ++k) {
+    const Vec2 p0 = P(k), p1 = P(k + 1), p2 = P(k + 2), p3 = P(k + 3);
+    const Vec2 B[4] = {(p0 + 4 * p1 + p2) / 6, (2 * p1 + p2) / 3, (p1 + 2 * p2) / 3,
+                       (p1 + 4 * p2 + p3) / 6};
+    for (int q = 0; q < 3; ++q) {
+      const double u = 0.5 * (g[q] + 1), v = 1 - u;
+      const Vec2 c =
+          v * v * v * B[0] + 3 * u * v * v * B[1] + 3 * u * u * v * B[2] + u * u * u * B[3];
+      const Vec2 d =
+          3 * (v * v * (B[1] - B[0]) + 2 * u * v * (B[2] - B[1]) + u * u * (B[3] - B[2]));
+      area += 0.5 * w[q] * 0.5 * (c.x() * d.y() - c.y() * d.x());
+    }
+  }
+  (void)f;
+  return std::abs(area);
+}
+
+}  // namespace
+
+// A free-form hole (closed cubic B-spline, 12 control points): its area against the exact area
+// of the curve, second order under refinement, and every control point's ∂μ/∂p against central
+// differences of the mapping.
+TEST(DesignMap, BSplineHoleAreaConvergesToTheCurvesAreaAndItsDerivativesAreExact) {
+  Vec p(24);
+  const Feature f = bspline_feature("free", 12, 0.45, 0.0, 0.03, 0.015, true, &p);
+  ASSERT_EQ(f.check(f.values(p)), "");
+  const double ref = bspline_area(f, f.values(p));
+  auto err = [&](double h) {
+    const Mesh2D mesh = arm_mesh(h);
+    DesignMap m(mesh, LevelSet({f}, and_of(1), 24), {});
+    Vec mu;
+    m.map(p, mu);
+    std::printf("h = %.4f m: B-spline hole %.6e vs %.6e m² (%+.4f %%)\n", h, void_area(m, mu), ref,
+                100 * (void_area(m, mu) / ref - 1));
+    return std::abs(void_area(m, mu) / ref - 1);
+  };
+  const double e5 = err(0.005);
+  EXPECT_LT(e5, 0.003);
+  test::expect_order({err(0.01), e5, err(0.0025)}, 2.0, 0.3, "B-spline hole, h = 10, 5, 2.5 mm");
+  const Mesh2D mesh = Mesh2D::rectangle(0.4, -0.025, 0.1, 0.05, 40, 20);
+  check_derivatives(mesh, {f}, and_of(1), p, "B-spline control points");
+}
+
+// Features far from an element are frozen at their centre value (DesignMap::map): μ and ∂μ/∂p
+// equal those of evaluating every feature everywhere, on a plate with 21 features of every kind
+// (slender and high-exponent super-ellipses, which are never frozen, rotated ellipses, circles,
+// B-splines), under AND, OR, NOT and KS, with and without an offset.
+TEST(DesignMap, FrozenFarFeaturesChangeNothing) {
+  const Mesh2D mesh = arm_mesh(0.005);
+  std::vector<Feature> feats;
+  Vec p = Vec::Zero(200);
+  int k = 0;
+  auto v = [&](double value) {
+    p[k] = value;
+    return var(k++);
+  };
+  for (int i = 0; i < 6; ++i) {
+    const double x = 0.25 + 0.09 * i;
+    feats.emplace_back(
+        "s" + std::to_string(i), Feature::Type::kSuperEllipse,
+        std::vector<ParamBinding>{v(x), v(0.004 * (i % 3 - 1)), v(0.01 + 0.002 * i),
+                                  v(0.006 + 0.002 * (i % 2)), v(2 + 1.5 * i), v(2 + i), v(0.2 * i)},
+        true);
+    feats.emplace_back("e" + std::to_string(i), Feature::Type::kEllipse,
+                       std::vector<ParamBinding>{v(x + 0.04), v(0.01), v(1.0), v(0.3 + 0.1 * i),
+                                                 v(0.008), v(0.5 * i)},
+                       true);
+    feats.emplace_back("c" + std::to_string(i), Feature::Type::kCircle,
+                       std::vector<ParamBinding>{v(x + 0.02), v(-0.015), v(0.004 + 0.001 * i)},
+                       i != 1 && i != 3);  // c1, c3 solid (OR-ed), c0 a hole under NOT
+  }
+  for (int i = 0; i < 3; ++i) {
+    feats.push_back(bspline_feature("b" + std::to_string(i), 8, 0.3 + 0.2 * i, 0.012, 0.02, 0.008,
+                                    true, &p, k));
+    k += 16;
+  }
+  const int nf = static_cast<int>(feats.size()), nv = k;
+  p.conservativeResize(nv);
+  // OR(AND(the holes, the first two by KS), solid circles c1 and c3, NOT(hole circle c0))
+  auto leaf = [](int f) {
+    LevelSetNode l;
+    l.feature = f;
+    return l;
+  };
+  LevelSetNode holes, ks, top, inv;
+  holes.op = ks.op = LevelSetNode::Op::kAnd;
+  ks.ks = 400.0;
+  ks.children = {leaf(0), leaf(1)};
+  holes.children = {ks};
+  for (int f = 3; f < nf; ++f)
+    if (f != 5 && f != 11) holes.children.push_back(leaf(f));
+  inv.op = LevelSetNode::Op::kNot;
+  inv.children = {leaf(2)};
+  top.op = LevelSetNode::Op::kOr;
+  top.children = {holes, leaf(5), leaf(11), inv};
+  for (double offset : {0.0, 0.003}) {
+    MappingOptions o;
+    o.offset = offset;
+    DesignMap frozen(mesh, LevelSet(feats, top, nv), o), all(mesh, LevelSet(feats, top, nv), o);
+    all.set_freeze_far_features(false);
+    Vec mu1, mu2;
+    SpMat J1, J2;
+    MapCounts c1, c2;
+    frozen.map(p, mu1, &J1, &c1);
+    all.map(p, mu2, &J2, &c2);
+    EXPECT_GT(c1.cut, 100) << "offset " << offset;
+    EXPECT_EQ(c1.cut, c2.cut) << "offset " << offset;
+    EXPECT_EQ(c1.band, c2.band) << "offset " << offset;
+    EXPECT_GT(c1.frozen, 8 * c1.band) << "offset " << offset;  // most of the 15 that may be
+    EXPECT_EQ(c2.frozen, 0) << "offset " << offset;
+    // a frozen feature moves μ_e by the logistic's tail beyond 30 bands, e^-30 ≈ 1e-13, at most
+    EXPECT_LE((mu1 - mu2).cwiseAbs().maxCoeff(), 1e-12) << "offset " << offset;
+    const Mat D = Mat(J1) - Mat(J2);
+    EXPECT_LE(D.cwiseAbs().maxCoeff(), 1e-10 * Mat(J2).cwiseAbs().maxCoeff())
+        << "offset " << offset;
+  }
+}

@@ -757,3 +757,41 @@ TEST(StudyPrepare, AStudyBuiltInCodeMeetsTheChecksOfACaseFile) {
     EXPECT_EQ(s.initial.v[i], cs.initial.v[i]) << i;
   }
 }
+
+// A B-spline feature's control points: each [x, y] of numbers or variables, at least 4, a simple
+// closed curve at the initial design; the length-scale constraints refuse it.
+TEST(LoaderErrors, BSplineFeaturesNameTheBadControlPoint) {
+  auto with = [](const json& points) {
+    json j = plate_with_hole();
+    j["design"]["geometry"][0]["features"][0] = {
+        {"name", "free"}, {"type", "bspline"}, {"control_points", points}};
+    return j;
+  };
+  const json square = json::array({{0.4, 0.05}, {0.6, 0.05}, {0.6, 0.15}, {"cx", 0.15}});
+  EXPECT_NO_THROW(test::make_case(with(square)));
+  expect_error(with(json::array({{0.4, 0.05}, {0.6, 0.05}, {0.6, 0.15}})),
+               "/design/geometry/0/features/0/control_points",
+               "expected at least 4 control points [x, y] of a closed curve");
+  json bad = square;
+  bad[2] = json::array({0.6});
+  expect_error(with(bad), "/design/geometry/0/features/0/control_points/2",
+               "expected a control point [x, y]");
+  bad = square;
+  bad[1][1] = "nope";
+  expect_error(with(bad), "/design/geometry/0/features/0/control_points/1/1",
+               "unknown design variable 'nope'");
+  // a bow tie: the curve crosses itself at the initial design
+  const json bow = json::array({{0.4, 0.05}, {0.6, 0.15}, {0.6, 0.05}, {0.4, 0.15}});
+  expect_error(with(bow), "/design/geometry/0/features/0",
+               "feature 'free' at the initial design: the curve crosses itself");
+  json ls = with(square);
+  ls["optimization"] = {{"objective", "mass"}, {"length_scale", json::object()}};
+  const Case cs = test::make_case(ls);
+  try {
+    DesignProblem P(conditions_of(cs), parse_optimization(cs));
+    ADD_FAILURE() << "a B-spline with length-scale constraints was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("optimization.length_scale"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("feature 'free' is a B-spline"), std::string::npos);
+  }
+}
