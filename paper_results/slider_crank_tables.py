@@ -99,7 +99,8 @@ def fig8(out, case, lsmbs, link_base):
     for k in picks:
         row = h[k]
         sub = os.path.join(d, f"iter_{k + 1:02d}")
-        cmd = [lsmbs, "geometry", case, "-o", sub, "--width", "900"]
+        # --overwrite: the pictures of an earlier run of this script (their summary lists them)
+        cmd = [lsmbs, "geometry", case, "-o", sub, "--width", "900", "--overwrite"]
         for nm in names:
             cmd += ["--set", f"{nm}={float(row[nm])!r}"]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

@@ -8,8 +8,8 @@ a stored result differs from the re-run beyond --rtol (0 when all agree, 2 for b
     python3 scripts/check_paper_results.py --lsmbs build/src/lsmbs [--only robot_arm_mma,...]
         [--rtol 1e-6] [--report paper_results/freshness.md] [--write]
 
---write regenerates instead: each folder is re-run in place (`--overwrite`: the files its
-summary.json lists are replaced, nothing else), then the tables made from the folders
+--write regenerates instead: each folder is re-run into a scratch folder and the files the new
+run's summary.json lists replace the stored ones (nothing else is touched), then the tables made from the folders
 (robot_arm_tables.py → <folder>/tables.md, slider_crank_tables.py → slider_crank_tables.md). The
 table still says what changed against the stored result. README's numbers are then to be read off
 the new tables.
@@ -21,6 +21,7 @@ import argparse
 import json
 import pathlib
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -125,18 +126,25 @@ def main():
         if cmd is None:
             rows.append((folder.name, "not checked", "its command is not `lsmbs optimize`", ""))
             continue
-        if a.write:  # in place: the stored command's own output folder
-            cmd[cmd.index("-o") + 1] = str(folder)
         t0 = time.monotonic()
         p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
         wall = "%.0f s" % (time.monotonic() - t0)
-        fresh_file = (folder if a.write else scratch / folder.name) / "summary.json"
-        if not fresh_file.is_file():
+        fresh_file = scratch / folder.name / "summary.json"
+        if p.returncode not in (0, 1) or not fresh_file.is_file():
             rows.append((folder.name, "failed", "exit %d: %s" % (p.returncode, p.stderr.strip()[-200:]), wall))
             stale += 1
             continue
-        diffs = compare(stored, json.loads(fresh_file.read_text()), a.rtol)
+        fresh = json.loads(fresh_file.read_text())
+        diffs = compare(stored, fresh, a.rtol)
         stale += bool(diffs)
+        if a.write:  # the run's own files (its summary lists them) replace the stored ones
+            for name in [*fresh.get("files", []), "summary.json"]:
+                src, dst = scratch / folder.name / name, folder / name
+                if src.is_dir():
+                    shutil.copytree(src, dst, dirs_exist_ok=True)
+                elif src.is_file():
+                    dst.parent.mkdir(parents=True, exist_ok=True)
+                    shutil.copy2(src, dst)
         rows.append((folder.name, "differs" if diffs else "same", "; ".join(diffs), wall))
         print("%-40s %s %s" % (folder.name, rows[-1][1], rows[-1][2]), flush=True)
     if a.write:

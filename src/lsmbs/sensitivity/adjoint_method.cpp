@@ -458,7 +458,7 @@ SensitivityResult adjoint_with(const Study& cs, const Vec& p, ModelParams& param
 
 SensitivityResult adjoint_sensitivities(const Study& cs, const Vec& p, const SensitivityOptions& o,
                                         const AdjointTerms& terms) {
-  ModelParams params = parameters_at(cs, p);
+  ModelParams params = cs.model->params();  // adjoint_with maps the design at p
   return adjoint_with(cs, p, params, o, terms);
 }
 

@@ -33,6 +33,10 @@ class SensitivityMethod {
   virtual SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const = 0;
   /// False when the grid responses carry no gradients (NaN by design), as with the IDAS adjoint.
   virtual bool grid_gradients() const { return true; }
+  /// True when run() maps the design itself, with ∂μ/∂p (Design::apply_with_directions), before
+  /// it reads `params`: compute() then hands it the model's parameters unmapped, instead of
+  /// mapping the level sets twice (the mapping dominated the cost with many features).
+  virtual bool maps_design() const { return false; }
 
  private:
   SensitivityOptions options_;
@@ -42,6 +46,7 @@ class SensitivityMethod {
 class DirectSensitivity final : public SensitivityMethod {
  public:
   using SensitivityMethod::SensitivityMethod;
+  bool maps_design() const override { return true; }
 
  protected:
   SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const override;
@@ -51,6 +56,7 @@ class DirectSensitivity final : public SensitivityMethod {
 class AdjointSensitivity final : public SensitivityMethod {
  public:
   using SensitivityMethod::SensitivityMethod;
+  bool maps_design() const override { return true; }
 
  protected:
   SensitivityResult run(const Study& study, const Vec& p, ModelParams& params) const override;

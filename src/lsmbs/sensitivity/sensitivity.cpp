@@ -193,7 +193,9 @@ SensitivityResult SensitivityMethod::compute(const Study& cs, const Vec& p) cons
                     ") is below 1e-13 of its scale and lost in round-off; use a larger delta");
     }
   const auto t0 = std::chrono::steady_clock::now();
-  ModelParams params = parameters_at(cs, p);  // this evaluation's own: the study's stay as they are
+  // this evaluation's own parameters (the study's stay as they are), mapped at p here unless the
+  // method maps the design itself
+  ModelParams params = maps_design() ? cs.model->params() : parameters_at(cs, p);
   SensitivityResult res = run(cs, p, params);
   for (auto& w : res.primal.warnings()) res.warnings.push_back("primal run: " + w);
   if (auto w = cs.design->coincident_features(p); !w.empty()) res.warnings.push_back(w);
