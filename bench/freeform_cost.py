@@ -72,15 +72,7 @@ def bspline_case(base, holes, points, optimization=None, vtu_off=True, init=0.3,
         f"of cells {dx:.4g} m x {dy:.4g} m; each starts as an ellipse of {init} x its cell, its "
         f"control points move within +-{xbound} of the cell in x and +-{ybound} in y; generated "
         f"by bench/freeform_cost.py.")
-    out = case["output"]
-    out["responses"] = [x for x in out["responses"]
-                        if x["name"] in ac.KEEP_RESPONSES and x.get("aggregate") != "per_step"]
-    if vtu_off:
-        out["vtu_stride"] = 0
-    if optimization is None:
-        case.pop("optimization", None)
-    else:
-        case["optimization"] = optimization
+    ac.finish_case(case, optimization, vtu_off)
     return case
 
 

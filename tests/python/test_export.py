@@ -28,6 +28,18 @@ def super_ellipse_area(a, b, xi):
     return 4 * a * b * math.gamma(1 + 1 / xi) ** 2 / math.gamma(1 + 2 / xi)
 
 
+def step_volume(path):
+    """The volume of the solids in a STEP file, as Gmsh's OpenCASCADE reads it back (mm³)."""
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        vols = gmsh.model.occ.importShapes(str(path))
+        gmsh.model.occ.synchronize()
+        return sum(gmsh.model.occ.getMass(d, t) for d, t in vols if d == 3)
+    finally:
+        gmsh.finalize()
+
+
 def plate_shape(features):
     return {"body": "plate", "outline": [[[0, 0], [0.1, 0], [0.2, 0], [0.2, 0.05], [0, 0.05]]],
             "features": features,
@@ -71,14 +83,7 @@ def test_exact_entities_areas_and_volume(tmp_path):
     svg = open(out["svg"]).read()
     assert 'id="h1" cx="50" cy="25" r="10"' in svg
     # STEP: a solid of the area times the thickness (mm³)
-    gmsh.initialize(readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        vols = gmsh.model.occ.importShapes(out["step"])
-        gmsh.model.occ.synchronize()
-        v = sum(gmsh.model.occ.getMass(d, t) for d, t in vols if d == 3)
-    finally:
-        gmsh.finalize()
+    v = step_volume(out["step"])
     assert v == pytest.approx(exact * 0.002 * 1e9, rel=1e-9)
 
 
@@ -179,12 +184,5 @@ def test_a_bspline_feature_is_exported_as_its_exact_curve(tmp_path):
         assert (p[0], p[1]) == pytest.approx((x * 1000, y * 1000), abs=1e-9)
     svg = open(out["svg"]).read()
     assert svg.count(" C ") == 9  # one cubic Bézier per span
-    gmsh.initialize(readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        vols = gmsh.model.occ.importShapes(out["step"])
-        gmsh.model.occ.synchronize()
-        v = sum(gmsh.model.occ.getMass(d, t) for d, t in vols if d == 3)
-    finally:
-        gmsh.finalize()
+    v = step_volume(out["step"])
     assert v == pytest.approx(exact * 1e6 * 2.0, rel=1e-7)
