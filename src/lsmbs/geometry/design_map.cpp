@@ -129,12 +129,24 @@ void DesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts) con
     // an exact min/max, H* is 0 or 1 and H*' is 0 to e^-30. (A child of a KS and/or weighs in at
     // every distance: never frozen.) The cost per sub-cell then grows with the features near
     // the element only (the test FrozenFarFeaturesChangeNothing compares with freezing off).
+    // A super-ellipse's D₀ = φ/|∇φ| is not a distance; it is frozen where a lower bound of |D₀|
+    // over the element's disc (Feature::far_bound) exceeds the tail and the refinement radius,
+    // so that distance() is D₀ throughout, of one sign and beyond the tail.
     for (int f = 0; f < nf; ++f) {
       double& fz = frozen[static_cast<size_t>(f)];
       fz = std::numeric_limits<double>::quiet_NaN();
-      if (!freeze_far_features_ || !exact[static_cast<size_t>(f)] || ls_.smoothed(f)) continue;
-      const double d = ls_.feature_distance(f, c, vals, nullptr);
-      if (std::abs(d) > 2 * radius_[e] + cut_dist + std::abs(opt_.offset)) fz = d, ++frozen_pairs;
+      if (!freeze_far_features_ || ls_.smoothed(f)) continue;
+      const auto& th = vals.theta[static_cast<size_t>(f)];
+      const auto& F = ls_.features()[static_cast<size_t>(f)];
+      if (exact[static_cast<size_t>(f)]) {
+        const double d = ls_.feature_distance(f, c, vals, nullptr);
+        if (std::abs(d) > 2 * radius_[e] + cut_dist + std::abs(opt_.offset)) fz = d;
+      } else if (F.type() == Feature::Type::kSuperEllipse) {
+        const double L = std::abs(F.far_bound(c, radius_[e], th));
+        if (L > cut_dist + std::abs(opt_.offset) && L >= ls_.refine_within())
+          fz = ls_.feature_distance(f, c, vals, nullptr);
+      }
+      frozen_pairs += !std::isnan(fz);
     }
     // sub-cell integration over the cell, midpoint rule per sub-cell (CellShape::samples)
     samples.clear();

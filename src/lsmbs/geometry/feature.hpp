@@ -43,6 +43,12 @@ class Feature {
   /// inside, φ/|∇φ| overestimates it without bound, and far outside it underestimates it by up to
   /// the exponent.
   bool exact_distance(const std::vector<double>& theta) const;
+  /// For a super-ellipse: a signed lower bound L on the first-order D₀ = ±φ/|∇φ| over the disc
+  /// |x − c| ≤ rho, from interval bounds of φ and |∇φ| in the feature's frame: |D₀(x)| ≥ |L| with
+  /// the sign of L everywhere in the disc (0 when φ may change sign there, or for other types).
+  /// distance() is D₀ itself where |D₀| ≥ refine_within, which lets the mapping freeze far
+  /// super-ellipses (DesignMap::map) without an exact distance.
+  double far_bound(const Vec2& c, double rho, const std::vector<double>& theta) const;
   /// Empty if the parameter values θ describe a valid feature, else what is wrong.
   std::string check(const std::vector<double>& theta) const;
   std::vector<double> values(const Vec& p) const;

@@ -73,6 +73,7 @@ class LevelSet {
   /// Distances below this are refined to third order (see Feature::distance); the mapping
   /// sets it to a multiple of its smoothing band.
   void set_refine_within(double d) { refine_within_ = d; }
+  double refine_within() const { return refine_within_; }
   /// Foot-point iterations of the refined distances (Feature::distance): 0 for the mapping of the
   /// design itself, more where the level set is used away from its zero contour (an offset).
   void set_foot_iterations(int n) { foot_iterations_ = n; }

@@ -13,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <numbers>
+#include <random>
 
 #include "lsmbs/geometry/feature.hpp"
 
@@ -184,4 +185,48 @@ TEST(FeatureDistance, SuperEllipseAgainstBruteForceInTheRefinedBlendAndPlainZone
   EXPECT_LT(worst_k, 4e3);
   EXPECT_LT(near, 2e-7);
   EXPECT_GE(worst_order, 3.0);
+}
+
+TEST(FeatureDistance, SuperEllipseFarBoundHoldsOverItsDisc) {
+  // Feature::far_bound against D₀ sampled densely over the disc (it lets the mapping freeze far
+  // super-ellipses): never larger than |D₀| nor of the other sign, and not trivial far away.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0, 1);
+  int checked = 0, far_discs = 0, far_bounded = 0;
+  double tightest = 1e300;
+  for (int trial = 0; trial < 400; ++trial) {
+    const double a = 0.005 + 0.03 * U(rng), b = 0.005 + 0.03 * U(rng);
+    const double xi = 1 + 9 * U(rng), eta = 1 + 9 * U(rng), rot = 6.3 * U(rng);
+    const bool hole = trial % 2 == 0;
+    const std::vector<double> th = {0.1, 0.05, a, b, xi, eta, rot};
+    Feature f("S", Feature::Type::kSuperEllipse,
+              {constant(th[0]), constant(th[1]), constant(a), constant(b), constant(xi),
+               constant(eta), constant(rot)},
+              hole);
+    const double ang = 6.3 * U(rng), dist = 0.2 * U(rng), rho = 0.001 + 0.004 * U(rng);
+    const Vec2 c(th[0] + dist * std::cos(ang), th[1] + dist * std::sin(ang));
+    const double L = f.far_bound(c, rho, th);
+    double dmin = 1e300;
+    bool sign_ok = true;
+    for (int i = 0; i <= 40; ++i)
+      for (int j = 0; j < 48; ++j) {
+        const double r = rho * i / 40, t = 2 * kPi * j / 48;
+        const Vec2 x = c + r * Vec2(std::cos(t), std::sin(t));
+        const double D0 = f.distance<double>(x, th.data(), 0);
+        dmin = std::min(dmin, std::abs(D0));
+        if (L != 0 && (D0 > 0) != (L > 0)) sign_ok = false;
+      }
+    ++checked;
+    EXPECT_TRUE(sign_ok) << "trial " << trial;
+    EXPECT_LE(std::abs(L), dmin * (1 + 1e-12)) << "trial " << trial;
+    if (L != 0) tightest = std::min(tightest, dmin / std::abs(L));
+    if (f.distance<double>(c, th.data(), 0) * (hole ? 1 : -1) > 3 * rho) {
+      ++far_discs;
+      far_bounded += L != 0;
+    }
+  }
+  std::printf("far_bound: %d discs, %d of %d far outside bounded, best min|D0|/|L| = %.3f\n",
+              checked, far_bounded, far_discs, tightest);
+  EXPECT_GT(far_discs, 100);
+  EXPECT_EQ(far_bounded, far_discs);  // outside by three radii (D₀ ≤ d): φ > 0 over the disc
 }
