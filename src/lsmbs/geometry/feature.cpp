@@ -67,7 +67,8 @@ double Feature::far_bound(const Vec2& c, double rho, const std::vector<double>& 
   const double t_lo = std::max(0.0, v - rho) / b, t_hi = (v + rho) / b;
   // φ = s^ξ + t^η − 1 and both |∂φ/∂u| = ξ s^(ξ−1)/a, |∂φ/∂v| = η t^(η−1)/b grow with s, t
   // (ξ, η ≥ 1); +1e-15 covers distance()'s regularization sqrt(|∇φ|² + 1e-30)
-  const double g_hi = std::hypot(xi * std::pow(s_hi, xi - 1) / a, eta * std::pow(t_hi, eta - 1) / b);
+  const double g_hi =
+      std::hypot(xi * std::pow(s_hi, xi - 1) / a, eta * std::pow(t_hi, eta - 1) / b);
   const double phi_lo = std::pow(s_lo, xi) + std::pow(t_lo, eta) - 1;
   const double phi_hi = std::pow(s_hi, xi) + std::pow(t_hi, eta) - 1;
   double L = 0;
