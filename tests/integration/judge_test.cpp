@@ -1,5 +1,7 @@
 // The judgement of optimized designs (runs/judge.hpp) on the robot arm (robot_arm_holes.json,
-// h = 0.01 s) at the final designs of paper_results/robot_arm_multistart:
+// h = 0.01 s) at two final designs of `optimize --starts 4 --seed 1` at commit 04aacf0
+// (tests/data/judge/robot_arm_multistart_04aacf0.json; paper_results/robot_arm_multistart holds
+// the current code's run):
 //   - start 3 (101.035 g, ranked first before the judgement existed): feature LS4 with
 //     b = 29.9 mm > the plate's 25 mm half-height cuts the plate in two at x = 575 mm; the slit
 //     is 2 a₄ = 9.79 mm wide (the largest disc of a ξ = 5 super-ellipse with a < b has radius a),
@@ -37,14 +39,14 @@ struct Arm {
     c["output"]["vtu_stride"] = 0;
     return c;
   }
-  // the final design of a start of paper_results/robot_arm_multistart
+  // the final design of a start of that run
   Vec final_design(int start) const {
     const json S = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
-                                             "/paper_results/robot_arm_multistart/start_" +
-                                             std::to_string(start) + "/summary.json"));
+                                             "/tests/data/judge/robot_arm_multistart_04aacf0.json"));
+    const json& design = S["starts"][std::to_string(start)]["design"];
     const Design& d = *cs.design;
     Vec p(d.size());
-    for (int i = 0; i < d.size(); ++i) p[i] = S["final"]["design"][d.variables[i].name];
+    for (int i = 0; i < d.size(); ++i) p[i] = design[d.variables[i].name];
     return p;
   }
   DesignJudgement judge(const Vec& p) const {
