@@ -41,8 +41,8 @@ struct Arm {
   }
   // the final design of a start of that run
   Vec final_design(int start) const {
-    const json S = json::parse(std::ifstream(std::string(LSMBS_SOURCE_DIR) +
-                                             "/tests/data/judge/robot_arm_multistart_04aacf0.json"));
+    const json S = json::parse(std::ifstream(
+        std::string(LSMBS_SOURCE_DIR) + "/tests/data/judge/robot_arm_multistart_04aacf0.json"));
     const json& design = S["starts"][std::to_string(start)]["design"];
     const Design& d = *cs.design;
     Vec p(d.size());
