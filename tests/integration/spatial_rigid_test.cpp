@@ -4,8 +4,6 @@
 //    generalized-α, against the closed-form solution of Euler's equations in Jacobi elliptic
 //    functions (Landau & Lifshitz, Mechanics, §37), including the time of the flip, with the
 //    conservation of energy and of the angular momentum vector.
-#include "lsmbs/mbs/spatial.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,6 +14,7 @@
 
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/mbs/spatial.hpp"
 
 using namespace lsmbs;
 
@@ -140,8 +139,8 @@ Result spin(const FreeBody& ref, double h, double t_end) {
         std::max(res.omega_error, (rec.omega[i] - ref.omega(rec.t[i])).norm() / scale);
     res.energy_drift =
         std::max(res.energy_drift, std::abs(rec.energy[i] - rec.energy[0]) / rec.energy[0]);
-    res.momentum_drift = std::max(res.momentum_drift,
-                                  (rec.momentum[i] - rec.momentum[0]).norm() / rec.momentum[0].norm());
+    res.momentum_drift = std::max(
+        res.momentum_drift, (rec.momentum[i] - rec.momentum[0]).norm() / rec.momentum[0].norm());
     if (res.flip == 0 && i > 0 && rec.omega[i - 1].y() < 0 && rec.omega[i].y() >= 0)
       res.flip = rec.t[i - 1] + (rec.t[i] - rec.t[i - 1]) * (-rec.omega[i - 1].y()) /
                                     (rec.omega[i].y() - rec.omega[i - 1].y());
@@ -254,8 +253,7 @@ TopRun top(double h, double t_end, double rho_inf, double g, double* closed_form
       std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));
   model.add_constraint(
       std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kOrthogonal));
-  model.add_constraint(
-      std::make_unique<SpatialGroundSpherical>(d0, Vec3(0, 0, -l), Vec3::Zero()));
+  model.add_constraint(std::make_unique<SpatialGroundSpherical>(d0, Vec3(0, 0, -l), Vec3::Zero()));
   model.finalize();
   State s0;
   s0.q = Vec::Zero(model.nq());
@@ -322,7 +320,8 @@ TEST(SpatialRigid, HeavySymmetricTopPrecessesAtTheClosedFormRate) {
   double phid = 0;
   const TopRun coarse = top(2e-3, 2.0, 0.8, 9.81, &phid), fine = top(1e-3, 2.0, 0.8, 9.81, &phid);
   std::printf(
-      "heavy top, θ = 30°, ω₃ = 40 rad/s, ρ∞ = 0.8: closed-form precession %.8f rad/s\n  h = 2 ms: %.8f "
+      "heavy top, θ = 30°, ω₃ = 40 rad/s, ρ∞ = 0.8: closed-form precession %.8f rad/s\n  h = 2 ms: "
+      "%.8f "
       "(rel. error %.2e), tilt error %.2e rad, energy %.2e, L_z %.2e, spin %.2e\n  h = 1 ms: %.8f "
       "(%.2e), %.2e rad, %.2e, %.2e, %.2e\n",
       phid, coarse.precession, std::abs(coarse.precession / phid - 1), coarse.tilt_error,

@@ -85,7 +85,16 @@ QuarterArc arc_of(const Feature& f, const std::vector<double>& th) {
                                                   : QuarterArc(0, 0, 1, 1);
 }
 
-// Radius of a disc about the feature's centre that holds its shape.
+// Centre of a disc that holds the feature's shape: (cx, cy), or a B-spline's control points'
+// mean (the curve lies in their convex hull).
+Vec2 centre(const Feature& f, const std::vector<double>& th) {
+  if (f.type() != Feature::Type::kBSpline) return {th[0], th[1]};
+  Vec2 c = Vec2::Zero();
+  for (size_t i = 0; i + 1 < th.size(); i += 2) c += Vec2(th[i], th[i + 1]);
+  return c / static_cast<double>(th.size() / 2);
+}
+
+// Radius of that disc.
 double reach(const Feature& f, const std::vector<double>& th) {
   switch (f.type()) {
     case Feature::Type::kCircle:
@@ -94,8 +103,13 @@ double reach(const Feature& f, const std::vector<double>& th) {
       return th[4] * std::max(th[2], th[3]);
     case Feature::Type::kSuperEllipse:
       return std::hypot(th[2], th[3]);
-    case Feature::Type::kBSpline:  // refused by the problem (no length scale of B-splines)
-      break;
+    case Feature::Type::kBSpline: {
+      const Vec2 c = centre(f, th);
+      double r = 0;
+      for (size_t i = 0; i + 1 < th.size(); i += 2)
+        r = std::max(r, (Vec2(th[i], th[i + 1]) - c).norm());
+      return r;
+    }
   }
   return kInf;
 }
@@ -205,21 +219,32 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
   std::vector<QuarterArc> arcs;  // each feature's tabulated curve at p, once per evaluation
   for (int i = 0; i < nf; ++i)
     arcs.push_back(arc_of(F[static_cast<size_t>(i)], V.theta[static_cast<size_t>(i)]));
+  // a B-spline's exact distance from its shape (positive outside it) and its sparse ∂/∂p
+  // (LevelSet::feature_distance: > 0 in material, the curve's own closest point)
+  auto bspline_shape_distance = [&](int i, const Vec2& x, LevelSet::Gradient* g) {
+    const double sign = F[static_cast<size_t>(i)].hole() ? 1.0 : -1.0;
+    const double d = ls_->feature_distance(i, x, V, g);
+    if (g)
+      for (auto& e : *g) e.second *= sign;
+    return sign * d;
+  };
   // s_i at every sample within `cap` of feature i's disc (+∞ beyond: no constraint needs it)
   auto distances = [&](const std::vector<Sample>& S) {
     std::vector<std::vector<double>> d(static_cast<size_t>(nf));
     for (int i = 0; i < nf; ++i) {
       const auto& th = V.theta[static_cast<size_t>(i)];
-      const Vec2 c(th[0], th[1]);
+      const Vec2 c = centre(F[static_cast<size_t>(i)], th);
       const double R = reach(F[static_cast<size_t>(i)], th);
       auto& di = d[static_cast<size_t>(i)];
       di.assign(S.size(), kInf);
       if (cap <= 0) continue;
       const Feature& f = F[static_cast<size_t>(i)];
       const QuarterArc& arc = arcs[static_cast<size_t>(i)];
+      const bool curve = f.type() == Feature::Type::kBSpline;
       for (size_t k = 0; k < S.size(); ++k)
         if ((S[k].x - c).norm() - R < cap)
-          di[k] = shape_distance<double>(f, S[k].x, th.data(), &arc);
+          di[k] = curve ? bspline_shape_distance(i, S[k].x, nullptr)
+                        : shape_distance<double>(f, S[k].x, th.data(), &arc);
     }
     return d;
   };
@@ -230,6 +255,12 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
   auto gradient = [&](int i, const Vec2& x, double weight, Vec& grad) {
     const Feature& f = F[static_cast<size_t>(i)];
     const auto& th = V.theta[static_cast<size_t>(i)];
+    if (f.type() == Feature::Type::kBSpline) {
+      LevelSet::Gradient g;
+      bspline_shape_distance(i, x, &g);
+      for (const auto& [k, dk] : g) grad[k] += weight * dk;
+      return;
+    }
     std::array<Dual, kMaxFeatureParams> t;
     for (size_t m = 0; m < th.size(); ++m) t[m] = Dual::variable(th[m], static_cast<int>(m));
     const Dual s = shape_distance<Dual>(f, x, t.data(), &arcs[static_cast<size_t>(i)]);

@@ -15,7 +15,10 @@
 //     everywhere else: the minimum of D_i over the boundary samples outside the run of samples
 //     closer than δ around its deepest one;
 //   - member size of a feature: twice its inscribed radius, −2 D_i at its centre: 2r (circle),
-//     2d·min(a, b) (ellipse, eq. 41), 2 min(a, b) (super-ellipse with ξ, η ≥ 2, eq. 43).
+//     2d·min(a, b) (ellipse, eq. 41), 2 min(a, b) (super-ellipse with ξ, η ≥ 2, eq. 43); none
+//     for a closed B-spline (a free-form hole has no centre: the member size is refused).
+// A closed B-spline's distance is its exact distance to the curve (ClosedBSpline) with the sparse
+// derivatives of LevelSet::feature_distance; the sampled measures above hold for it unchanged.
 // Each minimum is a KS aggregate KS(v) = m − (1/ρ) ln Σ_k exp(−ρ (v_k − m)), m = min v_k, which
 // lies below the minimum by at most ln(N)/ρ (N samples): a design with KS ≥ δ has every sample
 // ≥ δ, conservative by at most that much. ρ = ln(N)/(tolerance · δ) makes the bound the fraction

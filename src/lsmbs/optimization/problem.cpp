@@ -182,13 +182,13 @@ void DesignProblem::add_length_scales() {
     // the member size of a super-ellipse is 2 min(a, b) only for exponents ≥ 2 (convex, its
     // nearest boundary point from the centre on an axis); its exponents are affine in the
     // variables: checked at the bounds
-    for (const Feature& f : ls.features())
-      if (f.type() == Feature::Type::kBSpline)
-        throw SetupError("optimization.length_scale",
-                         "feature '" + f.name() +
-                             "' is a B-spline: the length-scale constraints are built for "
-                             "circles, ellipses and super-ellipses; drop the control or the "
-                             "feature (docs/designs.md)");
+    for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i)
+      if (ls.features()[static_cast<size_t>(i)].type() == Feature::Type::kBSpline)
+        throw SetupError("optimization.length_scale.min_member",
+                         "feature '" + ls.features()[static_cast<size_t>(i)].name() +
+                             "' is a B-spline: a free-form hole has no member size; set "
+                             "min_member to 0 (its ligaments, edge and no_cut are constrained; "
+                             "docs/designs.md)");
     for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i) {
       const Feature& f = ls.features()[static_cast<size_t>(i)];
       if (f.type() != Feature::Type::kSuperEllipse) continue;

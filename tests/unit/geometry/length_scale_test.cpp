@@ -183,3 +183,52 @@ TEST(LengthScale, SuperEllipseDistanceIsExact) {
   EXPECT_LE(c[0].value, best + 2e-6);
   EXPECT_GE(c[0].value, best - c[0].error_bound - 2e-6);
 }
+
+TEST(LengthScale, BSplineHoleLigamentsAgainstItsCurve) {
+  // a closed B-spline hole (8 control points, 16 variables) beside a circle (cx, r variables):
+  // its ligament to the circle and to the top edge against the curve sampled at 40 000 points
+  // (uniform cubic B-spline, written out here), and every gradient against central differences
+  const int n = 8;
+  Vec p(n * 2 + 2);
+  std::vector<ParamBinding> cps;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * std::numbers::pi * i / n;
+    p[2 * i] = 0.06 + 0.022 * std::cos(t) + 0.003 * std::sin(3 * t);
+    p[2 * i + 1] = 0.025 + 0.014 * std::sin(t);
+    cps.push_back(var(2 * i)), cps.push_back(var(2 * i + 1));
+  }
+  p[2 * n] = 0.11, p[2 * n + 1] = 0.012;
+  std::vector<Feature> f = {
+      Feature("F", Feature::Type::kBSpline, cps, true),
+      Feature("C", Feature::Type::kCircle, {var(2 * n), constant(0.025), var(2 * n + 1)}, true)};
+  const LevelSet ls(std::move(f), LevelSetNode::all_of(2), 2 * n + 2);
+  LengthScaleOptions o;
+  o.min_ligament = o.min_edge = 0.01;
+  const LengthScale L(plate(), ls, 2, o);
+  const auto c = L.evaluate(p);
+  auto P = [&](int i) {
+    const int k = (i % n + n) % n;
+    return Vec2(p[2 * k], p[2 * k + 1]);
+  };
+  double to_circle = 1e9, top = 1e9;
+  const int m = 5000;
+  for (int i = 0; i < n; ++i)
+    for (int s = 0; s < m; ++s) {
+      const double t = double(s) / m, t2 = t * t, t3 = t2 * t;
+      const Vec2 x = ((1 - t) * (1 - t) * (1 - t) * P(i - 1) + (3 * t3 - 6 * t2 + 4) * P(i) +
+                      (-3 * t3 + 3 * t2 + 3 * t + 1) * P(i + 1) + t3 * P(i + 2)) /
+                     6;
+      to_circle = std::min(to_circle, (x - Vec2(0.11, 0.025)).norm() - 0.012);
+      top = std::min(top, 0.05 - x.y());
+    }
+  const auto& lig = find(c, "ligament.F.C");
+  const auto& edge = find(c, "edge.F");
+  std::printf("B-spline hole: ligament %.6f mm (curve %.6f), edge %.6f mm (curve %.6f)\n",
+              1e3 * lig.value, 1e3 * to_circle, 1e3 * edge.value, 1e3 * top);
+  // the sampling adds at most s²/(8R) (s = 1.25 mm, R ≥ 12 mm: 1.6e-5 m)
+  EXPECT_LE(lig.value, to_circle + 2e-5);
+  EXPECT_GE(lig.value, to_circle - lig.error_bound);
+  EXPECT_LE(edge.value, top + 2e-5);
+  EXPECT_GE(edge.value, top - edge.error_bound);
+  check_gradients(L, p);
+}

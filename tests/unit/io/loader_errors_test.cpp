@@ -759,7 +759,7 @@ TEST(StudyPrepare, AStudyBuiltInCodeMeetsTheChecksOfACaseFile) {
 }
 
 // A B-spline feature's control points: each [x, y] of numbers or variables, at least 4, a simple
-// closed curve at the initial design; the length-scale constraints refuse it.
+// closed curve at the initial design; the length-scale constraints refuse its member size.
 TEST(LoaderErrors, BSplineFeaturesNameTheBadControlPoint) {
   auto with = [](const json& points) {
     json j = plate_with_hole();
@@ -784,14 +784,19 @@ TEST(LoaderErrors, BSplineFeaturesNameTheBadControlPoint) {
   const json bow = json::array({{0.4, 0.05}, {0.6, 0.15}, {0.6, 0.05}, {0.4, 0.15}});
   expect_error(with(bow), "/design/geometry/0/features/0",
                "feature 'free' at the initial design: the curve crosses itself");
+  // the length-scale constraints: a member size (on by default) is refused, the rest holds
   json ls = with(square);
   ls["optimization"] = {{"objective", "mass"}, {"length_scale", json::object()}};
   const Case cs = test::make_case(ls);
   try {
     DesignProblem P(conditions_of(cs), parse_optimization(cs));
-    ADD_FAILURE() << "a B-spline with length-scale constraints was accepted";
+    ADD_FAILURE() << "a B-spline with a member-size constraint was accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("optimization.length_scale"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("optimization.length_scale.min_member"),
+              std::string::npos);
     EXPECT_NE(std::string(e.what()).find("feature 'free' is a B-spline"), std::string::npos);
   }
+  ls["optimization"]["length_scale"] = {{"min_member", 0}};
+  const Case cs2 = test::make_case(ls);
+  EXPECT_NO_THROW(DesignProblem(conditions_of(cs2), parse_optimization(cs2)));
 }
