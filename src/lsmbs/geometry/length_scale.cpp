@@ -291,6 +291,7 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
     }
     if (v.empty()) {  // nothing within reach: the bound holds with room, flat there
       c.value = cap;
+      c.at = centre(F[static_cast<size_t>(i)], V.theta[static_cast<size_t>(i)]);
       out.push_back(std::move(c));
       return;
     }

@@ -25,8 +25,12 @@
 // `tolerance` of δ. The sampling adds to a ligament at most about s²/(8R) (R: the smaller radius
 // of curvature of the two boundaries at their nearest points: the sum of distances is flat along
 // the segment between them and quadratic across it), and as much to an edge ligament.
-// Samples farther than 3δ from a feature (by its enclosing disc) are not evaluated: a measure
-// larger than 3δ is reported as 3δ with a zero gradient (the bound holds there with room).
+// Samples farther than 3δ_max from a feature (by its enclosing disc; δ_max the largest of the
+// bounds) are not evaluated: a measure larger than 3δ_max is reported as 3δ_max with a zero
+// gradient (the bound holds there with room; `at` is the feature's centre when no sample is
+// within reach).
+// no_cut on a non-convex feature (a B-spline) that nears one edge at two places keeps δ at the
+// shallower one: breaking through both would cut off the material between them.
 #include <string>
 #include <vector>
 

@@ -186,7 +186,7 @@ void DesignProblem::add_length_scales() {
       if (ls.features()[static_cast<size_t>(i)].type() == Feature::Type::kBSpline)
         throw SetupError("optimization.length_scale.min_member",
                          "feature '" + ls.features()[static_cast<size_t>(i)].name() +
-                             "' is a B-spline: a free-form hole has no member size; set "
+                             "' is a B-spline: a free-form feature has no member size; set "
                              "min_member to 0 (its ligaments, edge and no_cut are constrained; "
                              "docs/designs.md)");
     for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i) {
