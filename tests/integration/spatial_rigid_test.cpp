@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/mbs/model.hpp"
@@ -71,22 +72,34 @@ struct FreeBody {
   double flip_time() const { return K / rate; }  // Ω₂ crosses zero
 };
 
-struct Recorder : StepObserver {
-  int dof0 = 0;
-  std::vector<double> t;
-  std::vector<Vec3> omega, momentum;
-  std::vector<double> energy;
-  Vec3 I, J;
-  void record(const State& s) {
-    const Vec3 W = SpatialPose::body_angular_velocity(dof0, s.q, s.v);
-    const SpatialPose P = SpatialPose::read(dof0, s.q);
-    t.push_back(s.t);
-    omega.push_back(W);
-    momentum.push_back(P.R * I.cwiseProduct(W));  // inertial frame: constant
-    double T = 0;  // ½ Σ J_k |ė_k|² (natural coordinates' kinetic energy)
-    for (int k = 0; k < 3; ++k) T += 0.5 * J[k] * s.v.segment<3>(dof0 + 3 + 3 * k).squaredNorm();
-    energy.push_back(T);
-  }
+// A spatial rigid body `name` in natural coordinates (mass m, principal moments I, gravity g on
+// its centre of mass) with its six frame constraints; returns its first DOF.
+int add_body(Model& model, const std::string& name, double m, const Vec3& I, const Vec3& g) {
+  const int mp = model.add_parameter(name + ".mass", m);
+  const std::array<int, 3> ip = {model.add_parameter(name + ".I1", I[0]),
+                                 model.add_parameter(name + ".I2", I[1]),
+                                 model.add_parameter(name + ".I3", I[2])};
+  const int d0 = model.add_dofs(12, name);
+  model.add_force(std::make_unique<SpatialRigidInertia>(d0, mp, ip, g, name));
+  model.add_constraint(
+      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));
+  model.add_constraint(
+      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kOrthogonal));
+  return d0;
+}
+
+State zero_state(const Model& model) {
+  State s;
+  s.q = Vec::Zero(model.nq());
+  s.v = Vec::Zero(model.nq());
+  s.a = Vec::Zero(model.nq());
+  s.lambda = Vec::Zero(model.nc());
+  return s;
+}
+
+// Calls record() with the initial state and every converged state on the output grid.
+struct GridRecorder : StepObserver {
+  virtual void record(const State& s) = 0;
   void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double, double,
                 const SparseLU*) override {
     record(s0);
@@ -97,28 +110,33 @@ struct Recorder : StepObserver {
   }
 };
 
+struct Recorder : GridRecorder {
+  int dof0 = 0;
+  std::vector<double> t;
+  std::vector<Vec3> omega, momentum;
+  std::vector<double> energy;
+  Vec3 I, J;
+  void record(const State& s) override {
+    const Vec3 W = SpatialPose::body_angular_velocity(dof0, s.q, s.v);
+    const SpatialPose P = SpatialPose::read(dof0, s.q);
+    t.push_back(s.t);
+    omega.push_back(W);
+    momentum.push_back(P.R * I.cwiseProduct(W));  // inertial frame: constant
+    double T = 0;  // ½ Σ J_k |ė_k|² (natural coordinates' kinetic energy)
+    for (int k = 0; k < 3; ++k) T += 0.5 * J[k] * s.v.segment<3>(dof0 + 3 + 3 * k).squaredNorm();
+    energy.push_back(T);
+  }
+};
+
 struct Result {
   double omega_error = 0, flip = 0, energy_drift = 0, momentum_drift = 0;
 };
 
 Result spin(const FreeBody& ref, double h, double t_end) {
   Model model;
-  const int mp = model.add_parameter("box.mass", 2.0);
-  const std::array<int, 3> ip = {model.add_parameter("box.I1", ref.I[0]),
-                                 model.add_parameter("box.I2", ref.I[1]),
-                                 model.add_parameter("box.I3", ref.I[2])};
-  const int d0 = model.add_dofs(12, "box");
-  model.add_force(std::make_unique<SpatialRigidInertia>(d0, mp, ip, Vec3::Zero(), "box"));
-  model.add_constraint(
-      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));
-  model.add_constraint(
-      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kOrthogonal));
+  const int d0 = add_body(model, "box", 2.0, ref.I, Vec3::Zero());
   model.finalize();
-  State s0;
-  s0.q = Vec::Zero(model.nq());
-  s0.v = Vec::Zero(model.nq());
-  s0.a = Vec::Zero(model.nq());
-  s0.lambda = Vec::Zero(model.nc());
+  State s0 = zero_state(model);
   // a general orientation, so that no coordinate axis is special
   const Mat3 R0 = (Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized())).toRotationMatrix();
   SpatialPose{Vec3(0.1, -0.2, 0.3), R0}.write(d0, s0.q);
@@ -243,23 +261,10 @@ TopRun top(double h, double t_end, double rho_inf, double g, double* closed_form
       (I3 * w3 - std::sqrt(I3 * I3 * w3 * w3 - 4 * I1p * c * m * g * l)) / (2 * I1p * c);
   *closed_form = phid;
   Model model;
-  const int mp = model.add_parameter("top.mass", m);
-  const std::array<int, 3> ip = {model.add_parameter("top.I1", I1),
-                                 model.add_parameter("top.I2", I1),
-                                 model.add_parameter("top.I3", I3)};
-  const int d0 = model.add_dofs(12, "top");
-  model.add_force(std::make_unique<SpatialRigidInertia>(d0, mp, ip, Vec3(0, 0, -g), "top"));
-  model.add_constraint(
-      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));
-  model.add_constraint(
-      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kOrthogonal));
+  const int d0 = add_body(model, "top", m, Vec3(I1, I1, I3), Vec3(0, 0, -g));
   model.add_constraint(std::make_unique<SpatialGroundSpherical>(d0, Vec3(0, 0, -l), Vec3::Zero()));
   model.finalize();
-  State s0;
-  s0.q = Vec::Zero(model.nq());
-  s0.v = Vec::Zero(model.nq());
-  s0.a = Vec::Zero(model.nq());
-  s0.lambda = Vec::Zero(model.nc());
+  State s0 = zero_state(model);
   const Mat3 R0 = Eigen::AngleAxisd(th, Vec3::UnitX()).toRotationMatrix();
   const Vec3 axis = R0.col(2), r0 = l * axis;
   const Vec3 omega = phid * Vec3::UnitZ() + (w3 - phid * c) * axis;  // ω₃ = ω·e₃ = w3
@@ -269,14 +274,14 @@ TopRun top(double h, double t_end, double rho_inf, double g, double* closed_form
   o.h = h;
   o.t_end = t_end;
   o.rho_inf = rho_inf;
-  struct Obs : StepObserver {
+  struct Obs : GridRecorder {
     int d0 = 0;
     double m = 0, g = 0, th = 0;
     Vec3 I, J;
     double azimuth = 0, last = 0, tilt_error = 0, e0 = 0, lz0 = 0, w0 = 0;
     double e_drift = 0, lz_drift = 0, w_drift = 0;
     bool first = true;
-    void record(const State& s) {
+    void record(const State& s) override {
       const SpatialPose P = SpatialPose::read(d0, s.q);
       const Vec3 W = SpatialPose::body_angular_velocity(d0, s.q, s.v);
       const Vec3 rd = s.v.segment<3>(d0);
@@ -296,14 +301,6 @@ TopRun top(double h, double t_end, double rho_inf, double g, double* closed_form
       e_drift = std::max(e_drift, std::abs(E - e0) / std::abs(e0));
       lz_drift = std::max(lz_drift, std::abs(lz - lz0) / std::abs(lz0));
       w_drift = std::max(w_drift, std::abs(W.z() - w0) / std::abs(w0));
-    }
-    void on_start(const State& s, const Vec&, const AlphaCoefficients&, double, double,
-                  const SparseLU*) override {
-      record(s);
-    }
-    bool on_step(const StepInfo& info) override {
-      if (info.grid_point) record(*info.state);
-      return true;
     }
   } obs;
   obs.d0 = d0, obs.m = m, obs.g = g, obs.th = th;

@@ -13,6 +13,12 @@ Vec3 SpatialRigidInertia::second_moments(const Vec3& I) {
   return Vec3(I[1] + I[2] - I[0], I[2] + I[0] - I[1], I[0] + I[1] - I[2]) / 2;
 }
 
+Vec3 SpatialRigidInertia::second_moments(const ModelParams& p) const {
+  return second_moments(Vec3(p.scalars[static_cast<size_t>(I_[0])],
+                             p.scalars[static_cast<size_t>(I_[1])],
+                             p.scalars[static_cast<size_t>(I_[2])]));
+}
+
 bool SpatialRigidInertia::uses_parameter(int j) const {
   return j == m_ || j == I_[0] || j == I_[1] || j == I_[2];
 }
@@ -20,9 +26,7 @@ bool SpatialRigidInertia::uses_parameter(int j) const {
 void SpatialRigidInertia::evaluate(const LocalState& s, const ModelParams& p, LocalVec& r,
                                    const Coefficients* c, LocalMat* S) const {
   const double m = p.scalars[static_cast<size_t>(m_)];
-  const Vec3 J = second_moments(Vec3(p.scalars[static_cast<size_t>(I_[0])],
-                                     p.scalars[static_cast<size_t>(I_[1])],
-                                     p.scalars[static_cast<size_t>(I_[2])]));
+  const Vec3 J = second_moments(p);
   // r = M q̈ − m g on the centre of mass (no velocity-dependent term: M is constant)
   for (int i = 0; i < 3; ++i) r[i] += m * (s.a[i] - g_[i]);
   for (int k = 0; k < 3; ++k)
@@ -38,9 +42,7 @@ void SpatialRigidInertia::mass_damping(const LocalState& /*s*/, const ModelParam
   M.setZero(12, 12);
   C.setZero(12, 12);
   const double m = p.scalars[static_cast<size_t>(m_)];
-  const Vec3 J = second_moments(Vec3(p.scalars[static_cast<size_t>(I_[0])],
-                                     p.scalars[static_cast<size_t>(I_[1])],
-                                     p.scalars[static_cast<size_t>(I_[2])]));
+  const Vec3 J = second_moments(p);
   for (int i = 0; i < 3; ++i) M(i, i) = m;
   for (int k = 0; k < 3; ++k)
     for (int i = 0; i < 3; ++i) M(3 + 3 * k + i, 3 + 3 * k + i) = J[k];

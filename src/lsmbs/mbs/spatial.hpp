@@ -41,6 +41,7 @@ class SpatialRigidInertia : public ForceElement {
   static Vec3 second_moments(const Vec3& I);
 
  private:
+  Vec3 second_moments(const ModelParams& p) const;  ///< from the moments' parameters
   std::array<int, 12> dofs_;
   int m_;
   std::array<int, 3> I_;
