@@ -16,8 +16,13 @@
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/mbs/model.hpp"
 #include "lsmbs/mbs/spatial.hpp"
+#include "support/element_checks.hpp"
+#include "support/spatial_models.hpp"
 
 using namespace lsmbs;
+using checks::add_body;
+using checks::GridRecorder;
+using checks::zero_state;
 
 namespace {
 
@@ -70,44 +75,6 @@ struct FreeBody {
     return Vec3(A[0] * cn, A[1] * sn, A[2] * dn);
   }
   double flip_time() const { return K / rate; }  // Ω₂ crosses zero
-};
-
-// A spatial rigid body `name` in natural coordinates (mass m, principal moments I, gravity g on
-// its centre of mass) with its six frame constraints; returns its first DOF.
-int add_body(Model& model, const std::string& name, double m, const Vec3& I, const Vec3& g) {
-  const int mp = model.add_parameter(name + ".mass", m);
-  const std::array<int, 3> ip = {model.add_parameter(name + ".I1", I[0]),
-                                 model.add_parameter(name + ".I2", I[1]),
-                                 model.add_parameter(name + ".I3", I[2])};
-  const int d0 = model.add_dofs(12, name);
-  model.add_force(std::make_unique<SpatialRigidInertia>(d0, mp, ip, g, name));
-  model.add_constraint(
-      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));
-  model.add_constraint(
-      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kOrthogonal));
-  return d0;
-}
-
-State zero_state(const Model& model) {
-  State s;
-  s.q = Vec::Zero(model.nq());
-  s.v = Vec::Zero(model.nq());
-  s.a = Vec::Zero(model.nq());
-  s.lambda = Vec::Zero(model.nc());
-  return s;
-}
-
-// Calls record() with the initial state and every converged state on the output grid.
-struct GridRecorder : StepObserver {
-  virtual void record(const State& s) = 0;
-  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double, double,
-                const SparseLU*) override {
-    record(s0);
-  }
-  bool on_step(const StepInfo& info) override {
-    if (info.grid_point) record(*info.state);
-    return true;
-  }
 };
 
 struct Recorder : GridRecorder {
@@ -166,43 +133,17 @@ Result spin(const FreeBody& ref, double h, double t_end) {
   return res;
 }
 
-LocalVec random_local(int n, std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(-1, 1);
-  LocalVec q(n);
-  for (int i = 0; i < n; ++i) q[i] = U(rng);
-  return q;
-}
-
 }  // namespace
 
 TEST(SpatialRigid, FrameConstraintDerivativesAgainstCentralDifferences) {
   std::mt19937 rng(3);
-  const ModelParams p;
   for (const auto kind :
        {SpatialFrameConstraint::Kind::kNormal, SpatialFrameConstraint::Kind::kOrthogonal}) {
     const SpatialFrameConstraint c(0, kind);
-    const LocalVec q = random_local(9, rng);
-    const LocalEqVec w = random_local(3, rng);
-    LocalEqVec phi, phi_p, phi_m;
-    LocalJac J;
-    c.evaluate(0, q, p, phi, &J);
-    LocalMat H;
-    c.hessian(0, q, w, H);
-    const double d = 1e-6;
-    double jac_err = 0, hess_err = 0;
-    for (int j = 0; j < 9; ++j) {
-      LocalVec qp = q, qm = q;
-      qp[j] += d, qm[j] -= d;
-      LocalJac Jp, Jm;
-      c.evaluate(0, qp, p, phi_p, &Jp);
-      c.evaluate(0, qm, p, phi_m, &Jm);
-      jac_err = std::max(jac_err, ((phi_p - phi_m) / (2 * d) - J.col(j)).cwiseAbs().maxCoeff());
-      // column j of Σ_i w_i ∂²Φ_i/∂q² = ∂(Φ_qᵀ w)/∂q_j
-      const LocalVec col = (Jp.transpose() * w - Jm.transpose() * w) / (2 * d);
-      hess_err = std::max(hess_err, (col - H.col(j)).cwiseAbs().maxCoeff());
-    }
-    EXPECT_LT(jac_err, 1e-9);
-    EXPECT_LT(hess_err, 1e-9);
+    const auto e =
+        checks::check_constraint(c, 0, checks::random_local(9, rng), checks::random_local(3, rng));
+    EXPECT_LT(e.jacobian, 1e-9);
+    EXPECT_LT(e.hessian, 1e-9);
   }
 }
 

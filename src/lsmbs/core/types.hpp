@@ -14,8 +14,9 @@ using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
 using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-/// Largest number of DOFs one local contribution (element, joint, force) may touch.
-inline constexpr int kMaxLocalDofs = 12;
+/// Largest number of DOFs one local contribution (element, joint, force) may touch: a joint
+/// between two spatial bodies in natural coordinates touches 2 × 12 (mbs/spatial.hpp).
+inline constexpr int kMaxLocalDofs = 24;
 /// Largest number of constraint equations in one local constraint block.
 inline constexpr int kMaxLocalEqs = 3;
 

@@ -11,6 +11,7 @@
 // The index-3 augmented-Lagrangian generalized-α of eq. (7)–(20) then integrates a spatial body
 // with no rotation parameters and no singularity; every sensitivity method sees ordinary force
 // and constraint elements (docs/methods.md, "Spatial bodies").
+#include <Eigen/Geometry>
 #include <array>
 #include <string>
 

@@ -1,0 +1,52 @@
+#pragma once
+// Building blocks of the spatial tests: a rigid body in natural coordinates with its frame
+// constraints, a zero state, and an observer of the output grid.
+#include <array>
+#include <memory>
+#include <string>
+
+#include "lsmbs/integrators/generalized_alpha.hpp"
+#include "lsmbs/mbs/model.hpp"
+#include "lsmbs/mbs/spatial.hpp"
+
+namespace lsmbs::checks {
+
+// A spatial rigid body `name` in natural coordinates (mass m, principal moments I, gravity g on
+// its centre of mass) with its six frame constraints; returns its first DOF.
+inline int add_body(Model& model, const std::string& name, double m, const Vec3& I, const Vec3& g) {
+  const int mp = model.add_parameter(name + ".mass", m);
+  const std::array<int, 3> ip = {model.add_parameter(name + ".I1", I[0]),
+                                 model.add_parameter(name + ".I2", I[1]),
+                                 model.add_parameter(name + ".I3", I[2])};
+  const int d0 = model.add_dofs(12, name);
+  model.add_force(std::make_unique<SpatialRigidInertia>(d0, mp, ip, g, name));
+  model.add_constraint(
+      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));
+  model.add_constraint(
+      std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kOrthogonal));
+  return d0;
+}
+
+inline State zero_state(const Model& model) {
+  State s;
+  s.q = Vec::Zero(model.nq());
+  s.v = Vec::Zero(model.nq());
+  s.a = Vec::Zero(model.nq());
+  s.lambda = Vec::Zero(model.nc());
+  return s;
+}
+
+// Calls record() with the initial state and every converged state on the output grid.
+struct GridRecorder : StepObserver {
+  virtual void record(const State& s) = 0;
+  void on_start(const State& s0, const Vec&, const AlphaCoefficients&, double, double,
+                const SparseLU*) override {
+    record(s0);
+  }
+  bool on_step(const StepInfo& info) override {
+    if (info.grid_point) record(*info.state);
+    return true;
+  }
+};
+
+}  // namespace lsmbs::checks
