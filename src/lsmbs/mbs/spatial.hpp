@@ -10,7 +10,7 @@
 //    and joints on body points are linear or bilinear in q.
 // The index-3 augmented-Lagrangian generalized-α of eq. (7)–(20) then integrates a spatial body
 // with no rotation parameters and no singularity; every sensitivity method sees ordinary force
-// and constraint elements (docs/methods.md, "Spatial bodies").
+// and constraint elements (docs/methods.md, "Spatial rigid bodies").
 #include <Eigen/Geometry>
 #include <array>
 #include <string>
