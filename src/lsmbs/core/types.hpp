@@ -12,6 +12,8 @@ using Vec = Eigen::VectorXd;
 using Mat = Eigen::MatrixXd;
 using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
 using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
 /// Largest number of DOFs one local contribution (element, joint, force) may touch: a joint

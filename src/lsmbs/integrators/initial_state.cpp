@@ -33,11 +33,14 @@ Status factor_projection(const Model& model, const ModelParams& p, const State& 
 }
 
 // Metric of the velocity projection: 1 for translations, L² for rigid-body angles (an angular
-// rate weighs as the speed it gives a point at the model's length scale L).
+// rate weighs as the speed it gives a point at the model's length scale L; likewise the rates
+// of a spatial body's unit vectors).
 Vec velocity_weights(const Model& model) {
   Vec w = Vec::Ones(model.nq());
   const double L = model.length_scale();
   for (const auto& b : model.rigid_bodies()) w[b.dof0 + 2] = L * L;
+  // spatial bodies: the rates of their unit vectors [1/s], as the speeds L ė they give
+  for (const auto& b : model.spatial_bodies()) w.segment<9>(b.dof0 + 3).setConstant(L * L);
   return w;
 }
 

@@ -94,6 +94,20 @@ void Model::add_constraint(std::unique_ptr<ConstraintElement> c) {
   cons_.push_back(std::move(c));
 }
 
+SpatialRigidBody& Model::add_spatial_body(SpatialRigidBody b) {
+  b.dof0 = add_dofs(12, "spatial body '" + b.name + "'");
+  q_init_.segment<3>(b.dof0) = b.position0;
+  for (int k = 0; k < 3; ++k) q_init_.segment<3>(b.dof0 + 3 + 3 * k) = b.orientation0.col(k);
+  spatial_.push_back(std::move(b));
+  return spatial_.back();
+}
+
+const SpatialRigidBody* Model::find_spatial(const std::string& name) const {
+  for (const auto& b : spatial_)
+    if (b.name == name) return &b;
+  return nullptr;
+}
+
 const RigidBody* Model::find_rigid(const std::string& name) const {
   for (const auto& b : rigid_)
     if (b.name == name) return &b;
@@ -138,7 +152,16 @@ void Model::finalize() {
         lo = lo.cwiseMin(b->placed(i));
         hi = hi.cwiseMax(b->placed(i));
       }
-    const double d = (hi - lo).norm();
+    double d = (hi - lo).norm();
+    if (!spatial_.empty()) {  // spatial bodies: the spread of their centres of mass in 3D
+      Vec3 lo3 = Vec3::Constant(1e300), hi3 = Vec3::Constant(-1e300);
+      for (const auto& b : spatial_) {
+        lo3 = lo3.cwiseMin(b.position0);
+        hi3 = hi3.cwiseMax(b.position0);
+      }
+      const double d3 = (hi3 - lo3).norm();
+      d = std::isfinite(d) ? std::max(d, d3) : d3;
+    }
     length_scale_ = d > 0 && std::isfinite(d) ? d : 1.0;
   }
   finalized_ = true;
@@ -160,6 +183,12 @@ std::string Model::describe_unknown(int i) const {
                            : i - b.dof0 == 1 ? "y"
                                              : "θ") +
                ")";
+    for (const auto& b : spatial_)
+      if (i >= b.dof0 && i < b.dof0 + 12) {
+        static const char* const kCoord[] = {"r", "e1", "e2", "e3"};
+        const int k = i - b.dof0;
+        return "spatial body '" + b.name + "' (" + kCoord[k / 3] + "." + "xyz"[k % 3] + ")";
+      }
     return dof_owner_[i];
   }
   const int row = i - nq_;

@@ -9,6 +9,7 @@
 //
 // The unknown vector of the Newton iteration is [q; λ] (n = nq + nc); λ is the scaled
 // multiplier, the physical constraint force is kλ.
+#include <array>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -52,6 +53,17 @@ struct RigidBody {
   std::vector<Vec2> attachments;
 };
 
+/// A spatial rigid body in natural coordinates (mbs/spatial.hpp): its centre of mass r and the
+/// unit vectors of its principal frame at dof0 … dof0 + 11, q_b = [r; e1; e2; e3].
+struct SpatialRigidBody {
+  std::string name;
+  int dof0 = -1;
+  int mass_param = -1;
+  std::array<int, 3> inertia_params = {-1, -1, -1};  ///< principal moments I₁, I₂, I₃
+  Vec3 position0 = Vec3::Zero();                     ///< centre of mass at t = 0
+  Mat3 orientation0 = Mat3::Identity();              ///< principal axes at t = 0 (columns)
+};
+
 /// A state at one time: positions, velocities, accelerations q̈ and scaled multipliers λ.
 struct State {
   double t = 0;
@@ -89,6 +101,11 @@ class Model {
   const ModelParams& params() const { return params_; }
   ModelParams& params() { return params_; }
   const std::vector<RigidBody>& rigid_bodies() const { return rigid_; }
+  /// Allocates the body's 12 unknowns and places it (q at t = 0); its elements are added by the
+  /// caller (ModelBuilder::spatial_body).
+  SpatialRigidBody& add_spatial_body(SpatialRigidBody b);
+  const std::vector<SpatialRigidBody>& spatial_bodies() const { return spatial_; }
+  const SpatialRigidBody* find_spatial(const std::string& name) const;
   const std::vector<std::unique_ptr<FlexibleBody>>& flexible_bodies() const { return flex_; }
   const RigidBody* find_rigid(const std::string& name) const;
   const FlexibleBody* find_flexible(const std::string& name) const;
@@ -218,6 +235,7 @@ class Model {
   ModelParams params_;
   std::vector<std::string> dof_owner_;
   std::vector<RigidBody> rigid_;
+  std::vector<SpatialRigidBody> spatial_;
   std::vector<std::unique_ptr<FlexibleBody>> flex_;
   std::vector<std::unique_ptr<ForceElement>> forces_;
   std::vector<std::unique_ptr<ConstraintElement>> cons_;

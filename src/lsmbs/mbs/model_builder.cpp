@@ -82,7 +82,7 @@ void ModelBuilder::check_name(const std::string& name, bool body) const {
 
 ModelBuilder::Mark ModelBuilder::begin(const Entity& e) const {
   check_not_built();
-  check_name(e, e.kind == "rigid body" || e.kind == "flexible body");
+  check_name(e, e.kind == "rigid body" || e.kind == "flexible body" || e.kind == "spatial body");
   return {m_->forces().size(), m_->constraints().size()};
 }
 
@@ -111,6 +111,7 @@ void ModelBuilder::add_constraint(const Entity& e, std::unique_ptr<ConstraintEle
 ModelBuilder::BodyKind ModelBuilder::body_kind(const std::string& name) const {
   if (m_->find_rigid(name)) return BodyKind::kRigid;
   if (m_->find_flexible(name)) return BodyKind::kFlexible;
+  if (m_->find_spatial(name)) return BodyKind::kSpatial;
   return BodyKind::kNone;
 }
 
@@ -546,6 +547,17 @@ void ModelBuilder::check_determined() const {
     if (!constrained && mass == 0 && J == 0)
       fail({"rigid body", b.name}, "",
            "rigid body '" + b.name + "' has no mass and no joint: its motion is not determined");
+  }
+  for (const auto& b : m_->spatial_bodies()) {
+    double inertia = m_->params().scalars[static_cast<size_t>(b.mass_param)];
+    for (int ip : b.inertia_params) inertia += m_->params().scalars[static_cast<size_t>(ip)];
+    bool constrained = false;  // by more than its own frame constraints
+    for (const auto& c : m_->constraints())
+      if (c->name() != b.name + ".frame")
+        for (int d : c->dofs()) constrained = constrained || (d >= b.dof0 && d < b.dof0 + 12);
+    if (!constrained && inertia == 0)
+      fail({"spatial body", b.name}, "",
+           "spatial body '" + b.name + "' has no mass and no joint: its motion is not determined");
   }
 }
 

@@ -43,6 +43,8 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/fem/mesh.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/mbs/spatial_force.hpp"
+#include "lsmbs/mbs/spatial_joint.hpp"
 
 namespace lsmbs {
 
@@ -130,6 +132,37 @@ struct RotationalSpringOptions {
   std::string validate() const;
 };
 
+/// A spatial rigid body in natural coordinates (mbs/spatial.hpp).
+struct SpatialBodyOptions {
+  double mass = 0;               ///< m ≥ 0 (parameter "<body>.mass")
+  Vec3 inertia = Vec3::Zero();   ///< principal moments about the centre of mass ("<body>.I1" …)
+  Vec3 position = Vec3::Zero();  ///< centre of mass at t = 0
+  Mat3 orientation = Mat3::Identity();   ///< principal axes at t = 0 (columns; a rotation)
+  std::optional<Vec3> velocity;          ///< of the centre of mass at t = 0 (given: kept)
+  std::optional<Vec3> angular_velocity;  ///< ω at t = 0, global components (given: kept)
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
+};
+
+/// Where a spatial joint sits at assembly (t = 0) and its axes, in global components.
+struct SpatialJointOptions {
+  Vec3 at = Vec3::Zero();  ///< the joint's point
+  /// revolute, cylindrical, prismatic: the axis; planar: the normal; universal: the cross's axis
+  /// on body a; spherical, weld: unused
+  Vec3 axis = Vec3::UnitZ();
+  std::optional<Vec3> axis_b;  ///< universal: the cross's axis on body b (⟂ axis)
+  /// Empty string when valid for that kind, otherwise "field: what is expected".
+  std::string validate(SpatialJointKind kind) const;
+};
+
+/// A spatial joint as built: its kind, bodies, frame and joint angle unknown (−1: none).
+struct SpatialJointInfo {
+  SpatialJointKind kind = SpatialJointKind::kSpherical;
+  std::string a, b;
+  SpatialJointFrame frame;
+  int theta_dof = -1;
+};
+
 /// The argument of a pressure table: the time (angle_of empty) plus offset, or the angle of a
 /// rigid body plus offset.
 struct PressureArgument {
@@ -164,7 +197,7 @@ struct ModelStart {
 
 class ModelBuilder {
  public:
-  enum class BodyKind { kNone, kRigid, kFlexible };
+  enum class BodyKind { kNone, kRigid, kFlexible, kSpatial };
 
   ModelBuilder();
   ModelBuilder(const ModelBuilder&) = delete;
@@ -178,6 +211,39 @@ class ModelBuilder {
   /// sides, Gmsh physical groups, or sets added with the Mesh2D selectors) are the sets joints
   /// refer to, each non-empty.
   void flexible_body(const std::string& name, Mesh2D mesh, const FlexibleBodyOptions& o);
+
+  // ------------------------------------------------------------ spatial (mbs/spatial*.hpp)
+  /// Gravity of the spatial bodies (set before adding any).
+  void set_spatial_gravity(const Vec3& g);
+  /// Twelve unknowns (centre of mass, principal axes), a SpatialRigidInertia and its six frame
+  /// constraints (named "<body>.frame"); parameters "<body>.mass", "<body>.I1", "I2", "I3".
+  void spatial_body(const std::string& name, const SpatialBodyOptions& o);
+  /// A joint of that kind between spatial bodies a and b ("ground" for one of them), its frame
+  /// equal on both at assembly. A revolute or cylindrical joint also gets its rotation angle θ
+  /// (one more unknown, 0 at assembly).
+  void spatial_joint(const std::string& name, SpatialJointKind kind, const std::string& a,
+                     const std::string& b, const SpatialJointOptions& o);
+  /// θ − s(t) = 0 on the rotation of a revolute or cylindrical joint.
+  void joint_rotation_driver(const std::string& name, const std::string& joint,
+                             std::shared_ptr<const TimeLaw> law);
+  /// a₃·(x_b − x_a) − s(t) = 0 along a prismatic or cylindrical joint's axis (0 at assembly).
+  void joint_translation_driver(const std::string& name, const std::string& joint,
+                                std::shared_ptr<const TimeLaw> law);
+  /// A force at the body point that is at `at` (global) at t = 0, or (torque) a moment on the
+  /// body: scale · (L₁, L₂, L₃)(t) in the ground frame or the body's principal frame; null laws
+  /// are zero. Parameter "<force>.scale".
+  void spatial_load(const std::string& name, SpatialLoad::Kind kind, const std::string& body,
+                    const Vec3& at, std::array<std::shared_ptr<const TimeLaw>, 3> laws,
+                    SpatialLoad::Frame frame, double scale = 1);
+  /// Between the body points at a_at and b_at (global, t = 0); b may be "ground".
+  void spatial_spring_damper(const std::string& name, const std::string& a, const Vec3& a_at,
+                             const std::string& b, const Vec3& b_at, const SpringOptions& o);
+  /// M = k (θ − θ0) + c θ̇ on a revolute or cylindrical joint's angle (θ0 default 0).
+  void joint_spring_damper(const std::string& name, const std::string& joint,
+                           const RotationalSpringOptions& o);
+  const SpatialRigidBody& spatial(const std::string& name) const;
+  /// The spatial joint of that name (ModelError if there is none).
+  const SpatialJointInfo& spatial_joint_info(const std::string& joint) const;
 
   // ------------------------------------------------------------ joints and drivers
   /// p_a = p_b; b defaults to the ground point at the initial position of a.
@@ -300,6 +366,11 @@ class ModelBuilder {
                       bool rotation, const std::string& field);
   void check_not_built() const;
   void check_determined() const;
+  const SpatialRigidBody* spatial_or_ground(const Entity& e, const std::string& field,
+                                            const std::string& name) const;
+  const SpatialJointInfo& spatial_joint(const Entity& e, const std::string& field,
+                                        const std::string& joint) const;
+  SpatialPose pose0(const SpatialRigidBody* b) const;
 
   std::unique_ptr<Model> model_;  // owned until build()
   Model* m_ = nullptr;            // the model, before and after build()
@@ -310,6 +381,8 @@ class ModelBuilder {
   std::map<std::string, std::pair<size_t, size_t>> joint_elements_;  // constraint elements [b, e)
   std::map<std::string, std::vector<int>> joint_rows_;
   std::map<std::string, DriverInfo> drivers_;
+  std::map<std::string, SpatialJointInfo> spatial_joints_;
+  Vec3 gravity3_ = Vec3::Zero();
   std::map<std::string, std::vector<int>> entity_params_;
   Vec init_v_;
   std::vector<char> held_v_;

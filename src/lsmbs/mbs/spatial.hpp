@@ -19,9 +19,6 @@
 
 namespace lsmbs {
 
-using Vec3 = Eigen::Vector3d;
-using Mat3 = Eigen::Matrix3d;
-
 /// Inertia of a spatial rigid body in natural coordinates at dof0 … dof0 + 11 (r, e1, e2, e3):
 /// mass m and principal moments I₁, I₂, I₃ about the centre of mass (scalar parameters), a
 /// constant gravity g acting on the centre of mass.
