@@ -94,6 +94,7 @@ struct Loader : KindReader {
   std::string base_dir;
   ModelBuilder builder_;
   std::map<std::string, std::string> paths;  ///< JSON path of each body, joint and force by name
+  bool spatial = false;  ///< "dimension": 3: spatial bodies and the spatial kinds
 
   std::string resolve(const std::string& f) {
     const std::string path = fs::path(f).is_absolute() ? f : (fs::path(base_dir) / f).string();
@@ -223,6 +224,43 @@ struct Loader : KindReader {
     at_entry(r, [&] { builder_.rigid_body(name, o); });
   }
 
+  // A spatial rigid body ("dimension": 3): centre of mass, principal moments and axes.
+  void spatial_body(const JsonReader& r, const std::string& name) {
+    SpatialBodyOptions o;
+    o.mass = r.non_negative("mass", 0.0);
+    o.inertia = r.vec3("inertia", Vec3::Zero());
+    o.position = r.vec3("position", Vec3::Zero());
+    if (auto ori = r.optional_child("orientation")) o.orientation = orientation(*ori);
+    if (r.has("velocity")) o.velocity = r.vec3("velocity");
+    if (r.has("angular_velocity")) o.angular_velocity = r.vec3("angular_velocity");
+    r.finish();
+    at_entry(r, [&] { builder_.spatial_body(name, o); });
+  }
+
+  // A rotation: {"axis": [x, y, z], "angle": rad}, or its matrix by rows [[…], […], […]]
+  // (columns: the principal axes in ground coordinates).
+  static Mat3 orientation(const JsonReader& r) {
+    if (r.is_object()) {
+      const Vec3 axis = r.vec3("axis");
+      if (!(axis.norm() > 0)) r.fail("axis", "expected a non-zero direction");
+      const double angle = r.number("angle");
+      r.finish();
+      return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+    }
+    const auto& j = r.raw();
+    if (!j.is_array() || j.size() != 3)
+      r.fail("expected {\"axis\": [x, y, z], \"angle\": rad} or a 3 × 3 matrix by rows");
+    Mat3 R;
+    for (int i = 0; i < 3; ++i) {
+      const auto& row = j[static_cast<size_t>(i)];
+      if (!row.is_array() || row.size() != 3 || !row[0].is_number() || !row[1].is_number() ||
+          !row[2].is_number())
+        r.fail(std::to_string(i), "expected a row of three numbers");
+      for (int c = 0; c < 3; ++c) R(i, c) = row[static_cast<size_t>(c)].get<double>();
+    }
+    return R;
+  }
+
   void flexible_body(const JsonReader& r, const std::string& name) {
     Mesh2D mesh;
     const JsonReader m = r.child("mesh");
@@ -335,8 +373,9 @@ struct Loader : KindReader {
   // (checked as soon as it is read), then what its kind reads. An unnamed joint or force gets
   // "<type>_<index>".
   void kind_entry(const JsonReader& r, const std::string& section, int index) {
-    const std::string type = r.one_of("type", kind_types(section));
-    const ModelKind& kind = *find_kind(section, type);
+    const std::string type =
+        r.one_of("type", spatial ? spatial_kind_types(section) : kind_types(section));
+    const ModelKind& kind = spatial ? *find_spatial_kind(section, type) : *find_kind(section, type);
     std::string name;
     if (section == "measures") {
       name = r.string("name");
@@ -735,12 +774,26 @@ Case load_single(const nlohmann::json& j, const std::string& file_label,
   const JsonReader root(j, file_label);
   if (!root.is_object()) root.fail("expected a JSON object at the top level");
   cs.name = root.string("name", fs::path(file_label).stem().string());
-  if (root.has("gravity")) builder_.set_gravity(root.vec2("gravity"));
+  const int dimension = root.integer("dimension", 2, 2);
+  if (dimension > 3) root.fail("dimension", "expected 2 (planar) or 3 (spatial)");
+  L.spatial = dimension == 3;
+  if (root.has("gravity")) {
+    if (L.spatial)
+      builder_.set_spatial_gravity(root.vec3("gravity"));
+    else
+      builder_.set_gravity(root.vec2("gravity"));
+  }
   const auto bodies = root.items("bodies", true);
   if (bodies.empty()) root.fail("bodies", "expected at least one body");
   for (const auto& b : bodies) {
     const std::string name = b.string("name");
     L.entry(b, name, true);
+    if (L.spatial) {
+      // flexible components of spatial mechanisms are solids: not yet
+      b.one_of("type", {"rigid"});
+      L.spatial_body(b, name);
+      continue;
+    }
     const std::string type = b.one_of("type", {"rigid", "flexible"});
     if (type == "rigid")
       L.rigid_body(b, name);
@@ -762,6 +815,9 @@ Case load_single(const nlohmann::json& j, const std::string& file_label,
     out->finish();
   }
   const auto initial_state = root.optional_child("initial_state");
+  if (initial_state && L.spatial)
+    root.fail("initial_state",
+              "not available in spatial cases yet (give velocities on the bodies)");
   root.finish();
   try {  // refuses undetermined bodies, numbers the constraint rows
     cs.model = builder_.build();

@@ -139,6 +139,17 @@ Vec2 JsonReader::vec2(const std::string& key, const Vec2& def) const {
   return has(key) ? vec2(key) : def;
 }
 
+Vec3 JsonReader::vec3(const std::string& key) const {
+  const auto& v = get(key);
+  if (!v.is_array() || v.size() != 3)
+    fail(key, "expected an array of three numbers [x, y, z], got " + shown(v));
+  return Vec3(checked_number(v[0], key + "/0"), checked_number(v[1], key + "/1"),
+              checked_number(v[2], key + "/2"));
+}
+Vec3 JsonReader::vec3(const std::string& key, const Vec3& def) const {
+  return has(key) ? vec3(key) : def;
+}
+
 double JsonReader::as_number() const {
   if (!j_->is_number()) fail("expected a number, got " + type_name(*j_));
   const double d = j_->get<double>();

@@ -60,6 +60,8 @@ class JsonReader {
   bool boolean(const std::string& key, bool def) const;
   Vec2 vec2(const std::string& key) const;
   Vec2 vec2(const std::string& key, const Vec2& def) const;
+  Vec3 vec3(const std::string& key) const;
+  Vec3 vec3(const std::string& key, const Vec3& def) const;
   /// This node itself as a number / string.
   double as_number() const;
   std::string as_string() const;

@@ -20,6 +20,8 @@ const char* key_type_name(KeyType t) {
       return "name";
     case KeyType::kVec2:
       return "[x, y]";
+    case KeyType::kVec3:
+      return "[x, y, z]";
     case KeyType::kPoint:
       return "point";
     case KeyType::kPointOrGround:

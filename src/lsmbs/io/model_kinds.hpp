@@ -28,6 +28,7 @@ enum class KeyType {
   kBoolean,
   kName,           ///< the name of a body, joint, driver or node set
   kVec2,           ///< [x, y]
+  kVec3,           ///< [x, y, z] (spatial cases)
   kPoint,          ///< a material point ({"ground": [x, y]}, {"body": …, "at": …}, …)
   kPointOrGround,  ///< a point, or "ground" (the ground point at the other end's start)
   kLaw,            ///< a time law ({"type": "trapezoid" | "ramp" | "table" | "constant", …})
@@ -95,5 +96,11 @@ const std::vector<ModelKind>& model_kinds();
 const ModelKind* find_kind(const std::string& section, const std::string& type);
 /// The types of a section, in the table's order.
 std::vector<std::string> kind_types(const std::string& section);
+
+/// The kinds of spatial cases ("dimension": 3; io/spatial_kinds.cpp): joints, drivers, forces and
+/// measures of spatial rigid bodies, named like their planar counterparts where they have one.
+const std::vector<ModelKind>& spatial_model_kinds();
+const ModelKind* find_spatial_kind(const std::string& section, const std::string& type);
+std::vector<std::string> spatial_kind_types(const std::string& section);
 
 }  // namespace lsmbs

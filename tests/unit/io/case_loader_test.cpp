@@ -577,6 +577,31 @@ TEST(ModelKinds, TheTableIsTheLoadersVocabulary) {
   }
   for (const char* section : {"joints", "forces", "measures", "features"})
     EXPECT_FALSE(kind_types(section).empty()) << section;
+  // the spatial table: unique names and keys, a reader each, and documented in the spatial
+  // section of docs/case-format.md (every kind and every key)
+  std::ifstream doc(std::string(LSMBS_SOURCE_DIR) + "/docs/case-format.md");
+  const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  const size_t from = text.find("## Spatial cases"), to = text.find("\n## ", from + 1);
+  ASSERT_NE(from, std::string::npos);
+  const std::string spatial_doc = text.substr(from, to - from);
+  std::set<std::pair<std::string, std::string>> spatial_seen;
+  for (const ModelKind& k : spatial_model_kinds()) {
+    EXPECT_TRUE(spatial_seen.insert({k.section, k.type}).second) << k.section << " " << k.type;
+    EXPECT_TRUE(static_cast<bool>(k.read)) << k.type;
+    EXPECT_FALSE(k.doc.empty()) << k.type;
+    // a table row of the section that starts with the type and names every key
+    bool documented = false;
+    for (size_t row = spatial_doc.find("| `" + k.type + "` |");
+         row != std::string::npos && !documented;
+         row = spatial_doc.find("| `" + k.type + "` |", row + 1)) {
+      const std::string line = spatial_doc.substr(row, spatial_doc.find('\n', row) - row);
+      documented = true;
+      for (const KindKey& key : k.keys)
+        documented = documented && line.find("`" + key.name + "`") != std::string::npos;
+    }
+    EXPECT_TRUE(documented) << "docs/case-format.md, Spatial cases: no row of " << k.type
+                            << " names all its keys";
+  }
   json j = R"({"name": "m", "bodies": [{"name": "b", "type": "rigid", "mass": 1, "inertia": 1}],
                "joints": [{"name": "pin", "type": "hinge", "a": {"body": "b"}}],
                "simulation": {"t_end": 0.1, "h": 0.01}})"_json;

@@ -1,0 +1,115 @@
+// The shipped spatial case (data/spatial/slider_crank_spatial.json, "dimension": 3) read from
+// its file and run as a user runs it, against independent references:
+//  - the driven slider follows the closed-form loop closure of the spatial slider-crank,
+//    y = r cos θ + √(L² − e² − r² sin² θ), and the measured joint translation is y − y(0);
+//  - the rod's axis stays a unit vector (the frame constraints) along the rod's two joints;
+//  - every sensitivity method on the motor's peak torque and the mean kinetic energy with
+//    respect to the rod's mass and the spring's stiffness: direct-analytic, adjoint and
+//    semi-analytical against central differences, and against IDAS (GGL, BDF) within the
+//    discretization difference;
+//  - a spatial case's errors name the JSON path.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "lsmbs/io/case.hpp"
+#include "lsmbs/runs/simulate.hpp"
+#include "support/gradients.hpp"
+
+using namespace lsmbs;
+using json = nlohmann::json;
+using M = SensitivityOptions::Method;
+
+namespace {
+
+const std::string kCase = std::string(LSMBS_SOURCE_DIR) + "/data/spatial/slider_crank_spatial.json";
+
+std::string load_error(const json& j) {
+  try {
+    load_case_json(j, "bad.json", ".");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(SpatialCase, TheSliderFollowsTheClosedFormLoopClosure) {
+  const Case cs = load_case(kCase);
+  const SimulationResult r = run_simulation(cs);
+  ASSERT_TRUE(r.integrator.ok) << r.integrator.message;
+  const auto y = r.column("slider.y"), th = r.column("crank_angle"), s = r.column("stroke");
+  const auto ax = r.column("rod_axis.x"), ay = r.column("rod_axis.y"), az = r.column("rod_axis.z");
+  const double crank = 0.1, rod = 0.3, e = 0.2;
+  double err = 0, stroke_err = 0, unit_err = 0;
+  for (size_t i = 0; i < y.size(); ++i) {
+    const double ref = crank * std::cos(th[i]) +
+                       std::sqrt(rod * rod - e * e - std::pow(crank * std::sin(th[i]), 2));
+    err = std::max(err, std::abs(y[i] - ref));
+    stroke_err = std::max(stroke_err, std::abs(s[i] - (y[i] - y[0])));
+    unit_err = std::max(unit_err, std::abs(std::hypot(ax[i], ay[i], az[i]) - 1));
+  }
+  EXPECT_GT(th.back(), 2 * 2 * std::numbers::pi);  // more than two turns
+  EXPECT_LT(err, 1e-10);
+  EXPECT_LT(stroke_err, 1e-10);
+  EXPECT_LT(unit_err, 1e-10);
+}
+
+// The final stroke of a driven mechanism is kinematic: its gradient is zero, for every method
+// (checked in absolute terms; relative errors of zero say nothing). The other two responses are
+// compared with relative errors.
+TEST(SpatialCase, EverySensitivityMethodAgrees) {
+  Case full = load_case(kCase);
+  for (const auto m : {M::kDirectAnalytic, M::kAdjoint, M::kSemiAnalytical, M::kIdas}) {
+    const auto g = test::gradients(full, m);
+    for (const auto& r : g.responses)
+      if (r.name == "final_stroke") EXPECT_LT(r.gradient.cwiseAbs().maxCoeff(), 1e-12);
+  }
+  json j = json::parse(std::ifstream(kCase));
+  j["output"]["responses"].erase(2);
+  ASSERT_EQ(j["output"]["responses"].size(), 2u);
+  Case cs = load_case_json(j, kCase, std::string(LSMBS_SOURCE_DIR) + "/data/spatial");
+  const auto direct = test::gradients(cs, M::kDirectAnalytic);
+  const auto fd = test::gradients(cs, M::kFdCentral);
+  const auto adjoint = test::gradients(cs, M::kAdjoint);
+  const auto semi = test::gradients(cs, M::kSemiAnalytical);
+  const auto idas = test::gradients(cs, M::kIdas);
+  std::string where;
+  const double e_fd = test::worst_relative(direct, fd, test::Norm::kPerValue, &where);
+  std::printf("direct vs central differences %.2e (%s)\n", e_fd, where.c_str());
+  EXPECT_LT(e_fd, 1e-4);
+  EXPECT_LT(test::worst_relative(adjoint, direct), 1e-9);
+  EXPECT_LT(test::worst_relative(semi, direct), 1e-6);
+  const double e_idas = test::worst_relative(direct, idas, test::Norm::kPerValue, &where);
+  std::printf("direct vs IDAS %.2e (%s)\n", e_idas, where.c_str());
+  EXPECT_LT(e_idas, 5e-3);  // h = 0.5 ms against IDAS at 1e-9: the discretization's difference
+}
+
+TEST(SpatialCase, BadSpatialInputNamesTheJsonPath) {
+  json j = json::parse(std::ifstream(kCase));
+  json bad = j;
+  bad["bodies"][1]["orientation"][0][0] = 0.5;
+  EXPECT_NE(load_error(bad).find("/bodies/1"), std::string::npos) << load_error(bad);
+  EXPECT_NE(load_error(bad).find("orientation"), std::string::npos);
+  bad = j;
+  bad["joints"][2].erase("axis_b");
+  EXPECT_NE(load_error(bad).find("/joints/2"), std::string::npos) << load_error(bad);
+  bad = j;
+  bad["joints"][4]["joint"] = "pin";
+  EXPECT_NE(load_error(bad).find("spherical joint has no rotation"), std::string::npos)
+      << load_error(bad);
+  bad = j;
+  bad["dimension"] = 4;
+  EXPECT_NE(load_error(bad).find("/dimension"), std::string::npos) << load_error(bad);
+  bad = j;
+  bad["bodies"][0]["type"] = "flexible";
+  EXPECT_NE(load_error(bad).find("/bodies/0/type"), std::string::npos) << load_error(bad);
+  bad = j;
+  bad["gravity"] = {0, -9.81};
+  EXPECT_NE(load_error(bad).find("/gravity"), std::string::npos) << load_error(bad);
+  bad = j;
+  bad["output"]["measures"][0]["at"] = {0, 1};
+  EXPECT_NE(load_error(bad).find("/output/measures/0/at"), std::string::npos) << load_error(bad);
+}
