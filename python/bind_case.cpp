@@ -209,31 +209,38 @@ void bind_case(py::module_& m) {
       "text's, as if it were a file");
 }
 
-// lsmbs.model_kinds(): the table of joints, forces, measures and features (io/model_kinds.hpp),
-// from which python/lsmbs/builder.py makes the builder's methods.
+// A table of model kinds as Python dicts: {section, type, doc, keys: [{name, type, required,
+// positional, python_default, doc}]}.
+py::list kinds_to_python(const std::vector<ModelKind>& kinds) {
+  py::list out;
+  for (const ModelKind& k : kinds) {
+    py::list keys;
+    for (const KindKey& key : k.keys)
+      keys.append(py::dict(
+          py::arg("name") = key.name, py::arg("type") = std::string(key_type_name(key.type)),
+          py::arg("required") = key.required, py::arg("positional") = key.positional,
+          py::arg("python_default") =
+              key.python_default.empty()
+                  ? py::object(py::none())
+                  : json_to_python(nlohmann::json::parse(key.python_default)),
+          py::arg("doc") = key.doc));
+    out.append(py::dict(py::arg("section") = k.section, py::arg("type") = k.type,
+                        py::arg("doc") = k.doc, py::arg("keys") = keys));
+  }
+  return out;
+}
+
+// lsmbs.model_kinds() and lsmbs.spatial_model_kinds(): the tables of joints, forces, measures
+// and features (io/model_kinds.hpp), from which python/lsmbs/builder.py makes the builders'
+// methods.
 void bind_model_kinds(py::module_& m) {
   m.def(
-      "model_kinds",
-      [] {
-        py::list out;
-        for (const ModelKind& k : model_kinds()) {
-          py::list keys;
-          for (const KindKey& key : k.keys)
-            keys.append(py::dict(
-                py::arg("name") = key.name, py::arg("type") = std::string(key_type_name(key.type)),
-                py::arg("required") = key.required, py::arg("positional") = key.positional,
-                py::arg("python_default") =
-                    key.python_default.empty()
-                        ? py::object(py::none())
-                        : json_to_python(nlohmann::json::parse(key.python_default)),
-                py::arg("doc") = key.doc));
-          out.append(py::dict(py::arg("section") = k.section, py::arg("type") = k.type,
-                              py::arg("doc") = k.doc, py::arg("keys") = keys));
-        }
-        return out;
-      },
+      "model_kinds", [] { return kinds_to_python(model_kinds()); },
       "The joints, forces, measures and features of the case format, with their keys: a list of "
       "{section, type, doc, keys: [{name, type, required, positional, python_default, doc}]}");
+  m.def(
+      "spatial_model_kinds", [] { return kinds_to_python(spatial_model_kinds()); },
+      "The joints, forces and measures of spatial cases (\"dimension\": 3), as model_kinds()");
 }
 
 }  // namespace lsmbs_python

@@ -117,6 +117,7 @@ METHODS = ("semi-analytical", "semi-analytical-central", "direct-analytic", "adj
            "adjoint-semi-analytical", "fd-forward", "fd-central", "idas", "idas-adjoint")
 from .builder import (  # noqa: E402,F401
     ModelBuilder,
+    SpatialModelBuilder,
     Variable,
     at,
     at_global,

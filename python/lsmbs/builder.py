@@ -35,7 +35,7 @@ import pathlib
 from . import _lsmbs
 
 __all__ = [
-    "ModelBuilder", "Variable", "ground", "at", "at_global", "node", "nearest", "rectangle",
+    "ModelBuilder", "SpatialModelBuilder", "Variable", "ground", "at", "at_global", "node", "nearest", "rectangle",
     "gmsh", "trapezoid", "ramp", "constant", "table", "ellipse", "super_ellipse", "circle",
     "bspline",
 ]
@@ -64,6 +64,13 @@ def _vec2(value, what):
             or len(value) != 2):
         raise TypeError(f"{what}: expected a pair (x, y), got {value!r}")
     return [_number(value[0], what + "[0]"), _number(value[1], what + "[1]")]
+
+
+def _vec3(value, what):
+    if (isinstance(value, (str, bytes, collections.abc.Mapping)) or not hasattr(value, "__len__")
+            or len(value) != 3):
+        raise TypeError(f"{what}: expected a triple (x, y, z), got {value!r}")
+    return [_number(value[i], f"{what}[{i}]") for i in range(3)]
 
 
 def _name(value, what):
@@ -249,6 +256,10 @@ class ModelBuilder:
         self._variables = {}
 
     # ------------------------------------------------------------ bookkeeping
+    @staticmethod
+    def _kinds():
+        return _KINDS
+
     def _add(self, section, entry, call, body=False):
         name = entry["name"]
         if name in self._names:
@@ -338,7 +349,7 @@ class ModelBuilder:
         docs/case-format.md)."""
         call = f"measure({name!r})"
         e = {"name": _name(name, "measure: name"), "type": _name(type, call + ": type")}
-        kind = _KINDS.get(("measures", type))
+        kind = self._kinds().get(("measures", type))
         if kind is not None:  # an unknown type: the loader names the types at build()
             known = [k["name"] for k in kind["keys"]]
             for k in keys:
@@ -549,6 +560,8 @@ def _convert(key, value, what):
         return _name(value, what)
     if t == "[x, y]":
         return _vec2(value, what)
+    if t == "[x, y, z]":
+        return _vec3(value, what)
     if t == "point":
         return _point(value, what)
     if t == 'point or "ground"':
@@ -645,6 +658,87 @@ for (_section, _type), _kind in _KINDS.items():
         setattr(ModelBuilder, _type, _kind_method(_kind))
     elif _section == "features":
         globals()[_type] = _feature_function(_kind)
+
+
+# ---------------------------------------------------------------- spatial cases
+_SPATIAL_KINDS = {(k["section"], k["type"]): k for k in _lsmbs.spatial_model_kinds()}
+
+
+class SpatialModelBuilder(ModelBuilder):
+    """Builds a spatial case ("dimension": 3; docs/case-format.md, "Spatial cases"): rigid bodies
+    in space, joints between two bodies (or a body and "ground") given by their point and axes
+    at t = 0, forces and measures of the spatial kinds. Simulation, responses, design variables
+    bound to model parameters, optimization and conditions are the planar builder's.
+
+        m = lsmbs.SpatialModelBuilder("top", gravity=(0, 0, -9.81))
+        m.rigid_body("disc", position=(0, 0, 0.1), mass=1, inertia=(0.004, 0.004, 0.006),
+                     angular_velocity=(0, 0, 40))
+        m.spherical("tip", "ground", "disc", at=(0, 0, 0))
+    """
+
+    def __init__(self, name, gravity=(0.0, 0.0, 0.0), description=None, base_dir=None):
+        super().__init__(name, (0.0, 0.0), description, base_dir)
+        self._doc["dimension"] = 3
+        self._doc["gravity"] = _vec3(gravity, "gravity")
+
+    @staticmethod
+    def _kinds():
+        return _SPATIAL_KINDS
+
+    def rigid_body(self, name, *, position=(0.0, 0.0, 0.0), orientation=None, mass=0.0,
+                   inertia=(0.0, 0.0, 0.0), velocity=None, angular_velocity=None):
+        """A spatial rigid body: its centre of mass at t = 0, its principal axes (orientation: a
+        3 × 3 rotation matrix whose columns are the axes, or {'axis': (x, y, z), 'angle': rad}),
+        mass and principal moments (I1, I2, I3); velocity of the centre of mass and angular
+        velocity (ground components) at t = 0 are kept when given. Parameters '<name>.mass',
+        '<name>.I1', '.I2', '.I3'."""
+        call = f"rigid_body({name!r})"
+        e = {"name": _name(name, "rigid_body: name"), "type": "rigid",
+             "position": _vec3(position, call + ": position"),
+             "mass": _number(mass, call + ": mass"),
+             "inertia": _vec3(inertia, call + ": inertia")}
+        if orientation is not None:
+            if isinstance(orientation, collections.abc.Mapping):
+                e["orientation"] = {"axis": _vec3(orientation.get("axis"), call + ": orientation"),
+                                    "angle": _number(orientation.get("angle"),
+                                                     call + ": orientation angle")}
+            else:
+                if hasattr(orientation, "tolist"):
+                    orientation = orientation.tolist()
+                e["orientation"] = [_vec3(r, f"{call}: orientation[{i}]")
+                                    for i, r in enumerate(orientation)]
+        if velocity is not None:
+            e["velocity"] = _vec3(velocity, call + ": velocity")
+        if angular_velocity is not None:
+            e["angular_velocity"] = _vec3(angular_velocity, call + ": angular_velocity")
+        return self._add("bodies", e, call, body=True)
+
+    def flexible_body(self, *args, **kwargs):
+        raise NotImplementedError("flexible bodies of spatial cases come with 3D components "
+                                  "(not available yet)")
+
+    def features(self, *args, **kwargs):
+        raise NotImplementedError("level-set designs of spatial cases come with 3D components "
+                                  "(not available yet)")
+
+
+# the spatial kinds replace the planar ones of the same name on SpatialModelBuilder; planar
+# kinds with no spatial counterpart are not available there
+def _planar_only(type_):
+    def method(self, *args, **kwargs):
+        raise NotImplementedError(f"{type_}: a planar kind; spatial cases have "
+                                  f"{', '.join(sorted(t for s, t in _SPATIAL_KINDS if s != 'measures'))}")
+
+    method.__name__ = method.__qualname__ = type_
+    return method
+
+
+for (_section, _type), _kind in _KINDS.items():
+    if _section in ("joints", "forces") and (_section, _type) not in _SPATIAL_KINDS:
+        setattr(SpatialModelBuilder, _type, _planar_only(_type))
+for (_section, _type), _kind in _SPATIAL_KINDS.items():
+    if _section in ("joints", "forces"):
+        setattr(SpatialModelBuilder, _type, _kind_method(_kind))
 
 
 

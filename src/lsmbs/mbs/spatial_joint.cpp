@@ -44,7 +44,11 @@ SpatialAffine SpatialJointBlock::vector(int side, const Vec3& u) const {
 void SpatialJointBlock::add(SpatialAffine a, SpatialAffine b, double value, bool angular) {
   if (static_cast<int>(eq_.size()) >= kMaxLocalEqs)
     throw std::logic_error("SpatialJointBlock: more than kMaxLocalEqs equations");
-  eq_.push_back({std::move(a), std::move(b), value, angular, nullptr});
+  Equation e{std::move(a), std::move(b), value, angular, nullptr, {}, false};
+  // the Hessian of a·b is constant: computed once here, added with its weight per iteration
+  e.zero_hessian = e.a.A.isZero(0) || e.b.A.isZero(0);
+  if (!e.zero_hessian) e.hessian = e.a.A.transpose() * e.b.A + e.b.A.transpose() * e.a.A;
+  eq_.push_back(std::move(e));
 }
 
 void SpatialJointBlock::drive_last(std::shared_ptr<const TimeLaw> law) {
@@ -77,9 +81,7 @@ void SpatialJointBlock::hessian(double /*t*/, const LocalVec& /*q*/, const Local
   for (size_t i = 0; i < eq_.size(); ++i) {
     const Equation& e = eq_[i];
     const double wi = w[static_cast<Eigen::Index>(i)];
-    if (wi == 0) continue;
-    H.noalias() += wi * e.a.A.transpose() * e.b.A;
-    H.noalias() += wi * e.b.A.transpose() * e.a.A;
+    if (wi != 0 && !e.zero_hessian) H += wi * e.hessian;
   }
 }
 

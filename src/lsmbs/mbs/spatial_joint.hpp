@@ -88,6 +88,8 @@ class SpatialJointBlock : public ConstraintElement {
     double value = 0;
     bool angular = false;
     std::shared_ptr<const TimeLaw> law;  // s(t) = value + law(t) when set
+    LocalMat hessian;                    // A_aᵀA_b + A_bᵀA_a, constant
+    bool zero_hessian = false;           // an equation linear in z (a constant factor)
   };
   int column(int side) const;  // first local column of side 0/1, −1 for ground
   std::array<SpatialBody, 2> body_;
