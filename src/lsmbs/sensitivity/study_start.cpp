@@ -14,6 +14,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/integrators/initial_state.hpp"
+#include "lsmbs/mbs/spatial.hpp"
 #include "lsmbs/sensitivity/study.hpp"
 
 namespace lsmbs {
@@ -223,6 +224,20 @@ void check_initial_placement(const Study& cs, const State& placed) {
     std::snprintf(b, sizeof b, "rotates it by %.4g rad = %.3g° (angle %.6g → %.6g rad)", dth,
                   dth * 180 / std::numbers::pi, placed.q[i + 2], s.q[i + 2]);
     consider(r.name, std::abs(dth), kMove, b);
+  }
+  for (const auto& r : m.spatial_bodies()) {
+    // the centre of mass's move, and the angle of the rotation between the principal frames
+    // (from the frames as placed and as projected, each orthonormal to the projection's tolerance)
+    const SpatialPose a = SpatialPose::read(r.dof0, placed.q), z = SpatialPose::read(r.dof0, s.q);
+    const double d = (z.r - a.r).norm();
+    std::snprintf(b, sizeof b, "moves it by %.4g m (from (%.6g, %.6g, %.6g) to (%.6g, %.6g, %.6g))",
+                  d, a.r.x(), a.r.y(), a.r.z(), z.r.x(), z.r.y(), z.r.z());
+    consider(r.name, d, kMove * L, b);
+    const double angle =
+        std::acos(std::clamp(((a.R.transpose() * z.R).trace() - 1) / 2, -1.0, 1.0));
+    std::snprintf(b, sizeof b, "rotates it by %.4g rad = %.3g°", angle,
+                  angle * 180 / std::numbers::pi);
+    consider(r.name, angle, kMove, b);
   }
   for (const auto& f : m.flexible_bodies())
     for (int n = 0; n < f->mesh.num_nodes(); ++n) {
