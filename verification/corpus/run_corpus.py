@@ -4,7 +4,7 @@
     run_corpus.py --lsmbs BIN --seeds A-B [--jobs 1] [--out DIR] [--resume] [--matrix M] [--no-idas] [--require-idas] [--keep]
     mpirun -np K python3 run_corpus.py --lsmbs BIN --seeds A-B --out DIR [--resume] ...
 
-For each seed, gen_mechanisms.py generates a case; the gradients of every response are computed
+For each seed, gen_mechanisms.py (with ``--spatial``: gen_spatial.py) generates a case; the gradients of every response are computed
 with ``direct-analytic``, ``semi-analytical`` and ``semi-analytical-central`` at their default
 options (``--matrix M`` is passed to them only when given) and compared with
 
@@ -53,6 +53,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import gen_mechanisms  # noqa: E402
+import gen_spatial  # noqa: E402
 
 METHODS = ["direct-analytic", "semi-analytical", "semi-analytical-central"]
 # Pass thresholds on the metric against fd-central. The forward semi-analytical method perturbs
@@ -175,7 +176,8 @@ def run_seed(seed, a):
     os.makedirs(d)
     rec = {"seed": seed}
     try:
-        case = gen_mechanisms.generate(seed, with_new_loads=a.with_new_loads)
+        case = (gen_spatial.generate(seed) if a.spatial
+                else gen_mechanisms.generate(seed, with_new_loads=a.with_new_loads))
     except Exception as e:  # a generator bug: report it as such
         rec.update({"status": "generator_error", "message": "%s: %s" % (type(e).__name__, e)})
         return rec
@@ -533,6 +535,8 @@ def main(argv=None):
     ap.add_argument("--resume", action="store_true",
                     help="keep the seeds already written in OUT/seeds/ and run the others")
     ap.add_argument("--with-new-loads", action="store_true", help="generate torque / rotational spring loads")
+    ap.add_argument("--spatial", action="store_true",
+                    help="spatial mechanisms (gen_spatial.py: chains, slider-cranks, pendulums)")
     ap.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     a = ap.parse_args(argv)
     a.lsmbs = os.path.abspath(a.lsmbs)
