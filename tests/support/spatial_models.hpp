@@ -12,13 +12,18 @@
 namespace lsmbs::checks {
 
 // A spatial rigid body `name` in natural coordinates (mass m, principal moments I, gravity g on
-// its centre of mass) with its six frame constraints; returns its first DOF.
+// its centre of mass) with its six frame constraints, registered with the model (its placement
+// left at the origin: the tests write their states); returns its first DOF.
 inline int add_body(Model& model, const std::string& name, double m, const Vec3& I, const Vec3& g) {
   const int mp = model.add_parameter(name + ".mass", m);
   const std::array<int, 3> ip = {model.add_parameter(name + ".I1", I[0]),
                                  model.add_parameter(name + ".I2", I[1]),
                                  model.add_parameter(name + ".I3", I[2])};
-  const int d0 = model.add_dofs(12, name);
+  SpatialRigidBody b;
+  b.name = name;
+  b.mass_param = mp;
+  b.inertia_params = ip;
+  const int d0 = model.add_spatial_body(b).dof0;
   model.add_force(std::make_unique<SpatialRigidInertia>(d0, mp, ip, g, name));
   model.add_constraint(
       std::make_unique<SpatialFrameConstraint>(d0, SpatialFrameConstraint::Kind::kNormal));

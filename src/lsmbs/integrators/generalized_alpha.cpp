@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "lsmbs/integrators/initial_state.hpp"
+#include "lsmbs/mbs/spatial.hpp"
 
 namespace lsmbs {
 
@@ -285,6 +286,7 @@ class AlphaRun {
   // Step-size control: steps of opt.h on the output grid, each grid interval halved up to
   // max_halvings times.
   double t0_ = 0, h_ = 0, t_grid_next_ = 0;
+  int spinning_body_ = -1;  // the spatial body of the largest ωh so far
   long n_steps_ = 0, grid_ = 0;
   int depth_ = 0;         // halvings active for the current grid interval
   bool on_grid_ = false;  // the accepted step ends on the grid
@@ -674,6 +676,14 @@ bool AlphaRun::factor_for_observers(const AlphaCoefficients& c) {
 // (8)); a step that ends on the output grid is put exactly on it (no round-off drift).
 void AlphaRun::accept(const AlphaCoefficients& c) {
   retried_fresh_ = false;
+  for (size_t b = 0; b < model_.spatial_bodies().size(); ++b) {
+    const int d0 = model_.spatial_bodies()[b].dof0;
+    const double wh = SpatialPose::body_angular_velocity(d0, cur_.q, cur_.v).norm() * h_;
+    if (wh > sum_.max_omega_h) {
+      sum_.max_omega_h = wh, sum_.max_omega_h_t = cur_.t;
+      spinning_body_ = static_cast<int>(b);
+    }
+  }
   a_cur_ += (1 - c.alpha_f) / (1 - c.alpha_m) * cur_.a;
   prev_folded_ = inversion_.folded();
   ++sum_.steps;
@@ -727,6 +737,9 @@ void AlphaRun::next_step() {
 
 // The summary, the last converged state, and the concurrent observers of the last step completed.
 IntegratorSummary AlphaRun::finish() {
+  sum_.rho_inf = opt_.rho_inf;
+  if (spinning_body_ >= 0)
+    sum_.max_omega_h_body = model_.spatial_bodies()[static_cast<size_t>(spinning_body_)].name;
   if (started_) {
     sum_.t_reached = prev_.t;
     if (final_state_) *final_state_ = prev_;
@@ -793,8 +806,23 @@ std::string IntegratorSummary::report() const {
   return message.empty() ? r : r + "\n  " + message;
 }
 
+double IntegratorSummary::omega_h_limit(double rho_inf) {
+  return rho_inf <= 0.6 ? 0.2 : rho_inf <= 0.8 ? 0.1 : rho_inf <= 0.9 ? 0.05 : 0.03;
+}
+
 std::vector<std::string> IntegratorSummary::warnings() const {
   std::vector<std::string> w;
+  if (max_omega_h > omega_h_limit(rho_inf)) {
+    char b[400];
+    std::snprintf(b, sizeof b,
+                  "spatial body '%s' turned at omega h = %.3g (t = %.6g s), beyond %.2g, where "
+                  "generalized-alpha with rho_inf = %.2g is stable for a spinning body in natural "
+                  "coordinates (docs/methods.md, \"Spatial rigid bodies\"): a smaller h or rho_inf "
+                  "keeps it stable; compare with IDAS",
+                  max_omega_h_body.c_str(), max_omega_h, max_omega_h_t, omega_h_limit(rho_inf),
+                  rho_inf);
+    w.emplace_back(b);
+  }
   if (folded_element_steps > 0)
     w.push_back(std::to_string(folded_element_steps) +
                 " steps ended with a folded element (det F <= 0 at a corner, positive at the "

@@ -84,6 +84,15 @@ struct IntegratorSummary {
   /// accepted steps whose state has a folded element (det F ≤ 0 at a corner only), and the first
   long folded_element_steps = 0;
   std::string folded_first;
+  /// Spatial bodies: the largest |ω| h of an accepted step, the body and time, and the ρ∞ of the
+  /// run. Index-3 generalized-α in natural coordinates is stable for a spinning body only up to
+  /// an ωh that shrinks as ρ∞ → 1 (docs/methods.md, "Spatial rigid bodies"); warnings() names a
+  /// run beyond it.
+  double max_omega_h = 0, max_omega_h_t = 0, rho_inf = 0;
+  std::string max_omega_h_body;
+  /// The stability limit of ωh measured for ρ∞ (0.2 up to 0.6, 0.1 up to 0.8, 0.05 up to 0.9,
+  /// 0.03 beyond).
+  static double omega_h_limit(double rho_inf);
   /// Wall-time split [s]: `setup` = symbolic analysis, projection and consistent start; then, over
   /// the steps, residual evaluations, iteration-matrix assembly, numeric factorizations,
   /// back-solves.

@@ -17,6 +17,7 @@
 #include "lsmbs/core/version.hpp"
 #include "lsmbs/fem/element_types.hpp"
 #include "lsmbs/io/case.hpp"
+#include "lsmbs/mbs/spatial.hpp"
 
 namespace lsmbs {
 
@@ -105,6 +106,7 @@ struct VtuArray {
 // first array of each kind is the active one (Vectors when it has 3 components, else Scalars).
 struct VtuPiece {
   std::vector<Vec2> points;
+  std::vector<double> z;                   // per point, when the piece is spatial (empty: z = 0)
   std::vector<int> connectivity, offsets;  // offsets: the end of each cell in connectivity
   std::vector<int> types;                  // VTK cell types: 1 vertex, 3 line, 7 polygon, 9 quad
   std::vector<VtuArray> point_data, cell_data;
@@ -126,7 +128,8 @@ struct VtuPiece {
           "byte_order=\"LittleEndian\">\n<UnstructuredGrid><Piece NumberOfPoints=\""
        << points.size() << "\" NumberOfCells=\"" << types.size() << "\">\n"
        << "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (const auto& x : points) os << x.x() << " " << x.y() << " 0\n";
+    for (size_t i = 0; i < points.size(); ++i)
+      os << points[i].x() << " " << points[i].y() << " " << (z.empty() ? 0.0 : z[i]) << "\n";
     os << "</DataArray></Points>\n<Cells>\n"
        << "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
     for (size_t c = 0; c < offsets.size(); ++c) {  // one cell a line
@@ -291,6 +294,43 @@ void write_rigid_vtu(const std::string& path, const RigidBody& b, const Vec& q) 
   v.write(path);
 }
 
+void write_spatial_vtu(const std::string& path, const SpatialRigidBody& b, const Vec& q) {
+  // the centre of mass, a line to each attachment and the principal axes (lines of a tenth of
+  // the body's reach, at least 1 cm), placed by the natural coordinates at q
+  const SpatialPose P = SpatialPose::read(b.dof0, q);
+  const SpatialPose P0{b.position0, b.orientation0};
+  double reach = 0;
+  for (const auto& d : b.attachments) reach = std::max(reach, d.norm());
+  const double axis = std::max(0.1 * reach, 0.01);
+  std::vector<Vec3> local = {Vec3::Zero()};
+  for (const auto& d : b.attachments) local.push_back(d);
+  for (int k = 0; k < 3; ++k) local.push_back(axis * Vec3::Unit(k));
+  VtuPiece v;
+  VtuArray total{"total_displacement", 3, {}}, elastic{"elastic_displacement", 3, {}};
+  for (const auto& d : local) {
+    const Vec3 x = P.r + P.R * d, x0 = P0.r + P0.R * d;
+    v.points.emplace_back(x.x(), x.y());
+    v.z.push_back(x.z());
+    total.values.insert(total.values.end(), {x.x() - x0.x(), x.y() - x0.y(), x.z() - x0.z()});
+    elastic.values.insert(elastic.values.end(), {0.0, 0.0, 0.0});
+  }
+  VtuArray part{"part", 1, {}};  // 0 the centre of mass, 1 a link to an attachment, 2 an axis
+  v.add_cell({0}, 1);
+  part.values.push_back(0);
+  const int n = static_cast<int>(b.attachments.size());
+  for (int i = 1; i <= n; ++i) {
+    v.add_cell({0, i}, 3);
+    part.values.push_back(1);
+  }
+  for (int k = 0; k < 3; ++k) {
+    v.add_cell({0, n + 1 + k}, 3);
+    part.values.push_back(2);
+  }
+  v.point_data = {elastic, total};
+  v.cell_data = {part};
+  v.write(path);
+}
+
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi) {
   VtuPiece v;
   v.points = mesh.nodes;
@@ -337,6 +377,7 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
     write_vtu(add(b->name), *b, q, params, cells);
   }
   for (const auto& b : m.rigid_bodies()) write_rigid_vtu(add(b.name), b, q);
+  for (const auto& b : m.spatial_bodies()) write_spatial_vtu(add(b.name), b, q);
   f.multiblock = folder + kModelVtk + suffix + ".vtm";
   write_vtm(out_dir + "/" + f.multiblock, blocks);
   return f;
@@ -354,6 +395,7 @@ std::map<std::string, std::string> body_file_stems(const Model& m) {
   };
   for (const auto& b : m.flexible_bodies()) add(b->name);
   for (const auto& b : m.rigid_bodies()) add(b.name);
+  for (const auto& b : m.spatial_bodies()) add(b.name);
   return stems;
 }
 

@@ -49,6 +49,10 @@ std::vector<Vec2> rigid_outline(const RigidBody& body);
 /// polygon), point data total_displacement (from the placement at t = 0) and elastic_displacement
 /// (zero), so that filters over all bodies find the same arrays as on the flexible ones.
 void write_rigid_vtu(const std::string& path, const RigidBody& body, const Vec& q);
+/// A spatial rigid body at positions q: its centre of mass (a vertex), a line to each point where
+/// something attaches, and its principal axes (lines), with the total and (zero) elastic
+/// displacement and the cell field `part` (0 centre, 1 attachment, 2 axis).
+void write_spatial_vtu(const std::string& path, const SpatialRigidBody& body, const Vec& q);
 /// A design on its mesh (body frame, undeformed): the level set φ at the nodes (material where
 /// φ > 0; a contour at 0 is the features' boundary) and μ_e per element.
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi);
@@ -67,8 +71,8 @@ struct ModelVtkFiles {
   std::string multiblock;                                   ///< the .vtm listing them
 };
 /// Every body of the model at positions q, with the parameters (μ_e) of the run:
-/// OUT/<folder><body><suffix>.vtu (flexible bodies first, then rigid ones, each in model order) and
-/// OUT/<folder>model<suffix>.vtm listing them (folder:
+/// OUT/<folder><body><suffix>.vtu (flexible bodies first, then rigid ones, then spatial ones, each
+/// in model order) and OUT/<folder>model<suffix>.vtm listing them (folder:
 /// "" or ending in '/'; it must exist).
 /// `stress`: stress measures whose relaxed element stresses are written as the cell array
 /// "<measure>_relaxed_von_mises" of their body.

@@ -102,6 +102,15 @@ SpatialRigidBody& Model::add_spatial_body(SpatialRigidBody b) {
   return spatial_.back();
 }
 
+void Model::add_spatial_attachment(int dof0, const Vec3& d) {
+  for (auto& b : spatial_)
+    if (b.dof0 == dof0) {
+      for (const auto& a : b.attachments)
+        if ((a - d).norm() <= 1e-12 * (1 + d.norm())) return;
+      b.attachments.push_back(d);
+    }
+}
+
 const SpatialRigidBody* Model::find_spatial(const std::string& name) const {
   for (const auto& b : spatial_)
     if (b.name == name) return &b;

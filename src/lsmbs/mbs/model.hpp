@@ -62,6 +62,9 @@ struct SpatialRigidBody {
   std::array<int, 3> inertia_params = {-1, -1, -1};  ///< principal moments I₁, I₂, I₃
   Vec3 position0 = Vec3::Zero();                     ///< centre of mass at t = 0
   Mat3 orientation0 = Mat3::Identity();              ///< principal axes at t = 0 (columns)
+  /// Principal-frame points where joints, forces and springs attach, in the order they were
+  /// added, without repeats; only pictures read them (io/output.hpp).
+  std::vector<Vec3> attachments;
 };
 
 /// A state at one time: positions, velocities, accelerations q̈ and scaled multipliers λ.
@@ -106,6 +109,9 @@ class Model {
   SpatialRigidBody& add_spatial_body(SpatialRigidBody b);
   const std::vector<SpatialRigidBody>& spatial_bodies() const { return spatial_; }
   const SpatialRigidBody* find_spatial(const std::string& name) const;
+  /// Records that something attaches to the spatial body with first unknown dof0 at the
+  /// principal-frame point d (SpatialRigidBody::attachments).
+  void add_spatial_attachment(int dof0, const Vec3& d);
   const std::vector<std::unique_ptr<FlexibleBody>>& flexible_bodies() const { return flex_; }
   const RigidBody* find_rigid(const std::string& name) const;
   const FlexibleBody* find_flexible(const std::string& name) const;

@@ -164,6 +164,8 @@ void ModelBuilder::spatial_joint(const std::string& name, SpatialJointKind kind,
   const SpatialBody sa{ba ? ba->dof0 : -1}, sb{bb ? bb->dof0 : -1};
   for (auto& c : make_spatial_joint(kind, sa, pose0(ba), sb, pose0(bb), info.frame, info.theta_dof))
     add_constraint(e, std::move(c));
+  for (const SpatialRigidBody* s : {ba, bb})
+    if (s) m_->add_spatial_attachment(s->dof0, s->orientation0.transpose() * (o.at - s->position0));
   if (info.theta_dof >= 0) {  // the joint angle has no mass: its velocity follows the bodies'
     init_v_.conservativeResize(m_->nq());
     init_v_[info.theta_dof] = 0;
@@ -221,6 +223,7 @@ void ModelBuilder::spatial_load(const std::string& name, SpatialLoad::Kind kind,
   const int sp = param(e, "scale", scale);
   m_->add_force(std::make_unique<SpatialLoad>(b->dof0, kind, frame, d, std::move(laws), sp,
                                               e.kind + " '" + name + "'"));
+  if (kind == SpatialLoad::Kind::kForce) m_->add_spatial_attachment(b->dof0, d);
   commit(e, mark);
 }
 
@@ -247,6 +250,8 @@ void ModelBuilder::spatial_spring_damper(const std::string& name, const std::str
   m_->add_force(std::make_unique<SpatialSpringDamper>(
       SpatialBody{ba ? ba->dof0 : -1}, local(ba, a_at), SpatialBody{bb ? bb->dof0 : -1},
       local(bb, b_at), kp, cp, lp, "spring '" + name + "'"));
+  if (ba) m_->add_spatial_attachment(ba->dof0, local(ba, a_at));
+  if (bb) m_->add_spatial_attachment(bb->dof0, local(bb, b_at));
   commit(e, mark);
 }
 
