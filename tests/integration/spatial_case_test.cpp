@@ -115,7 +115,30 @@ TEST(SpatialCase, BadSpatialInputNamesTheJsonPath) {
   EXPECT_NE(load_error(bad).find("/dimension"), std::string::npos) << load_error(bad);
   bad = j;
   bad["bodies"][0]["type"] = "flexible";
-  EXPECT_NE(load_error(bad).find("/bodies/0/type"), std::string::npos) << load_error(bad);
+  EXPECT_NE(load_error(bad).find("/bodies/0/type: flexible bodies are not available in spatial"),
+            std::string::npos)
+      << load_error(bad);
+  bad = j;  // a matrix rounded to 3 digits: the size of the error and the way out are named
+  for (auto& row : bad["bodies"][1]["orientation"])
+    for (auto& x : row) x = std::round(x.get<double>() * 1000) / 1000;
+  EXPECT_NE(load_error(bad).find("{\"axis\": [x, y, z], \"angle\": rad}"), std::string::npos)
+      << load_error(bad);
+  bad =
+      j;  // a second bearing on the crank's axis: redundant rows named once each, no planar advice
+  bad["joints"].push_back({{"name", "bearing2"},
+                           {"type", "revolute"},
+                           {"a", "ground"},
+                           {"b", "crank"},
+                           {"at", {0, 0, 0}},
+                           {"axis", {1, 0, 0}}});
+  const std::string redundant = load_error(bad);
+  EXPECT_NE(redundant.find("redundant or conflicting"), std::string::npos) << redundant;
+  EXPECT_EQ(redundant.find("lock_rotation"), std::string::npos) << redundant;
+  for (size_t a = redundant.find("constraint '"); a != std::string::npos;
+       a = redundant.find("constraint '", a + 1)) {
+    const std::string entry = redundant.substr(a, redundant.find(')', a) - a);
+    EXPECT_EQ(redundant.find(entry, a + 1), std::string::npos) << "named twice: " << entry;
+  }
   bad = j;
   bad["gravity"] = {0, -9.81};
   EXPECT_NE(load_error(bad).find("/gravity"), std::string::npos) << load_error(bad);

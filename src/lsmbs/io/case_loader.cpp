@@ -790,6 +790,10 @@ Case load_single(const nlohmann::json& j, const std::string& file_label,
     L.entry(b, name, true);
     if (L.spatial) {
       // flexible components of spatial mechanisms are solids: not yet
+      if (b.has("type") && b.raw()["type"] == "flexible")
+        b.fail("type",
+               "flexible bodies are not available in spatial cases yet (they come with 3D "
+               "components); spatial cases have \"rigid\" bodies");
       b.one_of("type", {"rigid"});
       L.spatial_body(b, name);
       continue;

@@ -202,9 +202,12 @@ std::string Model::describe_unknown(int i) const {
   }
   const int row = i - nq_;
   for (size_t c = 0; c < cons_.size(); ++c)
-    if (row >= eq_offset_[c] && row < eq_offset_[c] + cons_[c]->size())
-      return "constraint '" + cons_[c]->name() + "' (equation " +
-             std::to_string(row - eq_offset_[c]) + ")";
+    if (row >= eq_offset_[c] && row < eq_offset_[c] + cons_[c]->size()) {
+      // numbered within the joint: its blocks (consecutive elements of one name) count together
+      int first = eq_offset_[c];
+      for (size_t k = c; k-- > 0 && cons_[k]->name() == cons_[c]->name();) first = eq_offset_[k];
+      return "constraint '" + cons_[c]->name() + "' (equation " + std::to_string(row - first) + ")";
+    }
   return "constraint row " + std::to_string(row);
 }
 

@@ -1,6 +1,7 @@
 // The spatial part of ModelBuilder (model_builder.hpp): bodies in natural coordinates, joints,
 // drivers, loads and spring–dampers of mbs/spatial*.hpp, named like the planar ones.
 #include <cmath>
+#include <cstdio>
 
 #include "lsmbs/mbs/model_builder.hpp"
 
@@ -45,10 +46,19 @@ std::string SpatialBodyOptions::validate() const {
       return "inertia: I" + std::to_string(k + 1) +
              " exceeds the sum of the other two principal moments (no rigid body has them)";
   if (!finite(position)) return "position: expected three finite numbers";
-  if (!orientation.allFinite() ||
-      (orientation.transpose() * orientation - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-9 ||
-      orientation.determinant() < 0)
-    return "orientation: expected a rotation (orthonormal columns, determinant +1, to 1e-9)";
+  if (!orientation.allFinite()) return "orientation: expected finite numbers";
+  const double off =
+      (orientation.transpose() * orientation - Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (off > 1e-9 || orientation.determinant() < 0) {
+    char b[240];
+    std::snprintf(
+        b, sizeof b,
+        "orientation: expected a rotation (orthonormal columns, determinant +1, to 1e-9); "
+        "|RᵀR − I| = %.2g, det R = %.6g (give {\"axis\": [x, y, z], \"angle\": rad}, or "
+        "the matrix to full precision)",
+        off, orientation.determinant());
+    return b;
+  }
   if (velocity && !finite(*velocity)) return "velocity: expected three finite numbers";
   if (angular_velocity && !finite(*angular_velocity))
     return "angular_velocity: expected three finite numbers";

@@ -44,8 +44,13 @@ void check_constraint_rank(const Study& cs) {
           " constraint equations are redundant or conflicting at t = 0 (the rows of the constraint "
           "Jacobian are dependent): " +
           dependent +
-          " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) locked "
-          "twice");
+          (m.spatial_bodies().empty()
+               ? " — remove the duplicated joint, or unlock a rotation (\"lock_rotation\": false) "
+                 "locked twice"
+               : " — remove the duplicated joint, or replace a joint whose equations others "
+                 "already "
+                 "impose by one that leaves that freedom (a spherical for a universal, a "
+                 "cylindrical for a revolute; docs/case-format.md, \"Spatial cases\")"));
 }
 
 // Values beyond double precision, seen before any run: every force element's residual and
