@@ -537,17 +537,27 @@ const std::vector<ModelKind>& model_kinds() {
   return kinds;
 }
 
-const ModelKind* find_kind(const std::string& section, const std::string& type) {
-  for (const auto& k : model_kinds())
+const ModelKind* find_kind_in(const std::vector<ModelKind>& kinds, const std::string& section,
+                              const std::string& type) {
+  for (const auto& k : kinds)
     if (k.section == section && k.type == type) return &k;
   return nullptr;
 }
 
-std::vector<std::string> kind_types(const std::string& section) {
+std::vector<std::string> kind_types_in(const std::vector<ModelKind>& kinds,
+                                       const std::string& section) {
   std::vector<std::string> v;
-  for (const auto& k : model_kinds())
+  for (const auto& k : kinds)
     if (k.section == section) v.push_back(k.type);
   return v;
+}
+
+const ModelKind* find_kind(const std::string& section, const std::string& type) {
+  return find_kind_in(model_kinds(), section, type);
+}
+
+std::vector<std::string> kind_types(const std::string& section) {
+  return kind_types_in(model_kinds(), section);
 }
 
 }  // namespace lsmbs

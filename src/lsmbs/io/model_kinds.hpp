@@ -96,6 +96,11 @@ const std::vector<ModelKind>& model_kinds();
 const ModelKind* find_kind(const std::string& section, const std::string& type);
 /// The types of a section, in the table's order.
 std::vector<std::string> kind_types(const std::string& section);
+/// The same lookups in a given table (the planar one or the spatial one).
+const ModelKind* find_kind_in(const std::vector<ModelKind>& kinds, const std::string& section,
+                              const std::string& type);
+std::vector<std::string> kind_types_in(const std::vector<ModelKind>& kinds,
+                                       const std::string& section);
 
 /// The kinds of spatial cases ("dimension": 3; io/spatial_kinds.cpp): joints, drivers, forces and
 /// measures of spatial rigid bodies, named like their planar counterparts where they have one.

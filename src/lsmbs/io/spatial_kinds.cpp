@@ -312,16 +312,11 @@ const std::vector<ModelKind>& spatial_model_kinds() {
 }
 
 const ModelKind* find_spatial_kind(const std::string& section, const std::string& type) {
-  for (const auto& k : spatial_model_kinds())
-    if (k.section == section && k.type == type) return &k;
-  return nullptr;
+  return find_kind_in(spatial_model_kinds(), section, type);
 }
 
 std::vector<std::string> spatial_kind_types(const std::string& section) {
-  std::vector<std::string> v;
-  for (const auto& k : spatial_model_kinds())
-    if (k.section == section) v.push_back(k.type);
-  return v;
+  return kind_types_in(spatial_model_kinds(), section);
 }
 
 }  // namespace lsmbs
