@@ -146,3 +146,40 @@ TEST(SpatialCase, BadSpatialInputNamesTheJsonPath) {
   bad["output"]["measures"][0]["at"] = {0, 1};
   EXPECT_NE(load_error(bad).find("/output/measures/0/at"), std::string::npos) << load_error(bad);
 }
+
+// A body with mass but no principal moments, held at its centre of mass by a spherical joint:
+// nothing determines its rotation. The run stops before the first step and says why, with the
+// moments, instead of "has no mass" for one of its axis coordinates.
+TEST(SpatialCase, ABodyWithoutMomentsOnABallJointIsNamedWithItsMoments) {
+  const json j = R"({
+    "name": "point_mass_ball", "dimension": 3, "gravity": [0, 0, -9.81],
+    "bodies": [{"name": "ball", "type": "rigid", "mass": 1, "inertia": [0, 0, 0],
+                "position": [0, 0, 0]}],
+    "joints": [{"name": "socket", "type": "spherical", "a": "ground", "b": "ball", "at": [0, 0, 0]}],
+    "simulation": {"t_end": 0.01, "h": 0.001},
+    "output": {"measures": [{"name": "e", "type": "kinetic_energy"}]}
+  })"_json;
+  std::string message = "no error";
+  try {
+    const SimulationResult r = run_simulation(load_case_json(j, "ball.json", "."));
+    message = r.integrator.ok ? "ran" : r.integrator.message;
+  } catch (const std::exception& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("spatial body 'ball' (e"), std::string::npos) << message;
+  EXPECT_NE(message.find("has no rotational inertia about an axis that its joints leave free "
+                         "(principal moments I1, I2, I3 = 0, 0, 0 kg m²)"),
+            std::string::npos)
+      << message;
+}
+
+// The misspelt optional-looking key of a joint is named with the required key it replaces.
+TEST(SpatialCase, AMisspeltAxisIsNamed) {
+  json j = json::parse(std::ifstream(kCase));
+  j["joints"][0]["axes"] = j["joints"][0]["axis"];
+  j["joints"][0].erase("axis");
+  EXPECT_NE(load_error(j).find("/joints/0: missing required key 'axis' (the entry has 'axes': a "
+                               "misspelling of it?)"),
+            std::string::npos)
+      << load_error(j);
+}

@@ -215,7 +215,7 @@ Status consistent_accelerations(const Model& model, const ModelParams& p, double
   if (auto st = lu.factor(vals); !st.ok())
     return Status::Fail(st.code, "consistent initial accelerations: " + st.message + " — " +
                                      model.describe_unknown(lu.singular_column()) +
-                                     " has no mass and is not fixed by a constraint");
+                                     model.why_no_pivot(lu.singular_column(), p));
   Vec rhs(model.n());
   rhs.head(nq) = -R.head(nq);
   rhs.tail(nc) = -k * gamma;

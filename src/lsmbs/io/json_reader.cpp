@@ -1,7 +1,9 @@
 #include "lsmbs/io/json_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 namespace lsmbs {
 namespace {
@@ -14,13 +16,38 @@ std::string shown(const nlohmann::json& v) {
 std::string described(const nlohmann::json& v) {
   return v.is_null() ? type_name(v) : type_name(v) + " " + shown(v);
 }
+
+// Levenshtein distance, for "did you mean"
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
 }  // namespace
+
+// " (the entry has 'axes': a misspelling?)" when a key of the object is within two edits of the
+// missing one and is not a key the reader has used.
+std::string JsonReader::misspelt(const std::string& key) const {
+  for (auto it = j_->begin(); it != j_->end(); ++it)
+    if (!used_->count(it.key()) && edit_distance(it.key(), key) <= std::min<size_t>(2, key.size() / 3))
+      return " (the entry has '" + it.key() + "': a misspelling of it?)";
+  return "";
+}
 
 bool JsonReader::has(const std::string& key) const { return j_->is_object() && j_->contains(key); }
 
 const nlohmann::json& JsonReader::get(const std::string& key) const {
   if (!j_->is_object()) fail("expected an object, got " + type_name(*j_));
-  if (!j_->contains(key)) fail("missing required key '" + key + "'");
+  if (!j_->contains(key)) fail("missing required key '" + key + "'" + misspelt(key));
   used_->insert(key);
   return (*j_)[key];
 }

@@ -70,6 +70,7 @@ class JsonReader {
   void finish() const;
 
  private:
+  std::string misspelt(const std::string& key) const;
   const nlohmann::json& get(const std::string& key) const;
   double checked_number(const nlohmann::json& v, const std::string& key) const;
   const nlohmann::json* j_;

@@ -30,6 +30,12 @@ SpatialJointOptions joint_options(const JsonReader& r, SpatialJointKind kind) {
   return o;
 }
 
+// A driver's law less its value at assembly (the joint coordinates are zero there).
+std::shared_ptr<const TimeLaw> shifted(std::shared_ptr<const TimeLaw> law, double offset) {
+  if (offset == 0 || !law) return law;
+  return std::make_shared<ShiftedLaw>(std::move(law), -offset);
+}
+
 ModelKind joint(const char* type, SpatialJointKind kind, const char* doc) {
   std::vector<KindKey> keys = {req("a", K::kName, "the first body, or \"ground\""),
                                req("b", K::kName, "the second body, or \"ground\""),
@@ -64,22 +70,28 @@ std::vector<ModelKind> joints() {
       joint("prismatic", J::kPrismatic, "b slides along the axis without turning (5 equations)"),
       joint("planar", J::kPlanar, "b moves in the plane of the normal through the point (3)"),
       joint("weld", J::kWeld, "b is fixed to a (6 equations)"),
+      joint("inline", J::kInline,
+            "x_b stays on the line through x_a along the axis, turning freely (2 equations; "
+            "closes a loop of a planar mechanism without redundant equations)"),
       {"joints",
        "rotation_driver",
-       "θ − s(t) = 0 on the angle of a revolute or cylindrical joint (0 at t = 0)",
-       {req("joint", K::kName, "the joint"), req("law", K::kLaw, "s(t) [rad]")},
+       "θ − s(t) + offset = 0 on the angle of a revolute or cylindrical joint (θ = 0 at t = 0)",
+       {req("joint", K::kName, "the joint"), req("law", K::kLaw, "s(t) [rad]"),
+        opt("offset", K::kNumber, "s(t) where θ = 0, at assembly (default 0)")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const std::string j = r.string("joint");
-         auto l = k.law(r.child("law"));
+         auto l = shifted(k.law(r.child("law")), r.number("offset", 0.0));
          k.at_entry(r, [&] { k.builder().joint_rotation_driver(name, j, l); });
        }},
       {"joints",
        "translation_driver",
-       "a₃·(x_b − x_a) − s(t) = 0 along a prismatic or cylindrical joint's axis (0 at t = 0)",
-       {req("joint", K::kName, "the joint"), req("law", K::kLaw, "s(t) [m]")},
+       "a₃·(x_b − x_a) − s(t) + offset = 0 along a prismatic or cylindrical joint's axis (0 at t = "
+       "0)",
+       {req("joint", K::kName, "the joint"), req("law", K::kLaw, "s(t) [m]"),
+        opt("offset", K::kNumber, "s(t) where the translation is 0 (default 0)")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const std::string j = r.string("joint");
-         auto l = k.law(r.child("law"));
+         auto l = shifted(k.law(r.child("law")), r.number("offset", 0.0));
          k.at_entry(r, [&] { k.builder().joint_translation_driver(name, j, l); });
        }},
   };
@@ -288,6 +300,14 @@ std::vector<ModelKind> measures() {
          const std::string j = r.string("joint");
          k.at_key(r, "joint", [&] { return k.builder().joint_equations(j); });
          k.add_constraint_force(name, j);
+       }},
+      {"measures",
+       "combination",
+       "c0 + Σ w_i · (a column of an earlier measure)",
+       {req("terms", K::kJson, "[{\"measure\": column, \"weight\": w}, …]"),
+        opt("constant", K::kNumber, "c0 (default 0)")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         k.add_measure(k.combination(r, name));
        }},
       {"measures",
        "kinetic_energy",

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <stdexcept>
 
 #include "lsmbs/core/error.hpp"
@@ -174,6 +175,23 @@ void Model::finalize() {
     length_scale_ = d > 0 && std::isfinite(d) ? d : 1.0;
   }
   finalized_ = true;
+}
+
+std::string Model::why_no_pivot(int i, const ModelParams& p) const {
+  for (const auto& b : spatial_)
+    if (i >= b.dof0 + 3 && i < b.dof0 + 12) {
+      const auto moment = [&](int k) {
+        const int ip = b.inertia_params[static_cast<size_t>(k)];
+        return ip >= 0 ? p.scalars[static_cast<size_t>(ip)] : 0.0;
+      };
+      std::ostringstream o;
+      o << " has no rotational inertia about an axis that its joints leave free (principal "
+           "moments I1, I2, I3 = "
+        << moment(0) << ", " << moment(1) << ", " << moment(2)
+        << " kg m²): give the body its moments, or a joint that fixes that rotation";
+      return o.str();
+    }
+  return " has no mass and is not fixed by a constraint";
 }
 
 std::string Model::describe_unknown(int i) const {

@@ -124,6 +124,9 @@ class Model {
   Vec initial_positions() const { return q_init_; }
   /// Human-readable owner of a DOF or of a constraint row (for failure messages).
   std::string describe_unknown(int i) const;
+  /// Why unknown i has a zero pivot in the leading matrix [M Φ_qᵀ; Φ_q 0]: "has no mass and is
+  /// not fixed by a constraint", or for a spatial body's axis, its principal moments.
+  std::string why_no_pivot(int i, const ModelParams& p) const;
   /// Length scale of the model (largest body size / joint distance), for tolerances.
   double length_scale() const { return length_scale_; }
 

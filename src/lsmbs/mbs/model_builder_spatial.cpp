@@ -27,6 +27,8 @@ const char* joint_kind_name(SpatialJointKind k) {
       return "planar";
     case SpatialJointKind::kWeld:
       return "weld";
+    case SpatialJointKind::kInline:
+      return "inline";
   }
   return "joint";
 }

@@ -239,7 +239,7 @@ std::vector<std::unique_ptr<ConstraintElement>> make_spatial_joint(
     j.add(j.vector(0, ax(fa, 1)), j.vector(1, ax(fb, 2)), 0, true);
     if (kind == K::kPlanar) j.add(j.vector(0, ax(fa, 2)), gap(j), 0, false);
   }
-  if (kind == K::kCylindrical || kind == K::kPrismatic) {
+  if (kind == K::kCylindrical || kind == K::kPrismatic || kind == K::kInline) {
     // x_B on the line through x_A along a3
     SpatialJointBlock& j = *block();
     j.add(j.vector(0, ax(fa, 0)), gap(j), 0, false);

@@ -18,6 +18,7 @@
 //   prismatic    cylindrical, a1·b2 = 0 (no rotation about a3)     (4 + 1)
 //   planar       a1·b3 = a2·b3 = 0, a3·(x_B − x_A) = 0 (normal a3) (3)
 //   weld         spherical, a1·b2 = a2·b3 = a3·b1 = 0              (3 + 3)
+//   inline       a1·(x_B − x_A) = a2·(x_B − x_A) = 0 (x_B on the line along a3)   (2)
 //
 // Each joint is one or two SpatialJointBlock constraints (a block holds at most kMaxLocalEqs
 // equations). The rotation about a revolute or cylindrical axis is a joint coordinate θ (an
@@ -139,7 +140,8 @@ enum class SpatialJointKind {
   kCylindrical,
   kPrismatic,
   kPlanar,
-  kWeld
+  kWeld,
+  kInline
 };
 
 /// The constraint blocks of a joint of the given kind between bodies A and B, placed at assembly

@@ -76,6 +76,26 @@ class TabulatedLaw : public TimeLaw {
   Table1D table_;
 };
 
+/// Another law shifted by a constant, s(t) = law(t) + shift, with its phases and kinks: a
+/// planar law of absolute angles driving a spatial joint's angle, which is zero at assembly.
+class ShiftedLaw : public TimeLaw {
+ public:
+  ShiftedLaw(std::shared_ptr<const TimeLaw> law, double shift)
+      : law_(std::move(law)), shift_(shift) {}
+  void eval(double t, double& s, double& sd, double& sdd) const override {
+    law_->eval(t, s, sd, sdd);
+    s += shift_;
+  }
+  std::vector<Phase> phases() const override { return law_->phases(); }
+  void kinks(double t0, double t1, std::vector<double>& out) const override {
+    law_->kinks(t0, t1, out);
+  }
+
+ private:
+  std::shared_ptr<const TimeLaw> law_;
+  double shift_;
+};
+
 class ConstantLaw : public TimeLaw {
  public:
   explicit ConstantLaw(double s0) : s0_(s0) {}

@@ -800,3 +800,21 @@ TEST(LoaderErrors, BSplineFeaturesNameTheBadControlPoint) {
   const Case cs2 = test::make_case(ls);
   EXPECT_NO_THROW(DesignProblem(conditions_of(cs2), parse_optimization(cs2)));
 }
+
+// A misspelt required key is named with the key it replaces: the entry is read in the order of
+// its required keys, so the misspelling itself would only be reported after them.
+TEST(LoaderErrors, AMissingKeyNamesItsMisspelling) {
+  json j = base();
+  j["forces"][0].erase("stiffness");
+  j["forces"][0]["stifness"] = 100;
+  expect_error(j, "/forces/0", "missing required key 'stiffness' (the entry has 'stifness'");
+  json r = base();
+  r["simulation"].erase("h");
+  r["simulation"]["hh"] = 0.01;  // one letter is too short to guess from
+  try {
+    test::make_case(r);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find("misspelling"), std::string::npos) << e.what();
+  }
+}

@@ -51,7 +51,7 @@ LocalVec gather(const ConstraintElement& c, const Vec& x) {
 
 const std::vector<K>& all_kinds() {
   static const std::vector<K> k = {K::kSpherical, K::kUniversal, K::kRevolute, K::kCylindrical,
-                                   K::kPrismatic, K::kPlanar,    K::kWeld};
+                                   K::kPrismatic, K::kPlanar,    K::kWeld,     K::kInline};
   return k;
 }
 
@@ -74,6 +74,8 @@ std::vector<std::pair<Vec3, Vec3>> allowed_twists(K kind, const Mat3& x) {
       return {{x.col(2), z}, {z, x.col(0)}, {z, x.col(1)}};
     case K::kWeld:
       return {};
+    case K::kInline:
+      return {{x.col(0), z}, {x.col(1), z}, {x.col(2), z}, {z, x.col(2)}};
   }
   return {};
 }
