@@ -38,7 +38,8 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 // missing one and is not a key the reader has used.
 std::string JsonReader::misspelt(const std::string& key) const {
   for (auto it = j_->begin(); it != j_->end(); ++it)
-    if (!used_->count(it.key()) && edit_distance(it.key(), key) <= std::min<size_t>(2, key.size() / 3))
+    if (!used_->count(it.key()) &&
+        edit_distance(it.key(), key) <= std::min<size_t>(2, key.size() / 3))
       return " (the entry has '" + it.key() + "': a misspelling of it?)";
   return "";
 }
