@@ -28,23 +28,35 @@ def main():
     spec.loader.exec_module(planar)
     src, dst = pathlib.Path(a.case), pathlib.Path(a.output)
     try:
-        doc = json.loads(src.read_text())
-    except (OSError, json.JSONDecodeError) as e:
+        doc = json.loads(src.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         print(f"error: {src}: {e}", file=sys.stderr)
         return 2
-    try:
-        out, notes = planar.to_spatial(doc, source=src.name)
-    except (ValueError, KeyError, TypeError) as e:
-        print(f"error: {src}: {e}", file=sys.stderr)
+    if dst.is_dir():
+        print(f"error: -o {dst}: a folder; expected a file name", file=sys.stderr)
+        return 2
+    if not dst.parent.is_dir():
+        print(f"error: -o {dst}: the folder {dst.parent} does not exist", file=sys.stderr)
         return 2
     if dst.exists() and not a.overwrite:
         print(f"error: {dst} exists (give --overwrite to replace it)", file=sys.stderr)
         return 2
+    try:
+        out, notes = planar.to_spatial(doc, source=src.name, src_dir=str(src.parent.resolve()),
+                                       out_dir=str(dst.parent.resolve()))
+    except (ValueError, KeyError, TypeError, AttributeError, IndexError) as e:
+        print(f"error: {src}: {e}", file=sys.stderr)
+        return 2
     for n in notes:
         print(f"note: {n}", file=sys.stderr)
     tmp = dst.with_name(dst.name + ".tmp")
-    tmp.write_text(json.dumps(out, indent=1) + "\n")
-    tmp.replace(dst)
+    try:
+        tmp.write_text(json.dumps(out, indent=1) + "\n")
+        tmp.replace(dst)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        print(f"error: -o {dst}: {e}", file=sys.stderr)
+        return 2
     print(f"wrote {dst}")
     return 0
 

@@ -97,3 +97,116 @@ def test_a_loop_is_closed_by_an_inline_joint_and_angles_are_sums_of_joint_angles
     assert th3["type"] == "combination" and th3["constant"] == doc["bodies"][2]["angle"]
     assert notes == ["left out measure 'spring_length' (distance): no spatial counterpart here, "
                      "and no response uses it"]
+
+
+def pendulum(**body):
+    """A pendulum pinned at the origin, its reference point at (1, 0)."""
+    b = {"name": "bob", "type": "rigid", "position": [1, 0], "mass": 1, "inertia": 0.1}
+    b.update(body)
+    return {"name": "pend", "gravity": [0, -9.81], "bodies": [b],
+            "joints": [{"name": "pin", "type": "revolute", "a": {"body": "bob", "at": [-1, 0]}}],
+            "simulation": {"t_end": 0.5, "h": 0.005},
+            "output": {"measures": [{"name": "bob", "type": "position", "point": {"body": "bob"}},
+                                    {"name": "pin_force", "type": "constraint_force",
+                                     "joint": "pin"}],
+                       "responses": [{"name": "y_end", "measure": "bob.y", "aggregate": "final"}]}}
+
+
+def four_bar(closing_last):
+    """A driven four-bar whose joint listed last closes the loop: O2, B, O4, A (A between the
+    coupler and the crank, two moving bodies) or O2, A, B, O4 (O4 to the ground)."""
+    bodies = [{"name": "crank", "type": "rigid", "position": [0, 0], "mass": 1, "inertia": 0.01},
+              {"name": "coupler", "type": "rigid", "position": [0.1, 0], "mass": 1,
+               "inertia": 0.02},
+              {"name": "rocker", "type": "rigid", "position": [0.3, 0], "mass": 1,
+               "inertia": 0.01}]
+    j = {"O2": {"name": "O2", "type": "revolute", "a": {"body": "crank"}},
+         "A": {"name": "A", "type": "revolute", "a": {"body": "crank", "at": [0.1, 0]},
+               "b": {"body": "coupler"}},
+         "B": {"name": "B", "type": "revolute", "a": {"body": "coupler", "at": [0.3, 0.2]},
+               "b": {"body": "rocker", "at": [0.1, 0.2]}},
+         "O4": {"name": "O4", "type": "revolute", "a": {"body": "rocker"}}}
+    order = ["O2", "B", "O4", "A"] if closing_last == "A" else ["O2", "A", "B", "O4"]
+    return {"name": "fb", "bodies": bodies, "joints": [j[k] for k in order] + [
+        {"name": "motor", "type": "rotation_driver", "body": "crank",
+         "law": {"type": "ramp", "from": 0, "speed": 30, "ramp_time": 0.1}}],
+        "simulation": {"t_end": 0.2, "h": 0.004, "tol_r": 1e-12},
+        "output": {"measures": [{"name": "f", "type": "constraint_force",
+                                 "joint": closing_last}],
+                   "responses": [{"name": "f0", "measure": "f.0", "aggregate": "final"}]}}
+
+
+@pytest.mark.parametrize("doc, message", [
+    (pendulum(velocity=[0, 1], com=[-0.5, 0]),
+     r"/bodies/0/velocity: the spatial velocity is the centre of mass's, which needs the angular "
+     r"velocity too"),
+    (dict(pendulum(), joints=[{"name": "pin", "type": "revolute",
+                               "a": {"body": "bob", "at": [-1, 0]}, "b": {"ground": [0, 0.05]}}]),
+     r"/joints/0: not assembled at t = 0: a at \[0.0, 0.0\] and b at \[0.0, 0.05\] are 0.05 m "
+     r"apart"),
+    (pendulum(mas=1), r"/bodies/0/mas: unknown key"),
+    (dict(pendulum(), output={"measures": [{"name": "f", "type": "constraint_force",
+                                            "joint": "pin"}],
+                              "responses": [{"name": "r", "measure": "f.2",
+                                             "aggregate": "final"}]}),
+     r"/output/responses/0/measure: 'f.2' has no spatial equation"),
+    (four_bar("A"), r"/output/responses/0/measure: 'f.0' has no spatial equation of the same sign "
+                    r"and frame"),
+    (dict(pendulum(), conditions=[{"name": "c", "set": {"/bodies/bob/inertia": 0.2}}]),
+     r"/conditions/0/set//bodies/bob/inertia: not carried over"),
+    (dict(pendulum(), joints=[{"name": "rail", "type": "prismatic", "a": {"body": "bob"},
+                               "direction": [0, 0]}]),
+     r"/joints/0/direction: expected a non-zero direction"),
+])
+def test_what_the_converter_cannot_write_the_same_is_refused_by_its_path(doc, message):
+    with pytest.raises(ValueError, match=message):
+        to_spatial(doc)
+
+
+def test_an_inline_joint_to_the_ground_keeps_its_forces_and_they_converge(tmp_path):
+    # the loop closed by O4 (to the ground): the inline joint's frame is the ground's
+    doc = four_bar("O4")
+    doc3, _ = to_spatial(doc)
+    assert [j["type"] for j in doc3["joints"][:4]] == ["revolute", "revolute", "revolute", "inline"]
+    d = []
+    for h in (0.001, 0.0005):
+        f = []
+        for tag, dd in (("2d", doc), ("3d", doc3)):
+            dd = dict(dd, simulation={"t_end": 0.2, "h": h, "tol_r": 1e-12})
+            p = tmp_path / f"{tag}.json"
+            p.write_text(json.dumps(dd))
+            f.append(lsmbs.simulate(lsmbs.load_case(str(p))).responses["f0"])
+        d.append(abs(f[1] - f[0]))
+        print(f"four-bar O4 force x at h = {h}: 2D {f[0]:.6g}, 3D {f[1]:.6g}")
+    assert 1.7 < math.log2(d[0] / d[1]) < 2.3, d
+
+
+def test_conditions_are_carried_by_name_and_table_files_follow_the_case(tmp_path):
+    doc = pendulum()
+    doc["joints"].append({"name": "tq", "type": "rotation_driver", "body": "bob",
+                          "law": {"type": "table", "file": "law.csv"}})
+    doc["conditions"] = [{"name": "fast", "set": {"/joints/1/law": {"type": "table",
+                                                                   "file": "law2.csv"},
+                                                  "/simulation/h": 0.001}}]
+    doc3, _ = to_spatial(doc, src_dir=str(tmp_path / "in"), out_dir=str(tmp_path / "out"))
+    c = doc3["conditions"][0]["set"]
+    assert set(c) == {"/joints/tq/law", "/simulation/h"}
+    assert doc3["joints"][-1]["law"]["file"] == "../in/law.csv"
+    assert c["/joints/tq/law"]["file"] == "../in/law2.csv"
+
+
+def test_the_command_line_refuses_bad_output_paths_without_a_traceback(tmp_path):
+    src = tmp_path / "p.json"
+    src.write_text(json.dumps(pendulum()))
+    script = str(ROOT / "scripts/planar_to_spatial.py")
+    for out, phrase in ((tmp_path / "no_such_folder" / "x.json", "does not exist"),
+                        (tmp_path, "a folder")):
+        p = subprocess.run([sys.executable, script, str(src), "-o", str(out), "--overwrite"],
+                           capture_output=True, text=True)
+        assert p.returncode == 2 and phrase in p.stderr and "Traceback" not in p.stderr, p.stderr
+    bad = tmp_path / "latin1.json"
+    bad.write_bytes(b'{"name": "\xe9"}')
+    p = subprocess.run([sys.executable, script, str(bad), "-o", str(tmp_path / "o.json")],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert not list(tmp_path.glob("*.tmp"))

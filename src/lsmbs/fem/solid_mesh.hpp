@@ -1,0 +1,27 @@
+#pragma once
+// Meshes of 3D solid bodies: node positions, cells (eight-node hexahedra in the order of
+// fem/hex_element.hpp, or four-node tetrahedra) and named node sets.
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lsmbs/core/types.hpp"
+
+namespace lsmbs {
+
+struct SolidMesh {
+  std::vector<Vec3> nodes;
+  std::vector<std::vector<int>> cells;  ///< 8 nodes (hexahedron) or 4 (tetrahedron) each
+  std::map<std::string, std::vector<int>> node_sets;
+
+  int num_nodes() const { return static_cast<int>(nodes.size()); }
+  int num_elements() const { return static_cast<int>(cells.size()); }
+  /// The largest extent of the bounding box.
+  double size() const;
+  /// The box [origin, origin + size] in n[0] × n[1] × n[2] hexahedra, with the node sets of its
+  /// six faces: xmin, xmax, ymin, ymax, zmin, zmax.
+  static SolidMesh box(const Vec3& origin, const Vec3& size, const std::array<int, 3>& n);
+};
+
+}  // namespace lsmbs
