@@ -112,7 +112,8 @@ HexElement::HexElement(const std::array<Vec3, 8>& X, Formulation f)
   shape(Vec3::Zero(), N, dN);
   const Mat3 J0 = jacobian(X, dN);
   const double j0 = J0.determinant();
-  if (!(j0 > 0)) throw Error("inverted or degenerate hexahedral element (det J <= 0 at its centre)");
+  if (!(j0 > 0))
+    throw Error("inverted or degenerate hexahedral element (det J <= 0 at its centre)");
   const Mat3 A0 = J0.inverse();  // E_cart = A0ᵀ E_nat A0
   G_centre_ = dN * A0;
   const double g = 1 / std::sqrt(3.0);
@@ -183,8 +184,7 @@ void HexElement::evaluate(const double* x, const Mat6& C, Eval& ev) const {
   }
 }
 
-void HexElement::internal_force(const double* x, double E, double nu, double* f,
-                                double* K) const {
+void HexElement::internal_force(const double* x, double E, double nu, double* f, double* K) const {
   const Mat6 C = svk_voigt(E, nu);
   Eval ev;
   evaluate(x, C, ev);

@@ -21,8 +21,7 @@ class SolidElement {
 
   /// f_int(x) at Young's modulus E; K = ∂f_int/∂x (material + geometric) when K is not null.
   /// f_int is the gradient of strain_energy, K its Hessian (symmetric).
-  virtual void internal_force(const double* x, double E, double nu, double* f,
-                              double* K) const = 0;
+  virtual void internal_force(const double* x, double E, double nu, double* f, double* K) const = 0;
   /// ∂f_int/∂ν (f_int is linear in E, which needs no function of its own).
   virtual void internal_force_nu_derivative(const double* x, double E, double nu,
                                             double* df) const = 0;
@@ -34,8 +33,7 @@ class SolidElement {
   virtual double volume() const = 0;
   /// The second Piola–Kirchhoff stress at the element centre (Voigt S11, S22, S33, S12, S23,
   /// S13), with the element's own strain there (an enhanced element: its enhanced strain).
-  virtual Eigen::Matrix<double, 6, 1> centre_stress(const double* x, double E,
-                                                    double nu) const = 0;
+  virtual Eigen::Matrix<double, 6, 1> centre_stress(const double* x, double E, double nu) const = 0;
   /// The smallest det F over the integration points and the centre (≤ 0: inverted).
   virtual double min_det_F(const double* x) const = 0;
 };

@@ -95,6 +95,46 @@ void Model::add_constraint(std::unique_ptr<ConstraintElement> c) {
   cons_.push_back(std::move(c));
 }
 
+SolidBody& Model::add_solid_body(SolidBody b) {
+  auto body = std::make_unique<SolidBody>(std::move(b));
+  body->dof0 = add_dofs(3 * body->mesh.num_nodes(), "solid body '" + body->name + "'");
+  for (int i = 0; i < body->mesh.num_nodes(); ++i)
+    q_init_.segment<3>(body->node_dof(i)) = body->mesh.nodes[static_cast<size_t>(i)];
+  body->elements.clear();
+  for (int e = 0; e < body->mesh.num_elements(); ++e) {
+    const auto& c = body->mesh.cells[static_cast<size_t>(e)];
+    try {
+      if (c.size() == 8) {
+        std::array<Vec3, 8> X;
+        for (size_t k = 0; k < 8; ++k) X[k] = body->mesh.nodes[static_cast<size_t>(c[k])];
+        body->elements.push_back(std::make_unique<HexElement>(X, body->formulation));
+      } else if (c.size() == 4) {
+        std::array<Vec3, 4> X;
+        for (size_t k = 0; k < 4; ++k) X[k] = body->mesh.nodes[static_cast<size_t>(c[k])];
+        body->elements.push_back(std::make_unique<TetElement>(X));
+      } else {
+        throw Error("a cell of " + std::to_string(c.size()) +
+                    " nodes (8: hexahedron, 4: tetrahedron)");
+      }
+    } catch (const Error& err) {
+      throw Error("solid body '" + body->name + "', element " + std::to_string(e) + ": " +
+                  err.what());
+    }
+  }
+  if (body->field < 0) body->field = add_field(Vec::Ones(body->mesh.num_elements()));
+  solid_.push_back(std::move(body));
+  SolidBody* sb = solid_.back().get();
+  for (int e = 0; e < sb->mesh.num_elements(); ++e) add_force(std::make_unique<SolidForce>(sb, e));
+  length_scale_ = std::max(length_scale_ == 1 ? 0.0 : length_scale_, sb->mesh.size());
+  return *sb;
+}
+
+const SolidBody* Model::find_solid(const std::string& name) const {
+  for (const auto& b : solid_)
+    if (b->name == name) return b.get();
+  return nullptr;
+}
+
 SpatialRigidBody& Model::add_spatial_body(SpatialRigidBody b) {
   b.dof0 = add_dofs(12, "spatial body '" + b.name + "'");
   q_init_.segment<3>(b.dof0) = b.position0;
@@ -210,6 +250,10 @@ std::string Model::describe_unknown(int i) const {
                            : i - b.dof0 == 1 ? "y"
                                              : "θ") +
                ")";
+    for (const auto& b : solid_)
+      if (i >= b->dof0 && i < b->dof0 + 3 * b->mesh.num_nodes())
+        return "solid body '" + b->name + "', node " + std::to_string((i - b->dof0) / 3) + " (" +
+               "xyz"[(i - b->dof0) % 3] + ")";
     for (const auto& b : spatial_)
       if (i >= b.dof0 && i < b.dof0 + 12) {
         static const char* const kCoord[] = {"r", "e1", "e2", "e3"};

@@ -22,6 +22,7 @@
 #include "lsmbs/mbs/elements.hpp"
 #include "lsmbs/mbs/flexible_body.hpp"
 #include "lsmbs/mbs/forces.hpp"
+#include "lsmbs/mbs/solid_body.hpp"
 
 namespace lsmbs {
 
@@ -113,6 +114,11 @@ class Model {
   /// principal-frame point d (SpatialRigidBody::attachments).
   void add_spatial_attachment(int dof0, const Vec3& d);
   const std::vector<std::unique_ptr<FlexibleBody>>& flexible_bodies() const { return flex_; }
+  /// Allocates the solid body's 3 unknowns per node at their mesh positions, builds its elements
+  /// (throws lsmbs::Error naming an inverted one) and adds one SolidForce per element.
+  SolidBody& add_solid_body(SolidBody b);
+  const std::vector<std::unique_ptr<SolidBody>>& solid_bodies() const { return solid_; }
+  const SolidBody* find_solid(const std::string& name) const;
   const RigidBody* find_rigid(const std::string& name) const;
   const FlexibleBody* find_flexible(const std::string& name) const;
   const std::vector<std::unique_ptr<ForceElement>>& forces() const { return forces_; }
@@ -246,6 +252,7 @@ class Model {
   std::vector<RigidBody> rigid_;
   std::vector<SpatialRigidBody> spatial_;
   std::vector<std::unique_ptr<FlexibleBody>> flex_;
+  std::vector<std::unique_ptr<SolidBody>> solid_;
   std::vector<std::unique_ptr<ForceElement>> forces_;
   std::vector<std::unique_ptr<ConstraintElement>> cons_;
   std::vector<int> eq_offset_, force_block_, con_block_qq_, con_block_ql_, con_block_lq_;

@@ -144,6 +144,15 @@ struct SpatialBodyOptions {
   std::string validate() const;
 };
 
+/// A 3D solid flexible body (mbs/solid_body.hpp): St Venant–Kirchhoff, eq. (3)'s μ_e E0, μ_e ρ0.
+struct SolidBodyOptions {
+  double E = 0, nu = 0.3, rho = 0;  ///< parameters "<body>.E", "<body>.nu", "<body>.rho"
+  /// Hexahedra: enhanced assumed strains (default; no locking) or the plain 2 × 2 × 2 brick.
+  HexElement::Formulation formulation = HexElement::Formulation::kEnhanced;
+  /// Empty string when valid, otherwise "field: what is expected".
+  std::string validate() const;
+};
+
 /// Where a spatial joint sits at assembly (t = 0) and its axes, in global components.
 struct SpatialJointOptions {
   Vec3 at = Vec3::Zero();  ///< the joint's point
@@ -241,6 +250,14 @@ class ModelBuilder {
   /// M = k (θ − θ0) + c θ̇ on a revolute or cylindrical joint's angle (θ0 default 0).
   void joint_spring_damper(const std::string& name, const std::string& joint,
                            const RotationalSpringOptions& o);
+  /// A solid body meshed by `mesh` (node positions at t = 0, ground frame), at rest; its weight
+  /// under the spatial gravity.
+  void solid_body(const std::string& name, SolidMesh mesh, const SolidBodyOptions& o);
+  /// Every node of the node set stays where it is at t = 0 (body "ground") or keeps its offset
+  /// in a spatial body's principal frame.
+  void solid_connection(const std::string& name, const std::string& solid,
+                        const std::string& node_set, const std::string& body);
+  const SolidBody& solid(const std::string& name) const;
   const SpatialRigidBody& spatial(const std::string& name) const;
   /// The spatial joint of that name (ModelError if there is none).
   const SpatialJointInfo& spatial_joint_info(const std::string& joint) const;

@@ -287,3 +287,80 @@ void ModelBuilder::joint_spring_damper(const std::string& name, const std::strin
 }
 
 }  // namespace lsmbs
+
+namespace lsmbs {
+
+std::string SolidBodyOptions::validate() const {
+  if (!(E > 0) || !std::isfinite(E)) return "E: expected a positive number";
+  if (!(nu > -1 && nu < 0.5)) return "nu: expected a number in (-1, 0.5)";
+  if (!(rho >= 0) || !std::isfinite(rho)) return "rho: expected a number >= 0";
+  return {};
+}
+
+void ModelBuilder::solid_body(const std::string& name, SolidMesh mesh, const SolidBodyOptions& o) {
+  const Entity e{"solid body", name};
+  const Mark mark = begin(e);
+  check(e, o.validate());
+  if (mesh.num_elements() == 0) fail(e, "mesh", "expected at least one cell");
+  for (const auto& [set, nodes] : mesh.node_sets) {
+    if (nodes.empty()) fail(e, "node_sets/" + set, "node set '" + set + "' is empty");
+    for (int n : nodes)
+      if (n < 0 || n >= mesh.num_nodes())
+        fail(e, "node_sets/" + set,
+             "node set '" + set + "' holds node " + std::to_string(n) + " (the mesh has " +
+                 std::to_string(mesh.num_nodes()) + " nodes)");
+  }
+  for (size_t c = 0; c < mesh.cells.size(); ++c)
+    for (int n : mesh.cells[c])
+      if (n < 0 || n >= mesh.num_nodes())
+        fail(e, "mesh", "cell " + std::to_string(c) + " names node " + std::to_string(n));
+  SolidBody b;
+  b.name = name;
+  b.mesh = std::move(mesh);
+  b.E_param = param(e, "E", o.E);
+  b.nu_param = param(e, "nu", o.nu);
+  b.rho_param = param(e, "rho", o.rho);
+  b.gravity = gravity3_;
+  b.formulation = o.formulation;
+  const SolidBody* added = nullptr;
+  try {  // the element geometry is checked here (inverted or degenerate cells)
+    added = &m_->add_solid_body(std::move(b));
+  } catch (const Error& err) {  // the model holds the body's unknowns already: the builder is spent
+    broken_ = true;
+    fail(e, "mesh", err.what());
+  }
+  init_v_.conservativeResize(m_->nq());
+  init_v_.segment(added->dof0, 3 * added->mesh.num_nodes()).setZero();
+  commit(e, mark);
+}
+
+const SolidBody& ModelBuilder::solid(const std::string& name) const {
+  const SolidBody* b = m_->find_solid(name);
+  if (!b) fail({}, "", "unknown solid body '" + name + "'");
+  return *b;
+}
+
+void ModelBuilder::solid_connection(const std::string& name, const std::string& solid_body,
+                                    const std::string& node_set, const std::string& body) {
+  const Entity e{"joint", name};
+  const Mark mark = begin(e);
+  const SolidBody* sb = m_->find_solid(solid_body);
+  if (!sb) fail(e, "solid", "unknown solid body '" + solid_body + "'");
+  const auto set = sb->mesh.node_sets.find(node_set);
+  if (set == sb->mesh.node_sets.end())
+    fail(e, "node_set", "solid body '" + solid_body + "' has no node set '" + node_set + "'");
+  const SpatialRigidBody* rb = spatial_or_ground(e, "body", body);
+  for (int n : set->second) {
+    const Vec3& X = sb->mesh.nodes[static_cast<size_t>(n)];
+    if (rb) {
+      const Vec3 d = rb->orientation0.transpose() * (X - rb->position0);
+      add_constraint(e, std::make_unique<SolidNodeLink>(sb->node_dof(n), rb->dof0, d));
+      m_->add_spatial_attachment(rb->dof0, d);
+    } else {
+      add_constraint(e, std::make_unique<SolidNodeLink>(sb->node_dof(n), -1, X));
+    }
+  }
+  commit(e, mark);
+}
+
+}  // namespace lsmbs

@@ -36,6 +36,24 @@ void SpatialPointMeasure::gradient(const Model&, const State&, const ModelParams
   for (int k = 0; k < 3; ++k) row.emplace_back(dof0_ + 3 + 3 * k + c, d_[k]);
 }
 
+// ------------------------------------------------------------------ NodeSetMeasure
+NodeSetMeasure::NodeSetMeasure(std::string name, std::vector<int> node_dofs)
+    : Measure(std::move(name)), dofs_(std::move(node_dofs)) {}
+
+std::vector<std::string> NodeSetMeasure::components() const { return xyz(name()); }
+
+void NodeSetMeasure::evaluate(const Model&, const State& s, const ModelParams&, double* out) const {
+  Vec3 x = Vec3::Zero();
+  for (int d : dofs_) x += s.q.segment<3>(d);
+  x /= static_cast<double>(dofs_.size());
+  for (int i = 0; i < 3; ++i) out[i] = x[i];
+}
+
+void NodeSetMeasure::gradient(const Model&, const State&, const ModelParams&, int c,
+                              MeasureGradient& g) const {
+  for (int d : dofs_) g.dq.emplace_back(d + c, 1.0 / static_cast<double>(dofs_.size()));
+}
+
 // ------------------------------------------------------------------ BodyAxisMeasure
 BodyAxisMeasure::BodyAxisMeasure(std::string name, int dof0, const Vec3& u)
     : Measure(std::move(name)), dof0_(dof0), u_(u) {}

@@ -29,6 +29,21 @@ class SpatialPointMeasure : public Measure {
   Vec3 d_;
 };
 
+/// The mean position of nodes of a solid body (their first unknowns x, y, z at dofs[i] … + 2):
+/// linear in q, constant partials 1/n.
+class NodeSetMeasure : public Measure {
+ public:
+  NodeSetMeasure(std::string name, std::vector<int> node_dofs);
+  std::vector<std::string> components() const override;
+  std::vector<std::string> units() const override { return {"m", "m", "m"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+
+ private:
+  std::vector<int> dofs_;
+};
+
 /// A body-fixed direction u (principal-frame components) in ground components: the body's
 /// orientation as the images of chosen axes (a unit u stays unit up to the frame constraints).
 class BodyAxisMeasure : public Measure {

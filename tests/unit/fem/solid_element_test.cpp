@@ -23,7 +23,7 @@ namespace {
 
 // A distorted brick (no two faces parallel) and a tetrahedron
 std::array<Vec3, 8> distorted_brick() {
-  return {Vec3(0, 0, 0),       Vec3(2.1, 0.1, -0.1), Vec3(2.0, 1.2, 0.05), Vec3(-0.1, 0.9, 0.1),
+  return {Vec3(0, 0, 0),        Vec3(2.1, 0.1, -0.1), Vec3(2.0, 1.2, 0.05), Vec3(-0.1, 0.9, 0.1),
           Vec3(0.1, -0.1, 0.8), Vec3(1.9, 0.0, 1.1),  Vec3(2.2, 1.0, 0.9),  Vec3(0.05, 1.1, 1.0)};
 }
 
@@ -219,10 +219,9 @@ TEST(SolidElements, PassTheSevenElementPatchTestInLargeDeformation) {
   for (int k = 0; k < 2; ++k)
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) m.X.emplace_back(i, j, k);  // node i + 2j + 4k
-  const std::vector<Vec3> inner = {{0.249, 0.342, 0.192}, {0.826, 0.288, 0.288},
-                                   {0.850, 0.649, 0.263}, {0.273, 0.750, 0.230},
-                                   {0.320, 0.186, 0.643}, {0.677, 0.305, 0.683},
-                                   {0.788, 0.693, 0.644}, {0.165, 0.745, 0.702}};
+  const std::vector<Vec3> inner = {
+      {0.249, 0.342, 0.192}, {0.826, 0.288, 0.288}, {0.850, 0.649, 0.263}, {0.273, 0.750, 0.230},
+      {0.320, 0.186, 0.643}, {0.677, 0.305, 0.683}, {0.788, 0.693, 0.644}, {0.165, 0.745, 0.702}};
   m.X.insert(m.X.end(), inner.begin(), inner.end());
   const std::array<int, 8> outer = {0, 1, 3, 2, 4, 5, 7, 6};  // the cube's corners in hex order
   std::array<int, 8> in;
@@ -243,7 +242,8 @@ TEST(SolidElements, PassTheSevenElementPatchTestInLargeDeformation) {
     J.col(1) = m.X[static_cast<size_t>(c[3])] - m.X[static_cast<size_t>(c[0])];
     J.col(2) = m.X[static_cast<size_t>(c[4])] - m.X[static_cast<size_t>(c[0])];
     if (J.determinant() < 0)
-      for (int k = 0; k < 4; ++k) std::swap(c[static_cast<size_t>(k)], c[static_cast<size_t>(k + 4)]);
+      for (int k = 0; k < 4; ++k)
+        std::swap(c[static_cast<size_t>(k)], c[static_cast<size_t>(k + 4)]);
     m.cells.push_back(c);
   }
   Mat3 A;
@@ -330,7 +330,8 @@ Cantilever cantilever(int nx, int ny, int nz, Formulation f, double nu, bool fre
     const int d = fr[static_cast<size_t>(a)];
     const Vec3& X = m.X[static_cast<size_t>(d / 3)];
     if (X.x() == L && d % 3 == 2) {
-      const double wy = (X.y() == 0 || X.y() == b) ? 0.5 : 1, wz = (X.z() == 0 || X.z() == h) ? 0.5 : 1;
+      const double wy = (X.y() == 0 || X.y() == b) ? 0.5 : 1,
+                   wz = (X.z() == 0 || X.z() == h) ? 0.5 : 1;
       load[a] = P * wy * wz / (ny * nz);
       tip_z.push_back(a);
     }
@@ -405,7 +406,8 @@ TEST(SolidElements, TheEnhancedHexLocksLittleNearIncompressibility) {
 // true one by about 1 % at this slenderness (Timoshenko), the tolerance covers it.
 TEST(SolidElements, TheFirstFrequencyOfACantileverMatchesBeamTheory) {
   const double L = 10, E = 1e7, I = 1.0 / 12, A = 1, rho = 1;
-  const double beta = 1.8751040687, eb = beta * beta * std::sqrt(E * I / (rho * A * std::pow(L, 4)));
+  const double beta = 1.8751040687,
+               eb = beta * beta * std::sqrt(E * I / (rho * A * std::pow(L, 4)));
   const double w = cantilever(20, 1, 1, Formulation::kEnhanced, 0, true).freq;
   const double wf = cantilever(20, 1, 1, Formulation::kFull, 0, true).freq;
   std::printf("first frequency / Euler-Bernoulli: enhanced %.4f, full %.4f\n", w / eb, wf / eb);
