@@ -116,12 +116,14 @@ TEST(SolidBody, ForcesAndLinksAgreeWithCentralDifferences) {
     if (!dynamic_cast<const SolidNodeLink*>(c.get())) continue;
     ++links;
     LocalVec z(static_cast<Eigen::Index>(c->dofs().size()));
-    for (size_t i = 0; i < c->dofs().size(); ++i) z[static_cast<Eigen::Index>(i)] = q0[c->dofs()[i]];
+    for (size_t i = 0; i < c->dofs().size(); ++i)
+      z[static_cast<Eigen::Index>(i)] = q0[c->dofs()[i]];
     LocalEqVec phi;
     c->evaluate(0, z, model->params(), phi, nullptr);
     EXPECT_LT(phi.cwiseAbs().maxCoeff(), 1e-14);
-    const auto ce = checks::check_constraint(*c, 0, z + checks::random_local(static_cast<int>(z.size()), rng, 0.1),
-                                             checks::random_local(3, rng));
+    const auto ce = checks::check_constraint(
+        *c, 0, z + checks::random_local(static_cast<int>(z.size()), rng, 0.1),
+        checks::random_local(3, rng));
     EXPECT_LT(ce.jacobian, 1e-8);
     EXPECT_LT(ce.hessian, 1e-8);
   }
@@ -132,7 +134,8 @@ TEST(SolidBody, ForcesAndLinksAgreeWithCentralDifferences) {
 // the first period (the higher modes hold a few per cent of the tip's static deflection).
 TEST(SolidBody, ACantileverUnderItsWeightSwingsAboutTheBeamTheorysDeflection) {
   const double g = 1, I = 1.0 / 12, A = 1, G = kE / 2, q = kRho * g * A;
-  const double static_tip = q * std::pow(kL, 4) / (8 * kE * I) + q * kL * kL / (2 * 5.0 / 6 * G * A);
+  const double static_tip =
+      q * std::pow(kL, 4) / (8 * kE * I) + q * kL * kL / (2 * 5.0 / 6 * G * A);
   const double w1 = std::pow(1.8751040687, 2) * std::sqrt(kE * I / (kRho * A * std::pow(kL, 4)));
   const double T1 = 2 * std::numbers::pi / w1;
   ModelBuilder b;
@@ -157,8 +160,8 @@ TEST(SolidBody, ACantileverUnderItsWeightSwingsAboutTheBeamTheorysDeflection) {
       up.push_back(t[i - 1] + (t[i] - t[i - 1]) * (-static_tip - z[i - 1]) / (z[i] - z[i - 1]));
   ASSERT_GE(up.size(), 2u);
   const double period = (up.back() - up.front()) / static_cast<double>(up.size() - 1);
-  std::printf("static tip %.4e (Timoshenko %.4e), period %.5f s (Euler-Bernoulli %.5f s)\n",
-              -mean, static_tip, period, T1);
+  std::printf("static tip %.4e (Timoshenko %.4e), period %.5f s (Euler-Bernoulli %.5f s)\n", -mean,
+              static_tip, period, T1);
   EXPECT_NEAR(-mean / static_tip, 1, 0.03);
   EXPECT_NEAR(period / T1, 1, 0.03);
 }
@@ -247,8 +250,7 @@ TEST(SolidBody, DirectAndAdjointGradientsAgreeWithCentralDifferences) {
   d->add_variable("nu", 0.25, 0.1, 0.4);
   d->add_variable("rho", kRho, 0.5, 2);
   for (const char* v : {"E", "nu", "rho"})
-    d->bind(cs.model->parameter_index(std::string("beam.") + v), v, 1, 0,
-            std::string("beam.") + v);
+    d->bind(cs.model->parameter_index(std::string("beam.") + v), v, 1, 0, std::string("beam.") + v);
   cs.set_design(std::move(d));
   cs.prepare();
   const Vec p = cs.design->initial();
@@ -257,7 +259,8 @@ TEST(SolidBody, DirectAndAdjointGradientsAgreeWithCentralDifferences) {
   fo.delta = 1e-5;
   const auto ref = compute_sensitivities(cs, p, fo);
   ASSERT_TRUE(ref.ok) << ref.message;
-  for (auto m : {SensitivityOptions::Method::kDirectAnalytic, SensitivityOptions::Method::kAdjoint}) {
+  for (auto m :
+       {SensitivityOptions::Method::kDirectAnalytic, SensitivityOptions::Method::kAdjoint}) {
     SensitivityOptions so;
     so.method = m;
     const auto r = compute_sensitivities(cs, p, so);
@@ -281,13 +284,13 @@ TEST(SolidBody, DirectAndAdjointGradientsAgreeWithCentralDifferences) {
     ASSERT_TRUE(ri.ok) << ri.message;
     const auto rd = compute_sensitivities(cs, p, dio);
     for (size_t k = 0; k < 2; ++k) {
-      const auto dk = compare_gradients({rd.responses[k]}, {ri.responses[k]},
-                                        GradientNorm::kPerResponse);
+      const auto dk =
+          compare_gradients({rd.responses[k]}, {ri.responses[k]}, GradientNorm::kPerResponse);
       std::printf("h = %.4f: %s, direct-analytic against IDAS: %.2e\n", h,
                   rd.responses[k].name.c_str(), dk.worst);
     }
-    const auto diff = compare_gradients({rd.responses[0]}, {ri.responses[0]},
-                                        GradientNorm::kPerResponse);
+    const auto diff =
+        compare_gradients({rd.responses[0]}, {ri.responses[0]}, GradientNorm::kPerResponse);
     if (previous > 0) EXPECT_GT(previous / diff.worst, 2.5);
     previous = diff.worst;
   }

@@ -23,8 +23,8 @@ std::string SolidForce::describe() const {
 
 namespace {
 // M0 q̈ per direction: the element's nodal inertia times its unit mass
-void add_inertia(const SolidElement& el, const LocalState& s, double m, const Vec3& g,
-                 LocalVec& r, double sign = 1) {
+void add_inertia(const SolidElement& el, const LocalState& s, double m, const Vec3& g, LocalVec& r,
+                 double sign = 1) {
   const auto M0 = el.unit_mass();
   const auto N0 = el.shape_integrals();
   const int n = el.num_nodes();
