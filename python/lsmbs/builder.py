@@ -713,9 +713,28 @@ class SpatialModelBuilder(ModelBuilder):
             e["angular_velocity"] = _vec3(angular_velocity, call + ": angular_velocity")
         return self._add("bodies", e, call, body=True)
 
+    def solid_body(self, name, *, size, elements, E, rho, nu=0.3, origin=(0.0, 0.0, 0.0),
+                   formulation="enhanced"):
+        """A 3D solid flexible body: the box [origin, origin + size] (ground coordinates at t = 0)
+        in elements = (nx, ny, nz) hexahedra, with the node sets 'xmin' … 'zmax' of its faces;
+        St Venant–Kirchhoff with E, nu, rho (parameters '<name>.E', '.nu', '.rho'); formulation
+        'enhanced' (default: no locking) or 'full'. Tie it with solid_connection, measure it with
+        node_set_position."""
+        call = f"solid_body({name!r})"
+        n = list(elements) if isinstance(elements, (list, tuple)) else None
+        if not n or len(n) != 3 or not all(isinstance(v, int) and v >= 1 for v in n):
+            raise ValueError(f"{call}: elements: expected three positive integers (nx, ny, nz)")
+        e = {"name": _name(name, "solid_body: name"), "type": "solid",
+             "mesh": {"type": "box", "origin": _vec3(origin, call + ": origin"),
+                      "size": _vec3(size, call + ": size"), "elements": n},
+             "material": {"E": _number(E, call + ": E"), "nu": _number(nu, call + ": nu"),
+                          "rho": _number(rho, call + ": rho")},
+             "formulation": formulation}
+        return self._add("bodies", e, call, body=True)
+
     def flexible_body(self, *args, **kwargs):
-        raise NotImplementedError("flexible bodies of spatial cases come with 3D components "
-                                  "(not available yet)")
+        raise NotImplementedError("plane-stress flexible bodies are planar; a flexible component "
+                                  "of a spatial mechanism is a solid_body")
 
     def features(self, *args, **kwargs):
         raise NotImplementedError("level-set designs of spatial cases come with 3D components "

@@ -59,6 +59,7 @@ std::string format_g(double v) {
 // exhausting the memory; 5e6 elements are 10^7 unknowns, beyond what a run of this testbed
 // finishes.
 constexpr double kMaxRectangleElements = 5e6;
+constexpr double kMaxSolidElements = 2e6;
 
 // A builder error at the JSON entry `r`: the builder names the argument at fault as the case format
 // does ("a/body", "node_set", or nothing for the entry as a whole), a path below the entry.
@@ -235,6 +236,41 @@ struct Loader : KindReader {
     if (r.has("angular_velocity")) o.angular_velocity = r.vec3("angular_velocity");
     r.finish();
     at_entry(r, [&] { builder_.spatial_body(name, o); });
+  }
+
+  // A 3D solid body ("dimension": 3, "type": "solid"): a box of hexahedra, St Venant–Kirchhoff.
+  void solid_body(const JsonReader& r, const std::string& name) {
+    const JsonReader m = r.child("mesh");
+    m.one_of("type", {"box"});
+    const Vec3 origin = m.vec3("origin", Vec3::Zero()), size = m.vec3("size");
+    if (!(size.minCoeff() > 0)) m.fail("size", "expected three positive lengths");
+    const JsonReader el = m.child("elements");
+    if (!el.is_array() || el.size() != 3) el.fail("expected [nx, ny, nz]");
+    std::array<int, 3> n{};
+    double cells = 1;
+    for (size_t k = 0; k < 3; ++k) {
+      const double v = el.at(k).as_number();
+      if (v < 1 || v != std::floor(v) || v > 1e6)
+        el.fail("expected three positive integers [nx, ny, nz]");
+      n[k] = static_cast<int>(v);
+      cells *= v;
+    }
+    if (cells > kMaxSolidElements)
+      el.fail("a box mesh has at most " + std::to_string(static_cast<long>(kMaxSolidElements)) +
+              " elements (nx × ny × nz)");
+    m.finish();
+    const JsonReader mat = r.child("material");
+    SolidBodyOptions o;
+    o.E = mat.positive("E");
+    o.nu = mat.number("nu");
+    if (!(o.nu >= 0 && o.nu < 0.5)) mat.fail("nu", "expected Poisson's ratio in [0, 0.5)");
+    o.rho = mat.positive("rho");
+    mat.finish();
+    o.formulation = r.one_of("formulation", {"enhanced", "full"}, "enhanced") == "full"
+                        ? HexElement::Formulation::kFull
+                        : HexElement::Formulation::kEnhanced;
+    r.finish();
+    at_entry(r, [&] { builder_.solid_body(name, SolidMesh::box(origin, size, n), o); });
   }
 
   // A rotation: {"axis": [x, y, z], "angle": rad}, or its matrix by rows [[…], […], […]]
@@ -792,10 +828,12 @@ Case load_single(const nlohmann::json& j, const std::string& file_label,
       // flexible components of spatial mechanisms are solids: not yet
       if (b.has("type") && b.raw()["type"] == "flexible")
         b.fail("type",
-               "flexible bodies are not available in spatial cases yet (they come with 3D "
-               "components); spatial cases have \"rigid\" bodies");
-      b.one_of("type", {"rigid"});
-      L.spatial_body(b, name);
+               "plane-stress flexible bodies are planar; a flexible component of a spatial "
+               "mechanism is a \"solid\" body (docs/case-format.md, \"Spatial cases\")");
+      if (b.one_of("type", {"rigid", "solid"}) == "solid")
+        L.solid_body(b, name);
+      else
+        L.spatial_body(b, name);
       continue;
     }
     const std::string type = b.one_of("type", {"rigid", "flexible"});

@@ -74,6 +74,18 @@ std::vector<ModelKind> joints() {
             "x_b stays on the line through x_a along the axis, turning freely (2 equations; "
             "closes a loop of a planar mechanism without redundant equations)"),
       {"joints",
+       "solid_connection",
+       "every node of a solid body's node set keeps its offset in a rigid body's principal "
+       "frame, or (body \"ground\") stays where it is (3 equations per node)",
+       {req("solid", K::kName, "the solid body"),
+        req("node_set", K::kName, "its node set (a box: xmin, xmax, ymin, ymax, zmin, zmax)"),
+        req("body", K::kName, "a rigid body, or \"ground\"")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         const std::string solid = r.string("solid"), set = r.string("node_set"),
+                           body = r.string("body");
+         k.at_entry(r, [&] { k.builder().solid_connection(name, solid, set, body); });
+       }},
+      {"joints",
        "rotation_driver",
        "θ − s(t) + offset = 0 on the angle of a revolute or cylindrical joint (θ = 0 at t = 0)",
        {req("joint", K::kName, "the joint"), req("law", K::kLaw, "s(t) [rad]"),
@@ -300,6 +312,21 @@ std::vector<ModelKind> measures() {
          const std::string j = r.string("joint");
          k.at_key(r, "joint", [&] { return k.builder().joint_equations(j); });
          k.add_constraint_force(name, j);
+       }},
+      {"measures",
+       "node_set_position",
+       "the mean position of a solid body's node set, x, y, z [m]",
+       {req("body", K::kName, "the solid body"), req("node_set", K::kName, "its node set")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         const std::string b = r.string("body"), set = r.string("node_set");
+         const SolidBody& sb =
+             k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
+         const auto it = sb.mesh.node_sets.find(set);
+         if (it == sb.mesh.node_sets.end())
+           r.fail("node_set", "solid body '" + b + "' has no node set '" + set + "'");
+         std::vector<int> dofs;
+         for (int n : it->second) dofs.push_back(sb.node_dof(n));
+         k.add_measure(std::make_unique<NodeSetMeasure>(name, std::move(dofs)));
        }},
       {"measures",
        "combination",
