@@ -197,9 +197,10 @@ TEST(SpatialCase, TheSolidCantileverMeetsBeamTheoryAndItsGradientsAgree) {
   const double w1 = std::pow(1.8751040687, 2) * std::sqrt(E * I / std::pow(L, 4)), T = 0.6;
   const double window_mean = delta * (1 - std::sin(w1 * T) / (w1 * T));
   const double mean = -r.responses.at("mean_tip_z"), drop = -r.responses.at("max_tip_drop");
-  std::printf("solid cantilever: mean tip %.5e (reference %.5e), largest drop %.5e, Timoshenko "
-              "%.5e\n",
-              mean, window_mean, drop, delta);
+  std::printf(
+      "solid cantilever: mean tip %.5e (reference %.5e), largest drop %.5e, Timoshenko "
+      "%.5e\n",
+      mean, window_mean, drop, delta);
   EXPECT_NEAR(mean / window_mean, 1, 0.02);
   EXPECT_NEAR(drop / (2 * delta), 1, 0.05);
   const Vec p = cs.design->initial();
