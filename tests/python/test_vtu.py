@@ -227,3 +227,34 @@ def test_a_spatial_body_is_drawn_in_3d_where_its_measures_put_it_and_stays_rigid
             assert np.ptp(rod[:, 2]) > 0.01  # drawn in 3D: the rod's axes leave the plane z = 0
         assert np.allclose(gaps, first, atol=1e-9)
     assert set(arrays) == {"elastic_displacement", "total_displacement", "part"}
+
+
+def test_a_solid_body_is_drawn_as_hexahedra_where_its_measures_put_it(tmp_path):
+    """data/spatial/solid_cantilever.json with VTU output: 20 hexahedra (VTK type 12) on the
+    deformed nodes; the tip face's mean height is the history's node_set_position; the total
+    displacement is the node's motion from t = 0 (zero at the clamp), the elastic one that motion
+    less a rigid fit (here, a cantilever bending: most of it)."""
+    import json
+    from conftest import ROOT
+    doc = json.loads((ROOT / "data/spatial/solid_cantilever.json").read_text())
+    doc["output"]["vtu_stride"] = 50
+    case = tmp_path / "case.json"
+    case.write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    run_cli("simulate", case, "-o", out)
+    hist = np.genfromtxt(out / "history.csv", delimiter=",", names=True)
+    x0, _ = read_vtu(out / "vtu" / "beam_0.vtu")
+    tip = np.isclose(x0[:, 0], 10.0)
+    root = np.isclose(x0[:, 0], 0.0)
+    assert tip.sum() == 4 and root.sum() == 4
+    for step in (50, 100, 150):
+        pts, arrays = read_vtu(out / "vtu" / f"beam_{step}.vtu")
+        assert np.isclose(pts[tip, 2].mean(), hist[step]["tipz"], atol=1e-14, rtol=0)
+        total = arrays["total_displacement"]
+        assert np.allclose(total, pts - x0, atol=1e-12)
+        assert np.abs(total[root]).max() < 1e-12
+        assert set(arrays) == {"elastic_displacement", "total_displacement", "mu", "von_mises"}
+        assert np.all(arrays["mu"] == 1.0) and np.all(arrays["von_mises"] >= 0)
+    cells = ET.parse(out / "vtu" / "beam_50.vtu").getroot().find("UnstructuredGrid/Piece/Cells")
+    types = next(a for a in cells.findall("DataArray") if a.get("Name") == "types")
+    assert [int(t) for t in types.text.split()] == [12] * 20

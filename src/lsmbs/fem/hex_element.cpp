@@ -258,6 +258,10 @@ Eigen::Matrix<double, 6, 1> HexElement::centre_stress(const double* x, double E,
   return svk_voigt(E, nu) * e;
 }
 
+Mat3 HexElement::centre_F(const double* x) const {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 8>>(x) * G_centre_;
+}
+
 double HexElement::min_det_F(const double* x) const {
   const Eigen::Map<const Eigen::Matrix<double, 3, 8>> xm(x);
   double m = (xm * G_centre_).determinant();
@@ -323,6 +327,10 @@ Eigen::Matrix<double, 6, 1> TetElement::centre_stress(const double* x, double E,
   Eigen::Matrix<double, 6, 12> B;
   strain_and_b<4>(xm * G_, G_, e, B);
   return svk_voigt(E, nu) * e;
+}
+
+Mat3 TetElement::centre_F(const double* x) const {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 4>>(x) * G_;
 }
 
 double TetElement::min_det_F(const double* x) const {

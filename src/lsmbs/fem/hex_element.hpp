@@ -45,6 +45,7 @@ class HexElement final : public SolidElement {
   double volume() const override { return volume_; }
   Eigen::Matrix<double, 6, 1> centre_stress(const double* x, double E, double nu) const override;
   double min_det_F(const double* x) const override;
+  Mat3 centre_F(const double* x) const override;
   /// The condensed enhanced-strain parameters α(x) (zero for kFull).
   Eigen::Matrix<double, 9, 1> enhanced_parameters(const double* x, double E, double nu) const;
 
@@ -82,6 +83,7 @@ class TetElement final : public SolidElement {
   double volume() const override { return volume_; }
   Eigen::Matrix<double, 6, 1> centre_stress(const double* x, double E, double nu) const override;
   double min_det_F(const double* x) const override;
+  Mat3 centre_F(const double* x) const override;
 
  private:
   Eigen::Matrix<double, 4, 3> G_;

@@ -34,6 +34,8 @@ class SolidElement {
   /// The second Piola–Kirchhoff stress at the element centre (Voigt S11, S22, S33, S12, S23,
   /// S13), with the element's own strain there (an enhanced element: its enhanced strain).
   virtual Eigen::Matrix<double, 6, 1> centre_stress(const double* x, double E, double nu) const = 0;
+  /// The deformation gradient at the element centre.
+  virtual Mat3 centre_F(const double* x) const = 0;
   /// The smallest det F over the integration points and the centre (≤ 0: inverted).
   virtual double min_det_F(const double* x) const = 0;
 };

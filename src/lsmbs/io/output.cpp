@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -331,6 +332,60 @@ void write_spatial_vtu(const std::string& path, const SpatialRigidBody& b, const
   v.write(path);
 }
 
+void write_solid_vtu(const std::string& path, const SolidBody& b, const Vec& q,
+                     const ModelParams& p) {
+  const int nn = b.mesh.num_nodes(), ne = b.mesh.num_elements();
+  VtuPiece v;
+  std::vector<Vec3> x(static_cast<size_t>(nn));
+  Vec3 xc = Vec3::Zero(), Xc = Vec3::Zero();
+  for (int i = 0; i < nn; ++i) {
+    x[static_cast<size_t>(i)] = q.segment<3>(b.node_dof(i));
+    v.points.emplace_back(x[static_cast<size_t>(i)].x(), x[static_cast<size_t>(i)].y());
+    v.z.push_back(x[static_cast<size_t>(i)].z());
+    xc += x[static_cast<size_t>(i)];
+    Xc += b.mesh.nodes[static_cast<size_t>(i)];
+  }
+  xc /= nn;
+  Xc /= nn;
+  for (const auto& c : b.mesh.cells) v.add_cell(c.begin(), c.end(), c.size() == 8 ? 12 : 10);
+  // the rotation that fits the nodes best (Kabsch: R = V diag(1, 1, det) Uᵀ of the covariance)
+  Mat3 H = Mat3::Zero();
+  for (int i = 0; i < nn; ++i)
+    H += (b.mesh.nodes[static_cast<size_t>(i)] - Xc) * (x[static_cast<size_t>(i)] - xc).transpose();
+  const Eigen::JacobiSVD<Mat3> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 D = Mat3::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  const Mat3 R = svd.matrixV() * D * svd.matrixU().transpose();
+  VtuArray total{"total_displacement", 3, {}}, elastic{"elastic_displacement", 3, {}};
+  for (int i = 0; i < nn; ++i) {
+    const Vec3& X = b.mesh.nodes[static_cast<size_t>(i)];
+    const Vec3 t = x[static_cast<size_t>(i)] - X, e = x[static_cast<size_t>(i)] - xc - R * (X - Xc);
+    total.values.insert(total.values.end(), {t.x(), t.y(), t.z()});
+    elastic.values.insert(elastic.values.end(), {e.x(), e.y(), e.z()});
+  }
+  const Vec& mu = p.fields[static_cast<size_t>(b.field)];
+  const double E0 = p.scalars[static_cast<size_t>(b.E_param)];
+  const double nu = p.scalars[static_cast<size_t>(b.nu_param)];
+  VtuArray vm{"von_mises", 1, {}};
+  double xe[kMaxLocalDofs];
+  for (int e = 0; e < ne; ++e) {
+    const auto& c = b.mesh.cells[static_cast<size_t>(e)];
+    for (size_t k = 0; k < c.size(); ++k)
+      for (int i = 0; i < 3; ++i) xe[3 * k + static_cast<size_t>(i)] = q[b.node_dof(c[k]) + i];
+    const SolidElement& el = *b.elements[static_cast<size_t>(e)];
+    const auto S = el.centre_stress(xe, E0, nu);  // solid material, as the planar picture
+    const Mat3 F = el.centre_F(xe);
+    Mat3 St;
+    St << S[0], S[3], S[5], S[3], S[1], S[4], S[5], S[4], S[2];
+    const Mat3 sig = F * St * F.transpose() / F.determinant();
+    const Mat3 dev = sig - sig.trace() / 3 * Mat3::Identity();
+    vm.values.push_back(std::sqrt(1.5 * dev.squaredNorm()));
+  }
+  v.point_data = {elastic, total};
+  v.cell_data = {{"mu", 1, std::vector<double>(mu.data(), mu.data() + ne)}, std::move(vm)};
+  v.write(path);
+}
+
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi) {
   VtuPiece v;
   v.points = mesh.nodes;
@@ -378,6 +433,7 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
   }
   for (const auto& b : m.rigid_bodies()) write_rigid_vtu(add(b.name), b, q);
   for (const auto& b : m.spatial_bodies()) write_spatial_vtu(add(b.name), b, q);
+  for (const auto& b : m.solid_bodies()) write_solid_vtu(add(b->name), *b, q, params);
   f.multiblock = folder + kModelVtk + suffix + ".vtm";
   write_vtm(out_dir + "/" + f.multiblock, blocks);
   return f;
@@ -396,6 +452,7 @@ std::map<std::string, std::string> body_file_stems(const Model& m) {
   for (const auto& b : m.flexible_bodies()) add(b->name);
   for (const auto& b : m.rigid_bodies()) add(b.name);
   for (const auto& b : m.spatial_bodies()) add(b.name);
+  for (const auto& b : m.solid_bodies()) add(b->name);
   return stems;
 }
 

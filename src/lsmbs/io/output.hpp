@@ -53,6 +53,12 @@ void write_rigid_vtu(const std::string& path, const RigidBody& body, const Vec& 
 /// something attaches, and its principal axes (lines), with the total and (zero) elastic
 /// displacement and the cell field `part` (0 centre, 1 attachment, 2 axis).
 void write_spatial_vtu(const std::string& path, const SpatialRigidBody& body, const Vec& q);
+/// A 3D solid body at positions q: its hexahedra and tetrahedra at the deformed nodes, point
+/// data total_displacement (x − X) and elastic_displacement (x less the rigid motion that fits
+/// the nodes best, Kabsch), cell data mu and von_mises (the Cauchy stress at the element centre
+/// from its own strain, solid material).
+void write_solid_vtu(const std::string& path, const SolidBody& body, const Vec& q,
+                     const ModelParams& p);
 /// A design on its mesh (body frame, undeformed): the level set φ at the nodes (material where
 /// φ > 0; a contour at 0 is the features' boundary) and μ_e per element.
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi);
