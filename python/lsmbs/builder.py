@@ -29,6 +29,7 @@ import copy
 import json
 import math
 import numbers
+import operator
 import os
 import pathlib
 
@@ -713,7 +714,7 @@ class SpatialModelBuilder(ModelBuilder):
             e["angular_velocity"] = _vec3(angular_velocity, call + ": angular_velocity")
         return self._add("bodies", e, call, body=True)
 
-    def solid_body(self, name, *, size, elements, E, rho, nu=0.3, origin=(0.0, 0.0, 0.0),
+    def solid_body(self, name, *, size, elements, E, nu, rho, origin=(0.0, 0.0, 0.0),
                    formulation="enhanced"):
         """A 3D solid flexible body: the box [origin, origin + size] (ground coordinates at t = 0)
         in elements = (nx, ny, nz) hexahedra, with the node sets 'xmin' … 'zmax' of its faces;
@@ -721,9 +722,13 @@ class SpatialModelBuilder(ModelBuilder):
         'enhanced' (default: no locking) or 'full'. Tie it with solid_connection, measure it with
         node_set_position."""
         call = f"solid_body({name!r})"
-        n = list(elements) if isinstance(elements, (list, tuple)) else None
-        if not n or len(n) != 3 or not all(isinstance(v, int) and v >= 1 for v in n):
+        try:
+            n = [operator.index(v) if not isinstance(v, float) else v for v in elements]
+        except TypeError:
+            n = None
+        if not n or len(n) != 3 or not all(v >= 1 and v == int(v) for v in n):
             raise ValueError(f"{call}: elements: expected three positive integers (nx, ny, nz)")
+        n = [int(v) for v in n]
         e = {"name": _name(name, "solid_body: name"), "type": "solid",
              "mesh": {"type": "box", "origin": _vec3(origin, call + ": origin"),
                       "size": _vec3(size, call + ": size"), "elements": n},

@@ -218,3 +218,47 @@ TEST(SpatialCase, TheSolidCantileverMeetsBeamTheoryAndItsGradientsAgree) {
     EXPECT_LT(d.worst, 1e-6) << SensitivityOptions::name(m) << " " << d.where;
   }
 }
+
+// Faces of a solid that share an edge tie its nodes once; a node tied to two bodies, a rigid
+// body where a solid is expected and the reverse, and an unknown node set are named.
+TEST(SpatialCase, SolidConnectionsOnFacesSharingAnEdgeAndMisnamedBodies) {
+  json j = json::parse(
+      std::ifstream(std::string(LSMBS_SOURCE_DIR) + "/data/spatial/solid_cantilever.json"));
+  json both = j;  // a plate clamped on two adjacent faces: no redundant equations
+  both["joints"].push_back({{"name", "side"},
+                            {"type", "solid_connection"},
+                            {"solid", "beam"},
+                            {"node_set", "ymin"},
+                            {"body", "ground"}});
+  EXPECT_EQ(load_error(both), "no error");
+  json two = j;  // the tip face to a rigid body, then the top face (sharing an edge) to the ground
+  two["bodies"].push_back({{"name", "hub"},
+                           {"type", "rigid"},
+                           {"mass", 1},
+                           {"inertia", {1, 1, 1}},
+                           {"position", {10, 0, 0}}});
+  two["joints"].push_back({{"name", "tip"},
+                           {"type", "solid_connection"},
+                           {"solid", "beam"},
+                           {"node_set", "xmax"},
+                           {"body", "hub"}});
+  two["joints"].push_back({{"name", "top"},
+                           {"type", "solid_connection"},
+                           {"solid", "beam"},
+                           {"node_set", "zmax"},
+                           {"body", "ground"}});
+  EXPECT_NE(load_error(two).find("/joints/2/node_set: "), std::string::npos) << load_error(two);
+  EXPECT_NE(load_error(two).find("is tied by 'tip' to another body already"), std::string::npos)
+      << load_error(two);
+  json torque = j;
+  torque["forces"] = {{{"name", "t"}, {"type", "torque"}, {"body", "beam"}, {"torque", {0, 0, 1}}}};
+  EXPECT_NE(load_error(torque).find("'beam' is a solid body; a rigid body is expected here"),
+            std::string::npos)
+      << load_error(torque);
+  json set = j;
+  set["joints"][0]["node_set"] = "left";
+  EXPECT_NE(load_error(set).find("has no node set 'left' (it has xmax, xmin, ymax, ymin, zmax, "
+                                 "zmin)"),
+            std::string::npos)
+      << load_error(set);
+}

@@ -67,7 +67,9 @@ def test_the_spatial_builder_refuses_what_spatial_cases_do_not_have():
                                                   "is a solid_body"):
         m.flexible_body("plate", None, E=1, nu=0.3, rho=1, thickness=1)
     with pytest.raises(ValueError, match=r"elements: expected three positive integers"):
-        m.solid_body("s", size=(1, 1, 1), elements=(2, 0, 1), E=1, rho=1)
+        m.solid_body("s", size=(1, 1, 1), elements=(2, 0, 1), E=1, nu=0.3, rho=1)
+    with pytest.raises(TypeError, match="nu"):
+        m.solid_body("s", size=(1, 1, 1), elements=(2, 1, 1), E=1, rho=1)  # ν has no default
     with pytest.raises(TypeError, match="expected a triple"):
         m.spherical("s", "ground", "b", (0, 0))
     with pytest.raises(TypeError, match="has no key 'point'"):
@@ -89,7 +91,7 @@ def test_a_solid_body_built_in_python_equals_the_shipped_case():
     b = doc["bodies"][0]
     m = lsmbs.SpatialModelBuilder("solid_cantilever", gravity=doc["gravity"])
     m.solid_body("beam", origin=b["mesh"]["origin"], size=b["mesh"]["size"],
-                 elements=b["mesh"]["elements"], E=1e7, nu=0, rho=1)
+                 elements=np.array(b["mesh"]["elements"]), E=1e7, nu=0, rho=1)  # NumPy counts
     m.solid_connection("clamp", "beam", "xmin", "ground")
     m.measure("tip", "node_set_position", body="beam", node_set="xmax")
     for r in doc["output"]["responses"]:

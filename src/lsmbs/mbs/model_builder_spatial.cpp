@@ -2,6 +2,7 @@
 // drivers, loads and spring–dampers of mbs/spatial*.hpp, named like the planar ones.
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "lsmbs/mbs/model_builder.hpp"
 
@@ -129,6 +130,11 @@ const SpatialRigidBody* ModelBuilder::spatial_or_ground(const Entity& e, const s
   if (!b) {
     if (m_->find_rigid(name) || m_->find_flexible(name))
       fail(e, field, "'" + name + "' is a planar body; a spatial body is expected here");
+    if (m_->find_solid(name))
+      fail(e, field,
+           "'" + name +
+               "' is a solid body; a rigid body is expected here (tie the solid to one "
+               "with a solid_connection)");
     fail(e, field, "unknown spatial body '" + name + "'");
   }
   return b;
@@ -336,21 +342,49 @@ void ModelBuilder::solid_body(const std::string& name, SolidMesh mesh, const Sol
 
 const SolidBody& ModelBuilder::solid(const std::string& name) const {
   const SolidBody* b = m_->find_solid(name);
+  if (!b && m_->find_spatial(name))
+    fail({}, "", "'" + name + "' is a rigid body; a solid body is expected here");
   if (!b) fail({}, "", "unknown solid body '" + name + "'");
   return *b;
 }
+
+namespace {
+// "xmin, xmax, …": the node sets a message offers
+std::string set_names(const SolidMesh& m) {
+  std::string s;
+  for (const auto& [name, nodes] : m.node_sets) s += (s.empty() ? "" : ", ") + name;
+  return s;
+}
+}  // namespace
 
 void ModelBuilder::solid_connection(const std::string& name, const std::string& solid_body,
                                     const std::string& node_set, const std::string& body) {
   const Entity e{"joint", name};
   const Mark mark = begin(e);
   const SolidBody* sb = m_->find_solid(solid_body);
+  if (!sb && m_->find_spatial(solid_body))
+    fail(e, "solid", "'" + solid_body + "' is a rigid body; a solid body is expected here");
   if (!sb) fail(e, "solid", "unknown solid body '" + solid_body + "'");
   const auto set = sb->mesh.node_sets.find(node_set);
   if (set == sb->mesh.node_sets.end())
-    fail(e, "node_set", "solid body '" + solid_body + "' has no node set '" + node_set + "'");
+    fail(e, "node_set",
+         "solid body '" + solid_body + "' has no node set '" + node_set + "' (it has " +
+             set_names(sb->mesh) + ")");
   const SpatialRigidBody* rb = spatial_or_ground(e, "body", body);
+  // nodes tied before (two faces sharing an edge): once to the same body, never to another
+  std::map<int, const ConstraintElement*> tied;
+  for (const auto& c : m_->constraints())
+    if (dynamic_cast<const SolidNodeLink*>(c.get())) tied[c->dofs()[0]] = c.get();
+  const int target = rb ? rb->dof0 : -1;
   for (int n : set->second) {
+    if (const auto it = tied.find(sb->node_dof(n)); it != tied.end()) {
+      const auto d = it->second->dofs();
+      const int other = d.size() > 3 ? d[3] : -1;
+      if (other == target) continue;  // already tied there by another face
+      fail(e, "node_set",
+           "node " + std::to_string(n) + " of '" + solid_body + "' is tied by '" +
+               it->second->name() + "' to another body already (a node follows one body)");
+    }
     const Vec3& X = sb->mesh.nodes[static_cast<size_t>(n)];
     if (rb) {
       const Vec3 d = rb->orientation0.transpose() * (X - rb->position0);
