@@ -5,6 +5,7 @@ import json
 import math
 import subprocess
 
+import numpy as np
 import pytest
 
 import lsmbs
@@ -99,3 +100,33 @@ def test_static_refuses_bad_options_and_reports_a_failure(tmp_path):
     assert p.returncode == 1, p.stderr
     S = json.loads((tmp_path / "f" / "summary.json").read_text())
     assert S["status"] == "partial" and S["failure"] and S["responses"]["y"] is None
+
+
+def test_a_body_that_nothing_holds_has_no_static_equilibrium(tmp_path):
+    """A solid under gravity with no joint: its stiffness is singular up to round-off and Newton
+    runs off along the fall, where the round-off floors of the rows grow until they pass. The
+    run is refused (exit 1, partial) instead of reporting an equilibrium thousands of km away;
+    the same solid clamped at one end hangs at Timoshenko's deflection."""
+    import json
+    doc = {"name": "free", "dimension": 3, "gravity": [0, 0, -1],
+           "bodies": [{"name": "beam", "type": "solid",
+                       "mesh": {"type": "box", "origin": [0, -0.5, -0.5], "size": [10, 1, 1],
+                                "elements": [8, 1, 1]},
+                       "material": {"E": 1e7, "nu": 0, "rho": 1}}],
+           "simulation": {"t_end": 0.01, "h": 0.002},
+           "output": {"measures": [{"name": "tip", "type": "node_set_position", "body": "beam",
+                                    "node_set": "xmax"}]}}
+    case = tmp_path / "free.json"
+    case.write_text(json.dumps(doc))
+    s = run_cli("static", case, "-o", tmp_path / "o1", exit_codes=(1,))
+    assert s["status"] != "complete"
+    p = subprocess.run([CLI, "static", str(case), "-o", str(tmp_path / "o2")], capture_output=True,
+                       text=True)
+    assert p.returncode == 1 and "a body or a rigid motion is not held" in p.stderr + p.stdout
+    doc["joints"] = [{"name": "clamp", "type": "solid_connection", "solid": "beam",
+                      "node_set": "xmin", "body": "ground"}]
+    case.write_text(json.dumps(doc))
+    run_cli("static", case, "-o", tmp_path / "o3")
+    tip = np.genfromtxt(tmp_path / "o3" / "history.csv", delimiter=",", names=True)["tipz"]
+    delta = 1e4 / (8 * 1e7 / 12) + 100 / (2 * 5 / 6 * 5e6)  # qL⁴/(8EI) + qL²/(2κGA), q = 1 N/m
+    assert np.ravel(tip)[-1] == pytest.approx(-delta, rel=0.02)

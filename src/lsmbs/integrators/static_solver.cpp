@@ -9,6 +9,11 @@
 
 namespace lsmbs {
 
+namespace {
+// how far from the start, in model sizes, a static iterate may go before it counts as running away
+constexpr double kRunaway = 1e6;
+}  // namespace
+
 std::string StaticOptions::validate() const {
   if (!std::isfinite(t)) return "t: expected a finite time";
   if (!(tol_r > 0)) return "tol_r: expected a positive tolerance";
@@ -45,6 +50,7 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
     k = cnt ? sum / cnt : 1.0;
   }
   Vec R, r_abs, dx, row_floor;
+  const Vec q_start = s.q;
   auto norm = [&](const Vec& r) {
     return std::max(r.head(nq).lpNorm<Eigen::Infinity>(),
                     nc ? r.tail(nc).lpNorm<Eigen::Infinity>() : 0.0);
@@ -64,6 +70,19 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
     model.iteration_matrix(s, p, cK, k, 0.0, vals);
     row_round_off_floor(model.pattern(), vals, s.q, model.length_scale(), nq, row_floor);
     const double pn = nc ? R.tail(nc).lpNorm<Eigen::Infinity>() / k : 0.0;
+    // a body that nothing holds runs away along its rigid motion (the stiffness is singular
+    // up to round-off), where the row floors grow with |q| until they pass: refuse that state
+    const double moved = (s.q - q_start).lpNorm<Eigen::Infinity>();
+    if (!(moved <= kRunaway * model.length_scale())) {
+      char b[200];
+      std::snprintf(b, sizeof b,
+                    "the state ran away (%.3e m from the start, %.0e times the model's size): a "
+                    "body or a rigid motion is not held; a static equilibrium needs every body "
+                    "held by joints or springs",
+                    moved, kRunaway);
+      res.message = b;
+      return res;
+    }
     if (rows_converged() && pn <= o.tol_phi * model.length_scale()) {
       // a reflected element is stress-free: a spurious equilibrium, not the structure's
       if (const auto inv = model.most_compressed_element(s.q, p); inv.inverted()) {
@@ -96,8 +115,9 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
       step *= 0.5;
     }
   }
-  res.message =
-      "static Newton did not converge (‖r‖∞ = " + std::to_string(res.residual_norm) + " N)";
+  char b[120];
+  std::snprintf(b, sizeof b, "static Newton did not converge (‖r‖∞ = %.3e N)", res.residual_norm);
+  res.message = b;
   return res;
 }
 
