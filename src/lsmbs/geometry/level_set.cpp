@@ -75,10 +75,7 @@ double LevelSet::feature_distance(int fi, const Vec2& x, const Values& v, Gradie
   return D.v;
 }
 
-namespace {
-
-// Whether two sparse gradients differ by more than 1e-9 of their largest entry.
-bool gradients_differ(const LevelSet::Gradient& a, const LevelSet::Gradient& b, int nv) {
+bool gradients_differ(const LevelSetGradient& a, const LevelSetGradient& b, int nv) {
   std::vector<double> diff(static_cast<size_t>(nv)), size(static_cast<size_t>(nv));
   for (const auto& [k, g] : a) diff[static_cast<size_t>(k)] += g;
   for (const auto& [k, g] : b) diff[static_cast<size_t>(k)] -= g;
@@ -89,8 +86,6 @@ bool gradients_differ(const LevelSet::Gradient& a, const LevelSet::Gradient& b, 
   return dmax > 1e-9 * smax;
 }
 
-}  // namespace
-
 bool LevelSet::tie_at(const Vec2& x, const Values& v, double tol) const {
   Gradient grad;
   bool tie = false;
@@ -100,61 +95,11 @@ bool LevelSet::tie_at(const Vec2& x, const Values& v, double tol) const {
 
 double LevelSet::eval_node(const LevelSetNode& n, const Vec2& x, const Values& v, Gradient* grad,
                            const double* frozen, const double* tie_tol, bool* tie) const {
-  switch (n.op) {
-    case LevelSetNode::Op::kFeature:
-      if (frozen && !std::isnan(frozen[n.feature])) return frozen[n.feature];
-      return feature_distance(n.feature, x, v, grad);
-    case LevelSetNode::Op::kNot: {
-      const size_t from = grad ? grad->size() : 0;
-      const double d = eval_node(n.children[0], x, v, grad, frozen, tie_tol, tie);
-      if (grad)
-        for (size_t k = from; k < grad->size(); ++k) (*grad)[k].second = -(*grad)[k].second;
-      return -d;
-    }
-    case LevelSetNode::Op::kAnd:
-    case LevelSetNode::Op::kOr: {
-      // the children's values first; derivatives only of the active child (exact min/max) or
-      // of the children with a weight (KS)
-      const double sign = n.op == LevelSetNode::Op::kAnd ? 1.0 : -1.0;  // OR = −AND(−D)
-      const size_t m = n.children.size();
-      double dmin = std::numeric_limits<double>::infinity();
-      size_t imin = 0;
-      for (size_t i = 0; i < m; ++i) {
-        const double d = sign * eval_node(n.children[i], x, v, nullptr, frozen, tie_tol, tie);
-        if (d < dmin) dmin = d, imin = i;
-      }
-      if (n.ks <= 0) {
-        if (grad) eval_node(n.children[imin], x, v, grad, frozen, tie_tol, tie);
-        if (tie && grad) {  // a second child as low with another derivative: a kink
-          Gradient gi, gmin;
-          eval_node(n.children[imin], x, v, &gmin, frozen);
-          for (size_t i = 0; i < m && !*tie; ++i) {
-            if (i == imin) continue;
-            gi.clear();
-            const double d = sign * eval_node(n.children[i], x, v, &gi, frozen);
-            if (d - dmin <= *tie_tol && gradients_differ(gi, gmin, nv_)) *tie = true;
-          }
-        }
-        return sign * dmin;
-      }
-      // KSmin(D) = m − (1/ks) ln Σ exp(−ks (D_i − m)); ∂/∂p = Σ w_i/s ∂D_i/∂p. The children's
-      // derivatives are of their unsigned values, d_i = sign · child: the sign cancels
-      double s = 0;
-      for (size_t i = 0; i < m; ++i) {
-        const double d = sign * eval_node(n.children[i], x, v, nullptr, frozen);
-        s += std::exp(-n.ks * (d - dmin));
-      }
-      if (grad)
-        for (size_t i = 0; i < m; ++i) {
-          const size_t from = grad->size();
-          const double d = sign * eval_node(n.children[i], x, v, grad, frozen, tie_tol, tie);
-          const double w = std::exp(-n.ks * (d - dmin)) / s;
-          for (size_t k = from; k < grad->size(); ++k) (*grad)[k].second *= w;
-        }
-      return sign * (dmin - std::log(s) / n.ks);
-    }
-  }
-  return 0;
+  const auto leaf = [&](int f, Gradient* g) {
+    if (frozen && !std::isnan(frozen[f])) return frozen[f];
+    return feature_distance(f, x, v, g);
+  };
+  return evaluate_csg(n, leaf, grad, nv_, tie_tol, tie);
 }
 
 }  // namespace lsmbs

@@ -14,27 +14,10 @@
 #include <vector>
 
 #include "lsmbs/geometry/bspline.hpp"
+#include "lsmbs/geometry/csg.hpp"
 #include "lsmbs/geometry/feature.hpp"
 
 namespace lsmbs {
-
-struct LevelSetNode {
-  enum class Op { kFeature, kAnd, kOr, kNot } op = Op::kFeature;
-  int feature = -1;
-  double ks = 0;  ///< 0: exact min / max; > 0: KS smoothing parameter [1/m]
-  std::vector<LevelSetNode> children;
-  /// The paper's default region: material where every one of n features is positive (eq. 4).
-  static LevelSetNode all_of(int n) {
-    LevelSetNode root;
-    root.op = Op::kAnd;
-    for (int i = 0; i < n; ++i) {
-      LevelSetNode leaf;
-      leaf.feature = i;
-      root.children.push_back(leaf);
-    }
-    return root;
-  }
-};
 
 class LevelSet {
  public:
@@ -53,7 +36,7 @@ class LevelSet {
   };
   Values values(const Vec& p) const;
   /// ∂D/∂p as (variable, value) entries; a variable may appear more than once (the entries sum).
-  using Gradient = std::vector<std::pair<int, double>>;
+  using Gradient = LevelSetGradient;
   /// D(x); if grad is non-null it is cleared and receives ∂D/∂p. `frozen` (optional, one per
   /// feature): where not NaN, the feature's value is taken as that constant (no derivative)
   /// instead of being evaluated — the mapping freezes features far from an element.
