@@ -6,14 +6,16 @@
 // (forward-mode duals, dual.hpp).
 //   sphere:           D = |x − c| − r                                   params cx, cy, cz, r
 //   cylinder:         D = |(x − c) − ((x − c)·a) a| − r, and with a length L > 0 the capped
-//                     cylinder max(D, |(x − c)·a| − L/2)                params cx, cy, cz, r, length
-//                     (axis a: the frame's third column; length 0: through everything)
+//                     cylinder max(D, |(x − c)·a| − L/2)                params cx, cy, cz, r,
+//                     length (axis a: the frame's third column; length 0: through everything)
 //   super_ellipsoid:  g = (|u/a|^ξ + |v/b|^ξ + |w/c|^ξ)^(1/ξ), (u, v, w) = Aᵀ(x − c),
-//                     D = (g − 1)/|∇g| (first order)                   params cx, cy, cz, a, b, c, xi
+//                     D = (g − 1)/|∇g| (first order)                   params cx, cy, cz, a, b, c,
+//                     xi
 //   pocket:           a planar profile (a circle, ellipse or super-ellipse of feature.hpp, its
 //                     parameters in the face frame's (u, v)) machined to a depth from a face:
 //                     D = max(D₂(u, v), w − depth), (u, v, w) = Aᵀ(x − o), w into the part
-//                                                                        params: the profile's, depth
+//                                                                        params: the profile's,
+//                                                                        depth
 //   through_hole:     the profile through the whole part along the frame's w: D = D₂(u, v)
 // The frame (origin o, axes A = [u v w], orthonormal) is data, not a design parameter.
 //

@@ -106,8 +106,8 @@ void SolidDesignMap::subcells(int e, std::vector<Vec3>& x, std::vector<double>& 
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
           double detJ = 0;
-          x.push_back(hex_point(*mesh_, e, Vec3(-1 + (i + 0.5) * hs, -1 + (j + 0.5) * hs,
-                                                -1 + (k + 0.5) * hs),
+          x.push_back(hex_point(*mesh_, e,
+                                Vec3(-1 + (i + 0.5) * hs, -1 + (j + 0.5) * hs, -1 + (k + 0.5) * hs),
                                 detJ));
           w.push_back(detJ * w0);
         }

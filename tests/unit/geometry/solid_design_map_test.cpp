@@ -6,11 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <map>
-
-#include <Eigen/Geometry>
 
 using namespace lsmbs;
 
@@ -54,9 +53,10 @@ Mapped removed(const SolidMesh& mesh, const std::vector<Feature3>& f, const Vec&
                int subgrid = 8) {
   MappingOptions o;
   o.subgrid = subgrid;
-  SolidDesignMap map(mesh, LevelSet3(f, LevelSetNode::all_of(static_cast<int>(f.size())),
-                                     static_cast<int>(p.size())),
-                     o);
+  SolidDesignMap map(
+      mesh,
+      LevelSet3(f, LevelSetNode::all_of(static_cast<int>(f.size())), static_cast<int>(p.size())),
+      o);
   Vec mu;
   SpMat dmu;
   map.map(p, mu, &dmu);
@@ -201,11 +201,10 @@ TEST(SolidDesignMap, PocketsAndThroughHolesAgainstClosedForm) {
   {
     // (u, v) = (x, −y) on this face: the profile's centre (0.5, −0.5) is the face's centre
     const double A = 0.3, B = 0.2, X = 4, Y = 6;
-    std::vector<Feature3> f = {Feature3(
-        "rounded", Feature3::Type::kPocket,
-        {constant(0.5), constant(-0.5), constant(A), constant(B), constant(X), constant(Y),
-         constant(0.3), var(0)},
-        true, top, Feature::Type::kSuperEllipse)};
+    std::vector<Feature3> f = {Feature3("rounded", Feature3::Type::kPocket,
+                                        {constant(0.5), constant(-0.5), constant(A), constant(B),
+                                         constant(X), constant(Y), constant(0.3), var(0)},
+                                        true, top, Feature::Type::kSuperEllipse)};
     Vec p(1);
     p << d;
     const Mapped m = removed(mesh, f, p);
@@ -234,8 +233,8 @@ TEST(SolidDesignMap, PocketsAndThroughHolesAgainstClosedForm) {
 // refined on a fixed mesh (the smoothing band ε shrinks with it).
 TEST(SolidDesignMap, SubcellIntegrationConverges) {
   const double r = 0.3;
-  std::vector<Feature3> f = {Feature3(
-      "ball", Feature3::Type::kSphere, {constant(0.5), constant(0.5), constant(0.5), var(0)}, true)};
+  std::vector<Feature3> f = {Feature3("ball", Feature3::Type::kSphere,
+                                      {constant(0.5), constant(0.5), constant(0.5), var(0)}, true)};
   Vec p(1);
   p << r;
   const double V = 4 * M_PI * r * r * r / 3;
@@ -256,8 +255,8 @@ TEST(SolidDesignMap, DerivativesAgainstCentralDifferences) {
   std::vector<Feature3> f = {
       Feature3("ball", Feature3::Type::kSphere, {var(0), var(1), constant(0.4), var(2)}, true),
       Feature3("pocket", Feature3::Type::kPocket,
-               {var(3), constant(0.5), constant(0.2), constant(0.15), constant(1.2),
-                constant(0.4), var(4)},
+               {var(3), constant(0.5), constant(0.2), constant(0.15), constant(1.2), constant(0.4),
+                var(4)},
                true, side, Feature::Type::kEllipse),
       Feature3("bore", Feature3::Type::kCylinder,
                {constant(0.3), constant(0.7), var(5), constant(0.1), constant(0.5)}, true,
@@ -304,11 +303,11 @@ TEST(SolidDesignMap, DerivativesAgainstCentralDifferences) {
 // Elements the level set's bound calls uniform are uniform: H*(D) at each of their corners equals
 // the μ they were given to 1e-12 (a super-ellipsoid, whose first-order D is not a distance).
 TEST(SolidDesignMap, UniformElementsAreUniform) {
-  std::vector<Feature3> f = {Feature3(
-      "blob", Feature3::Type::kSuperEllipsoid,
-      {constant(0.5), constant(0.5), constant(0.5), constant(0.35), constant(0.15), constant(0.25),
-       constant(6)},
-      true, frame(Vec3::Zero(), Vec3(1, 2, 0.5), Vec3(0, -0.25, 1)))};
+  std::vector<Feature3> f = {Feature3("blob", Feature3::Type::kSuperEllipsoid,
+                                      {constant(0.5), constant(0.5), constant(0.5), constant(0.35),
+                                       constant(0.15), constant(0.25), constant(6)},
+                                      true,
+                                      frame(Vec3::Zero(), Vec3(1, 2, 0.5), Vec3(0, -0.25, 1)))};
   MappingOptions o;
   o.subgrid = 4;
   const SolidMesh& mesh = unit_cube(12);
@@ -327,9 +326,9 @@ TEST(SolidDesignMap, UniformElementsAreUniform) {
     ++skipped;
     double lo = 1, hi = 0;
     for (int k : mesh.cells[static_cast<size_t>(e)]) {
-      const double h = 1 / (1 + std::exp(-ls.evaluate(mesh.nodes[static_cast<size_t>(k)], theta,
-                                                      nullptr) /
-                                         map.epsilon()));
+      const double h =
+          1 / (1 + std::exp(-ls.evaluate(mesh.nodes[static_cast<size_t>(k)], theta, nullptr) /
+                            map.epsilon()));
       lo = std::min(lo, h), hi = std::max(hi, h);
     }
     const double m = o.mu_min + (1 - o.mu_min) * 0.5 * (lo + hi);
