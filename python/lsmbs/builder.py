@@ -741,9 +741,93 @@ class SpatialModelBuilder(ModelBuilder):
         raise NotImplementedError("plane-stress flexible bodies are planar; a flexible component "
                                   "of a spatial mechanism is a solid_body")
 
-    def features(self, *args, **kwargs):
-        raise NotImplementedError("level-set designs of spatial cases come with 3D components "
-                                  "(not available yet)")
+    def features(self, body, features, *, region=None, mu_min=None, subgrid=None, band=None):
+        """3D level-set features on a solid body (lsmbs.sphere, cylinder, super_ellipsoid,
+        pocket, through_hole; docs/case-format.md, "Designs of solid bodies"): by default the
+        material is where every hole feature is positive; `region` combines feature names with
+        {'and': [...]}, {'or': [...]}, {'not': ...}."""
+        super().features(body, features, region=region, mu_min=mu_min, subgrid=subgrid, band=band)
+
+
+# ---------------------------------------------------------------- 3D features (solid bodies)
+def _feature3(name, type_, params, hole, non_design, **extra):
+    what = f"{type_} {name!r}"
+    f = {"name": _name(name, f"{type_}: name"), "type": type_}
+    if non_design:
+        f["non_design"] = True
+    else:
+        f["hole"] = bool(hole)
+    for k, v in extra.items():
+        if v is not None:
+            f[k] = v
+    for k, v in params.items():
+        if v is not None:
+            f[k] = _param(v, f"{what}: {k}")
+    return f
+
+
+def sphere(name, cx, cy, cz, r, *, hole=True, non_design=False):
+    """A spherical hole (or with hole=False a solid ball) of radius r about (cx, cy, cz) [m].
+    Each parameter: a number, a Variable or a variable name."""
+    return _feature3(name, "sphere", dict(cx=cx, cy=cy, cz=cz, r=r), hole, non_design)
+
+
+def cylinder(name, cx, cy, cz, r, *, length=None, axis=(0.0, 0.0, 1.0), hole=True,
+             non_design=False):
+    """A round bore of radius r along `axis` through (cx, cy, cz), through the whole part, or
+    capped at ±length/2 from the centre."""
+    return _feature3(name, "cylinder", dict(cx=cx, cy=cy, cz=cz, r=r, length=length), hole,
+                     non_design, axis=_vec3(axis, f"cylinder {name!r}: axis"))
+
+
+def super_ellipsoid(name, cx, cy, cz, a, b, c, xi, *, orientation=None, hole=True,
+                    non_design=False):
+    """|u/a|^xi + |v/b|^xi + |w/c|^xi <= 1 (xi >= 2: a rounded box) in the frame turned by
+    `orientation` ({'axis': (x, y, z), 'angle': rad} or a 3 x 3 matrix by rows)."""
+    if orientation is not None and not isinstance(orientation, collections.abc.Mapping):
+        if hasattr(orientation, "tolist"):
+            orientation = orientation.tolist()
+        orientation = [_vec3(r, f"super_ellipsoid {name!r}: orientation") for r in orientation]
+    return _feature3(name, "super_ellipsoid", dict(cx=cx, cy=cy, cz=cz, a=a, b=b, c=c, xi=xi),
+                     hole, non_design, orientation=orientation)
+
+
+def _profile(name, type_, profile):
+    """The planar feature `profile` (lsmbs.circle, ellipse or super_ellipse) as a pocket's or
+    through-hole's profile: its type and parameters."""
+    if not isinstance(profile, collections.abc.Mapping) or profile.get("type") not in (
+            "circle", "ellipse", "super_ellipse"):
+        raise ValueError(f"{type_} {name!r}: profile: expected a planar circle, ellipse or "
+                         f"super_ellipse (lsmbs.circle(...), ...)")
+    params = {k: v for k, v in profile.items() if k not in ("name", "type", "hole", "non_design")}
+    return profile["type"], params
+
+
+def _face(name, type_, face):
+    if isinstance(face, str):
+        return face
+    if isinstance(face, collections.abc.Mapping):
+        return {k: _vec3(face.get(k), f"{type_} {name!r}: face {k}")
+                for k in ("origin", "normal", "u_axis")}
+    raise ValueError(f"{type_} {name!r}: face: expected 'xmin' ... 'zmax' or "
+                     f"{{'origin', 'normal', 'u_axis'}}")
+
+
+def pocket(name, face, profile, depth, *, hole=True, non_design=False):
+    """A planar profile (lsmbs.circle, ellipse or super_ellipse, its centre in the face's (u, v))
+    machined from `face` ('xmin' ... 'zmax' of the body's box, or {'origin', 'normal' (into the
+    part), 'u_axis'}) to `depth` [m]."""
+    ptype, params = _profile(name, "pocket", profile)
+    params["depth"] = depth
+    return _feature3(name, "pocket", params, hole, non_design, face=_face(name, "pocket", face),
+                     profile=ptype)
+
+
+def through_hole(name, face, profile, *, hole=True, non_design=False):
+    """A planar profile through the whole part, normal to `face` (as for pocket)."""
+    ptype, params = _profile(name, "through_hole", profile)
+    return _feature3(name, "through_hole", params, hole, non_design,
+                     face=_face(name, "through_hole", face), profile=ptype)
 
 
 # the spatial kinds replace the planar ones of the same name on SpatialModelBuilder; planar

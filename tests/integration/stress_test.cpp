@@ -80,7 +80,7 @@ TEST(Stress, UniaxialStretchIsTheClosedFormAndObjective) {
   Case cs = test::make_case(robot_arm_json());
   const StressMeasure& ks = stress_measure(cs, "plate_ks");
   const StressMeasure& pn = stress_measure(cs, "plate_pnorm");
-  const FlexibleBody& b = ks.body();
+  const FlexibleBody& b = *ks.flexible();
   ModelParams p = cs.model->params();
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param], lambda = 1.001;
   for (auto& mu : p.fields[b.field]) mu = 0.25;
@@ -106,7 +106,7 @@ TEST(Stress, UniaxialStretchIsTheClosedFormAndObjective) {
 
 TEST(Stress, PartialDerivativesAreTheCentralDifferences) {
   Case cs = test::make_case(robot_arm_json());
-  const FlexibleBody& b = stress_measure(cs, "plate_ks").body();
+  const FlexibleBody& b = *stress_measure(cs, "plate_ks").flexible();
   std::mt19937 gen(7);
   std::uniform_real_distribution<double> u(-1, 1);
   ModelParams p = cs.model->params();
@@ -308,7 +308,7 @@ TEST(Stress, InputErrorsNameTheJsonPathAndWhatWasExpected) {
 TEST(Stress, KsBoundsAndDerivativesHoldForEveryPositiveReference) {
   Case cs = test::make_case(robot_arm_json());
   const StressMeasure& base = stress_measure(cs, "plate_ks");
-  const FlexibleBody& b = base.body();
+  const FlexibleBody& b = *base.flexible();
   std::mt19937 gen(11);
   std::uniform_real_distribution<double> u(-1, 1);
   ModelParams p = cs.model->params();

@@ -27,12 +27,21 @@ int geometry_command(const CommonArgs& c, const GeometryArgs& a) {
     std::fprintf(stderr, "lsmbs geometry: warning: %s\n", w.get<std::string>().c_str());
   if (!c.quiet) {
     for (const auto& b : S["bodies"])
-      std::printf(
-          "lsmbs geometry: body '%s': mass %.6f kg, void area %.6e m², %d of %d elements cut "
-          "by a boundary (%d integrated on the sub-grid, within 30 bands of one)\n",
-          b["body"].get<std::string>().c_str(), b["mass"].get<double>(),
-          b["void_area"].get<double>(), b["cut_elements"].get<int>(), b["elements"].get<int>(),
-          b["band_elements"].get<int>());
+      if (b.contains("material_volume"))  // a solid body
+        std::printf(
+            "lsmbs geometry: body '%s': mass %.6f kg, material volume %.6e of %.6e m³, %d of %d "
+            "elements cut by a boundary (%d integrated on the sub-grid, within 30 bands of "
+            "one)\n",
+            b["body"].get<std::string>().c_str(), b["mass"].get<double>(),
+            b["material_volume"].get<double>(), b["domain_volume"].get<double>(),
+            b["cut_elements"].get<int>(), b["elements"].get<int>(), b["band_elements"].get<int>());
+      else
+        std::printf(
+            "lsmbs geometry: body '%s': mass %.6f kg, void area %.6e m², %d of %d elements cut "
+            "by a boundary (%d integrated on the sub-grid, within 30 bands of one)\n",
+            b["body"].get<std::string>().c_str(), b["mass"].get<double>(),
+            b["void_area"].get<double>(), b["cut_elements"].get<int>(), b["elements"].get<int>(),
+            b["band_elements"].get<int>());
     std::printf("  results in %s\n", out.c_str());
   }
   return 0;

@@ -103,12 +103,29 @@ void Design::bind(int parameter, const std::string& variable, double scale, doub
 
 namespace {
 
-// A feature's parameters at the extremes of the design bounds: each is affine in its variable,
-// so its least and largest values are at the bounds.
-void parameter_range(const Design& d, const Feature& f, std::vector<double>& lo,
-                     std::vector<double>& hi) {
+// The region of the design features [0, nd) (their intersection by default, eq. 4), OR-ed with
+// every non-design feature [nd, n) (§2.2: material kept there whatever the design does).
+LevelSetNode region_with_non_design(const std::optional<LevelSetNode>& region, int nd, int n) {
+  LevelSetNode root = region ? *region : LevelSetNode::all_of(nd);
+  if (n == nd) return root;
+  LevelSetNode any;
+  any.op = LevelSetNode::Op::kOr;
+  if (!root.children.empty() || root.op == LevelSetNode::Op::kFeature)
+    any.children.push_back(std::move(root));
+  for (int i = nd; i < n; ++i) {
+    LevelSetNode leaf;
+    leaf.feature = i;
+    any.children.push_back(leaf);
+  }
+  return any;
+}
+
+// A parameter list's least and largest values over the design bounds (each parameter is affine
+// in one variable: its extremes are at the variable's bounds).
+void binding_range(const Design& d, const std::vector<ParamBinding>& params,
+                   std::vector<double>& lo, std::vector<double>& hi) {
   lo.clear(), hi.clear();
-  for (const auto& b : f.params()) {
+  for (const auto& b : params) {
     const double a = b.variable < 0 ? b.offset : b.offset + b.scale * d.variables[b.variable].lower;
     const double c = b.variable < 0 ? b.offset : b.offset + b.scale * d.variables[b.variable].upper;
     lo.push_back(std::min(a, c));
@@ -117,6 +134,43 @@ void parameter_range(const Design& d, const Feature& f, std::vector<double>& lo,
 }
 
 }  // namespace
+
+void Design::add_geometry(const SolidBody& body, SolidGeometrySpec spec) {
+  for (const auto& b : solid_bodies)
+    if (b.body == &body)
+      throw SetupError("design.geometry", "body '" + body.name + "' has two geometries");
+  const int nd = static_cast<int>(spec.features.size());
+  std::vector<Feature3> feats = std::move(spec.features);
+  for (auto& f : spec.non_design) feats.push_back(std::move(f));
+  std::vector<double> lo, hi;
+  for (const Feature3& f : feats) {
+    binding_range(*this, f.params(), lo, hi);
+    for (const auto* th : {&lo, &hi})
+      if (auto msg = f.check(*th); !msg.empty())
+        throw SetupError(
+            "design.geometry",
+            "feature '" + f.name() + "' is degenerate within the design bounds: " + msg, f.name());
+  }
+  LevelSetNode root = region_with_non_design(spec.region, nd, static_cast<int>(feats.size()));
+  SolidBodyDesign bd;
+  bd.body = &body;
+  bd.num_design_features = nd;
+  bd.map = std::make_unique<SolidDesignMap>(
+      body.mesh, LevelSet3(std::move(feats), std::move(root), size()), spec.options);
+  for (int k : bd.map->features_outside_mesh(initial())) {
+    const Feature3& f = bd.map->level_set().features()[static_cast<size_t>(k)];
+    bool moved = false;
+    for (const auto& b : f.params()) moved = moved || (b.variable >= 0 && b.scale != 0);
+    if (moved) continue;  // the runs warn while it lies outside (features_outside)
+    throw SetupError("design.geometry",
+                     std::string(k >= nd ? "non-design feature '" : "feature '") + f.name() +
+                         "' lies wholly outside body '" + body.name +
+                         "' (it overlaps no element) and no design variable moves it: it has no "
+                         "effect; check its centre, size and frame against the mesh",
+                     f.name());
+  }
+  solid_bodies.push_back(std::move(bd));
+}
 
 void Design::add_geometry(const FlexibleBody& body, GeometrySpec spec) {
   for (const auto& b : bodies)
@@ -132,7 +186,7 @@ void Design::add_geometry(const FlexibleBody& body, GeometrySpec spec) {
   std::vector<std::array<Vec2, 2>> centres;
   std::vector<double> lo, hi;
   for (const Feature& f : feats) {
-    parameter_range(*this, f, lo, hi);
+    binding_range(*this, f.params(), lo, hi);
     // a B-spline's control points at their bounds are no curve: it is checked at the initial
     // design (a simple closed curve); within the bounds it may come to cross itself, where its
     // distance stays defined (the nearest point's side) and `lsmbs geometry` says so
@@ -162,19 +216,7 @@ void Design::add_geometry(const FlexibleBody& body, GeometrySpec spec) {
                                                           : std::hypot(hi[2], hi[3]));
     centres.push_back({Vec2(lo[0], lo[1]), Vec2(hi[0], hi[1])});
   }
-  LevelSetNode root = spec.region ? *spec.region : LevelSetNode::all_of(nd);
-  if (feats.size() > static_cast<size_t>(nd)) {  // (region) OR every non-design feature (§2.2)
-    LevelSetNode any;
-    any.op = LevelSetNode::Op::kOr;
-    if (!root.children.empty() || root.op == LevelSetNode::Op::kFeature)
-      any.children.push_back(std::move(root));
-    for (int i = nd; i < static_cast<int>(feats.size()); ++i) {
-      LevelSetNode leaf;
-      leaf.feature = i;
-      any.children.push_back(leaf);
-    }
-    root = std::move(any);
-  }
+  LevelSetNode root = region_with_non_design(spec.region, nd, static_cast<int>(feats.size()));
   BodyDesign bd;
   bd.body = &body;
   bd.num_design_features = nd;
@@ -211,9 +253,12 @@ int Design::variable_index(const std::string& name) const {
 }
 
 void Design::apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu) const {
-  if (dmu) dmu->resize(bodies.size());
+  if (dmu) dmu->resize(bodies.size() + solid_bodies.size());
   for (size_t b = 0; b < bodies.size(); ++b)
     bodies[b].map->map(p, params.fields[bodies[b].body->field], dmu ? &(*dmu)[b] : nullptr);
+  for (size_t b = 0; b < solid_bodies.size(); ++b)
+    solid_bodies[b].map->map(p, params.fields[solid_bodies[b].body->field],
+                             dmu ? &(*dmu)[bodies.size() + b] : nullptr);
   for (const auto& bd : bindings)
     params.scalars[bd.parameter] = bd.offset + bd.scale * p[bd.variable];
 }
@@ -222,11 +267,13 @@ std::vector<ParamDirection> Design::apply_with_directions(const Vec& p, ModelPar
   std::vector<SpMat> dmu;
   apply(p, params, &dmu);
   std::vector<ParamDirection> dirs(size());
-  for (size_t b = 0; b < bodies.size(); ++b)
+  for (size_t b = 0; b < dmu.size(); ++b) {
+    const int field =
+        b < bodies.size() ? bodies[b].body->field : solid_bodies[b - bodies.size()].body->field;
     for (int k = 0; k < dmu[b].outerSize(); ++k)
       for (SpMat::InnerIterator it(dmu[b], k); it; ++it)
-        dirs[it.col()].fields.push_back(
-            {bodies[b].body->field, static_cast<int>(it.row()), it.value()});
+        dirs[it.col()].fields.push_back({field, static_cast<int>(it.row()), it.value()});
+  }
   for (const auto& bd : bindings) dirs[bd.variable].scalars.emplace_back(bd.parameter, bd.scale);
   return dirs;
 }
@@ -261,18 +308,28 @@ std::string Design::coincident_features(const Vec& p) const {
 
 std::string Design::features_outside(const Vec& p) const {
   std::string w;
-  for (const BodyDesign& b : bodies) {
-    const auto outside = b.map->features_outside_mesh(p);
-    if (outside.empty()) continue;
+  const auto add = [&](const std::string& body, const std::vector<std::string>& outside) {
+    if (outside.empty()) return;
     std::string names;
-    for (int f : outside)
-      names += (names.empty() ? "'" : ", '") + b.map->level_set().features()[f].name() + "'";
-    w += (w.empty() ? "" : "; ") + std::string("body '") + b.body->name + "': level-set " +
+    for (const auto& n : outside) names += (names.empty() ? "'" : ", '") + n + "'";
+    w += (w.empty() ? "" : "; ") + std::string("body '") + body + "': level-set " +
          (outside.size() == 1 ? "feature " : "features ") + names +
          (outside.size() == 1 ? " lies" : " lie") +
          " wholly outside the body at this design (overlapping no element), with no effect on "
          "it until a design variable moves it in (check the centre and size against the mesh, "
          "in the body's frame)";
+  };
+  for (const BodyDesign& b : bodies) {
+    std::vector<std::string> names;
+    for (int f : b.map->features_outside_mesh(p))
+      names.push_back(b.map->level_set().features()[static_cast<size_t>(f)].name());
+    add(b.body->name, names);
+  }
+  for (const SolidBodyDesign& b : solid_bodies) {
+    std::vector<std::string> names;
+    for (int f : b.map->features_outside_mesh(p))
+      names.push_back(b.map->level_set().features()[static_cast<size_t>(f)].name());
+    add(b.body->name, names);
   }
   return w;
 }
@@ -280,10 +337,14 @@ std::string Design::features_outside(const Vec& p) const {
 std::string Design::idle_variables() const {
   std::vector<char> drives(variables.size(), 0);
   for (const auto& b : bindings) drives[static_cast<size_t>(b.variable)] = 1;
+  const auto mark = [&](const std::vector<ParamBinding>& params) {
+    for (const auto& pb : params)
+      if (pb.variable >= 0 && pb.scale != 0) drives[static_cast<size_t>(pb.variable)] = 1;
+  };
   for (const BodyDesign& b : bodies)
-    for (const auto& f : b.map->level_set().features())
-      for (const auto& pb : f.params())
-        if (pb.variable >= 0 && pb.scale != 0) drives[static_cast<size_t>(pb.variable)] = 1;
+    for (const auto& f : b.map->level_set().features()) mark(f.params());
+  for (const SolidBodyDesign& b : solid_bodies)
+    for (const auto& f : b.map->level_set().features()) mark(f.params());
   std::string names;
   int n = 0;
   for (size_t k = 0; k < drives.size(); ++k)

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lsmbs/geometry/design_map.hpp"
+#include "lsmbs/geometry/solid_design_map.hpp"
 #include "lsmbs/mbs/model.hpp"
 #include "lsmbs/mbs/parameterization.hpp"
 
@@ -39,6 +40,21 @@ struct GeometrySpec {
   MappingOptions options;
 };
 
+/// The 3D level-set geometry of one solid body (docs/case-format.md, "Designs of solid bodies").
+struct SolidBodyDesign {
+  const SolidBody* body = nullptr;
+  std::unique_ptr<SolidDesignMap> map;
+  int num_design_features = 0;
+};
+
+/// A solid body's geometry as a case gives it: as GeometrySpec, with 3D features.
+struct SolidGeometrySpec {
+  std::vector<Feature3> features;
+  std::vector<Feature3> non_design;
+  std::optional<LevelSetNode> region;
+  MappingOptions options;
+};
+
 /// model parameter = offset + scale · p_variable
 struct ParameterBinding {
   int parameter = -1;
@@ -50,6 +66,7 @@ class Design final : public Parameterization {
  public:
   std::vector<DesignVariable> variables;
   std::vector<BodyDesign> bodies;
+  std::vector<SolidBodyDesign> solid_bodies;
   std::vector<ParameterBinding> bindings;
 
   // ---------------------------------------------------------- building a design in code
@@ -69,6 +86,10 @@ class Design final : public Parameterization {
   /// feature wholly outside its body that no design variable moves, or that no values within the
   /// bounds bring in. Add the variables first.
   void add_geometry(const FlexibleBody& body, GeometrySpec spec);
+  /// A solid body's 3D geometry. Refused (SetupError "design.geometry", naming the feature): a
+  /// body with two geometries, a feature degenerate within the design bounds, a feature wholly
+  /// outside the body that no design variable moves.
+  void add_geometry(const SolidBody& body, SolidGeometrySpec spec);
   /// model parameter `parameter` (Model::parameter_index) = offset + scale · p_variable.
   /// Refused (SetupError "design.parameters"): an unknown variable or parameter, a parameter bound
   /// twice, or one that leaves its admissible range (ModelBuilder::check_parameter_value) at a
@@ -91,7 +112,7 @@ class Design final : public Parameterization {
   double snap_to_bounds(int i, double v) const;
 
   /// Writes μ(p) into each designed body's field and bound parameter values into scalars.
-  /// If dmu is given it receives ∂μ/∂p per designed body (same order as `bodies`).
+  /// If dmu is given it receives ∂μ/∂p per designed body (`bodies`, then `solid_bodies`).
   void apply(const Vec& p, ModelParams& params, std::vector<SpMat>* dmu) const;
   void apply(const Vec& p, ModelParams& params) const override { apply(p, params, nullptr); }
   /// apply() with ∂μ/∂p, returned as one parameter direction ∂(ModelParams)/∂p_i per variable

@@ -22,6 +22,12 @@ struct SolidMesh {
   /// The box [origin, origin + size] in n[0] × n[1] × n[2] hexahedra, with the node sets of its
   /// six faces: xmin, xmax, ymin, ymax, zmin, zmax.
   static SolidMesh box(const Vec3& origin, const Vec3& size, const std::array<int, 3>& n);
+  /// A Gmsh MSH 4.1 ASCII file (fem/msh_reader.hpp): its 4-node tetrahedra and 8-node hexahedra
+  /// (Gmsh's node order is the hexahedron's), node sets from the physical groups of its points,
+  /// lines and surface elements. A cell turned inside out as a whole is reordered; one folded in
+  /// part, degenerate or nearly flat is refused with its tag and line, as are coincident nodes;
+  /// nodes that no cell uses are dropped.
+  static SolidMesh read_gmsh(const std::string& path);
 };
 
 }  // namespace lsmbs

@@ -59,7 +59,7 @@ SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, Mappi
     Vec3 c = Vec3::Zero();
     for (int k : cell) c += mesh.nodes[static_cast<size_t>(k)];
     c /= static_cast<double>(cell.size());
-    double r = 0, edges = 0;
+    double r = 0, edge = 0;
     for (int k : cell) r = std::max(r, (mesh.nodes[static_cast<size_t>(k)] - c).norm());
     if (cell.size() == 8) {
       double V = 0, detJ = 0;
@@ -72,9 +72,8 @@ SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, Mappi
     } else {
       volume_[e] = tet_volume(mesh, e);
     }
-    // the mean edge length: the six edges of a tetrahedron, or the hexahedron's diagonal-free
-    // twelve (node pairs at parent distance 2)
-    int count = 0;
+    // the longest edge (of a hexahedron: node pairs at parent distance 2), so that the band ε
+    // spans `band` sub-cells in every direction of a flat element
     for (size_t i = 0; i < cell.size(); ++i)
       for (size_t j = i + 1; j < cell.size(); ++j) {
         if (cell.size() == 8) {
@@ -82,12 +81,11 @@ SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, Mappi
           for (int k = 0; k < 3; ++k) differ += kCorner[i][k] != kCorner[j][k];
           if (differ != 1) continue;
         }
-        edges +=
-            (mesh.nodes[static_cast<size_t>(cell[i])] - mesh.nodes[static_cast<size_t>(cell[j])])
-                .norm();
-        ++count;
+        edge = std::max(edge, (mesh.nodes[static_cast<size_t>(cell[i])] -
+                               mesh.nodes[static_cast<size_t>(cell[j])])
+                                  .norm());
       }
-    h[e] = edges / count;
+    h[e] = edge;
     centre_[e] = c;
     radius_[e] = r;
   }
@@ -180,6 +178,19 @@ void SolidDesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts
     dmu_dp->setFromTriplets(trip.begin(), trip.end());
   }
   if (counts) *counts = local;
+}
+
+std::vector<int> SolidDesignMap::features_outside_mesh(const Vec& p) const {
+  const auto theta = ls_.values(p);
+  std::vector<int> outside;
+  const auto& features = ls_.features();
+  for (size_t f = 0; f < features.size(); ++f) {
+    bool reaches = false;
+    for (int e = 0; e < num_elements() && !reaches; ++e)
+      reaches = features[f].bound(centre_[e], theta[f].data(), 0) <= radius_[e];
+    if (!reaches) outside.push_back(static_cast<int>(f));
+  }
+  return outside;
 }
 
 double SolidDesignMap::material_volume(const Vec& mu, const SpMat* dmu, Vec* grad) const {

@@ -7,7 +7,8 @@
 // trilinearly (weight det J × (2/n)³ at each sub-cell centre), a tetrahedron's through the
 // collapsed cube (Duffy) map, (a, b, c) ∈ [0, 1]³ → λ = (a, b(1 − a), c(1 − a)(1 − b)), each
 // sub-cell weighted by its exact volume. V_e is the sum of the weights, so a uniform element has
-// μ_e = 1 exactly. ε = band × (median element edge / n). An element is uniform (μ_e = 1 or μ_min,
+// μ_e = 1 exactly. ε = band × (median longest element edge / n): the band spans `band` sub-cells
+// in every direction, also of a flat element. An element is uniform (μ_e = 1 or μ_min,
 // not integrated) when the level set's bound() at its centre exceeds its circumradius + 30 ε
 // (+ the KS slack): no boundary can reach it.
 #include <vector>
@@ -31,6 +32,10 @@ class SolidDesignMap {
   /// μ (size n_e) and, if requested, ∂μ/∂p (n_e × n_v, sparse) and the counts of the mapping.
   /// A pure function of p.
   void map(const Vec& p, Vec& mu, SpMat* dmu_dp = nullptr, MapCounts* counts = nullptr) const;
+  /// Features (indices into level_set().features()) wholly outside the mesh at p: every element's
+  /// centre is farther from the feature's shape than the element's circumradius (the features'
+  /// bound(), never above the true distance).
+  std::vector<int> features_outside_mesh(const Vec& p) const;
   /// Material volume Σ_e V_e (μ_e − μ_min)/(1 − μ_min) and its gradient (checks and reports).
   double material_volume(const Vec& mu, const SpMat* dmu, Vec* grad) const;
 

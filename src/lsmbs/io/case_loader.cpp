@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -238,26 +239,49 @@ struct Loader : KindReader {
     at_entry(r, [&] { builder_.spatial_body(name, o); });
   }
 
-  // A 3D solid body ("dimension": 3, "type": "solid"): a box of hexahedra, St Venant–Kirchhoff.
+  // A 3D solid body ("dimension": 3, "type": "solid"): a box of hexahedra or a Gmsh mesh of
+  // tetrahedra and hexahedra, St Venant–Kirchhoff.
   void solid_body(const JsonReader& r, const std::string& name) {
     const JsonReader m = r.child("mesh");
-    m.one_of("type", {"box"});
-    const Vec3 origin = m.vec3("origin", Vec3::Zero()), size = m.vec3("size");
-    if (!(size.minCoeff() > 0)) m.fail("size", "expected three positive lengths");
-    const JsonReader el = m.child("elements");
-    if (!el.is_array() || el.size() != 3) el.fail("expected [nx, ny, nz]");
-    std::array<int, 3> n{};
-    double cells = 1;
-    for (size_t k = 0; k < 3; ++k) {
-      const double v = el.at(k).as_number();
-      if (v < 1 || v != std::floor(v) || v > 1e6)
-        el.fail("expected three positive integers [nx, ny, nz]");
-      n[k] = static_cast<int>(v);
-      cells *= v;
+    SolidMesh mesh;
+    if (m.one_of("type", {"box", "gmsh"}) == "gmsh") {
+      const std::string f = resolve(m.string("file"));
+      try {
+        mesh = SolidMesh::read_gmsh(f);
+      } catch (const Error& e) {
+        throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() +
+                    "/file)");
+      }
+      const double sc = m.positive("scale", 1.0);
+      for (auto& x : mesh.nodes) {
+        x *= sc;
+        if (!x.allFinite() || x.norm() > 1e100)
+          m.fail("scale",
+                 "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
+      }
+      if (mesh.num_elements() > kMaxSolidElements)
+        m.fail("file", "the mesh has " + std::to_string(mesh.num_elements()) +
+                           " cells; a solid body has at most " +
+                           std::to_string(static_cast<long>(kMaxSolidElements)));
+    } else {
+      const Vec3 origin = m.vec3("origin", Vec3::Zero()), size = m.vec3("size");
+      if (!(size.minCoeff() > 0)) m.fail("size", "expected three positive lengths");
+      const JsonReader el = m.child("elements");
+      if (!el.is_array() || el.size() != 3) el.fail("expected [nx, ny, nz]");
+      std::array<int, 3> n{};
+      double cells = 1;
+      for (size_t k = 0; k < 3; ++k) {
+        const double v = el.at(k).as_number();
+        if (v < 1 || v != std::floor(v) || v > 1e6)
+          el.fail("expected three positive integers [nx, ny, nz]");
+        n[k] = static_cast<int>(v);
+        cells *= v;
+      }
+      if (cells > kMaxSolidElements)
+        el.fail("a box mesh has at most " + std::to_string(static_cast<long>(kMaxSolidElements)) +
+                " elements (nx × ny × nz)");
+      mesh = SolidMesh::box(origin, size, n);
     }
-    if (cells > kMaxSolidElements)
-      el.fail("a box mesh has at most " + std::to_string(static_cast<long>(kMaxSolidElements)) +
-              " elements (nx × ny × nz)");
     m.finish();
     const JsonReader mat = r.child("material");
     SolidBodyOptions o;
@@ -270,7 +294,7 @@ struct Loader : KindReader {
                         ? HexElement::Formulation::kFull
                         : HexElement::Formulation::kEnhanced;
     r.finish();
-    at_entry(r, [&] { builder_.solid_body(name, SolidMesh::box(origin, size, n), o); });
+    at_entry(r, [&] { builder_.solid_body(name, std::move(mesh), o); });
   }
 
   // A rotation: {"axis": [x, y, z], "angle": rad}, or its matrix by rows [[…], […], […]]
@@ -471,7 +495,7 @@ struct Loader : KindReader {
         t.fail("measure", "'" + col + "' is in " + u + ", the terms before it in " + unit +
                               ": a combination adds quantities of one unit");
       if (const auto* sm = dynamic_cast<const StressMeasure*>(found)) {
-        if (stress && stress != sm && &stress->body() != &sm->body())
+        if (stress && stress != sm && stress->body_name() != sm->body_name())
           t.fail("measure",
                  "stresses of two bodies: their exact design derivatives do not add "
                  "up in one combination; combine each body's separately");
@@ -723,13 +747,81 @@ struct Loader : KindReader {
     return Feature(name, type, ps, hole);
   }
 
-  void geometry(const JsonReader& g, Design& d) {
-    const std::string body = g.string("body");
-    const FlexibleBody& fb =
-        at_key(g, "body", [&]() -> const FlexibleBody& { return builder_.flexible(body); });
-    for (const auto& other : d.bodies)
-      if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
-    GeometrySpec spec;
+  // A 3D feature entry of a solid body's geometry: its parameters in Feature3's order, its frame
+  // (a cylinder's axis, a super-ellipsoid's orientation, a pocket's or through-hole's face).
+  Feature3 feature3(const JsonReader& f, const Design& d, const SolidMesh& mesh, bool& non_design) {
+    const std::string name = f.string("name");
+    bool ok = false;
+    const auto type = Feature3::parse_type(f.one_of("type", Feature3::type_names()), &ok);
+    Feature::Type profile = Feature::Type::kCircle;
+    Frame3 frame;
+    if (type == Feature3::Type::kPocket || type == Feature3::Type::kThroughHole) {
+      profile =
+          Feature::parse_type(f.one_of("profile", {"circle", "ellipse", "super_ellipse"}), &ok);
+      frame = face_frame(f.child("face"), mesh);
+    } else if (type == Feature3::Type::kCylinder) {
+      const Vec3 axis = f.vec3("axis", Vec3::UnitZ());
+      if (!(axis.norm() > 0)) f.fail("axis", "expected a non-zero direction");
+      frame.axes = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), axis).toRotationMatrix();
+    } else if (type == Feature3::Type::kSuperEllipsoid && f.has("orientation")) {
+      frame.axes = orientation(f.child("orientation"));
+    }
+    std::vector<ParamBinding> ps;
+    for (const std::string& key : Feature3::parameter_names(type, profile))
+      if ((key == "angle" || key == "length") && !f.has(key))
+        ps.push_back(ParamBinding{});  // zero: no rotation; a cylinder through everything
+      else
+        ps.push_back(binding(f, key, d));
+    non_design = f.boolean("non_design", false);
+    if (non_design && f.has("hole"))
+      f.fail("hole", "a non_design feature is solid inside (material forced there); drop \"hole\"");
+    const bool hole = non_design ? false : f.boolean("hole", true);
+    f.finish();
+    return Feature3(name, type, ps, hole, frame, profile);
+  }
+
+  // A pocket's or through-hole's face: a face of the mesh's bounding box by name, its profile's
+  // (u, v) the face plane's two global coordinates in x, y, z order and w the depth into the
+  // part; or {"origin", "normal" (into the part), "u_axis"}, v = normal × u_axis.
+  static Frame3 face_frame(const JsonReader& r, const SolidMesh& mesh) {
+    Frame3 fr;
+    if (r.is_string()) {
+      const std::vector<std::string> names = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
+      const auto it = std::find(names.begin(), names.end(), r.as_string());
+      if (it == names.end())
+        r.fail(
+            "expected a face of the body's bounding box (xmin, xmax, ymin, ymax, zmin, zmax) "
+            "or {\"origin\", \"normal\", \"u_axis\"}");
+      const int k = static_cast<int>(it - names.begin()) / 2;
+      const bool max = (it - names.begin()) % 2 == 1;
+      Vec3 lo = mesh.nodes.front(), hi = lo;
+      for (const Vec3& x : mesh.nodes) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+      fr.origin = Vec3::Zero();
+      fr.origin[k] = max ? hi[k] : lo[k];
+      const int u = k == 0 ? 1 : 0, v = k == 2 ? 1 : 2;
+      fr.axes.setZero();
+      fr.axes(u, 0) = 1, fr.axes(v, 1) = 1, fr.axes(k, 2) = max ? -1 : 1;
+      return fr;
+    }
+    fr.origin = r.vec3("origin");
+    const Vec3 n = r.vec3("normal");
+    if (!(n.norm() > 0)) r.fail("normal", "expected a non-zero direction (into the part)");
+    Vec3 u = r.vec3("u_axis");
+    const Vec3 w = n.normalized();
+    u -= u.dot(w) * w;  // its part in the face's plane
+    if (!(u.norm() > 1e-6 * r.vec3("u_axis").norm()) || !(u.norm() > 0))
+      r.fail("u_axis", "expected a direction not parallel to the normal");
+    r.finish();
+    fr.axes.col(0) = u.normalized();
+    fr.axes.col(2) = w;
+    fr.axes.col(1) = w.cross(fr.axes.col(0));
+    return fr;
+  }
+
+  // The features, region and mapping options of a geometry entry (planar or solid), each
+  // feature read by parse(entry, non_design); returns every feature's entry by name.
+  template <class Spec, class Parse>
+  std::map<std::string, JsonReader> geometry_spec(const JsonReader& g, Spec& spec, Parse&& parse) {
     std::map<std::string, int> by_name;  // design features, by name: their index in the region
     std::map<std::string, JsonReader> entries;  // every feature's entry, by name
     for (const auto& f : g.items("features", true)) {
@@ -737,7 +829,7 @@ struct Loader : KindReader {
       if (entries.count(name)) f.fail("name", "duplicate feature name '" + name + "'");
       entries.emplace(name, f);
       bool non_design = false;
-      Feature feat = feature(f, d, non_design);
+      auto feat = parse(f, non_design);
       if (!non_design) by_name[name] = static_cast<int>(spec.features.size());
       (non_design ? spec.non_design : spec.features).push_back(std::move(feat));
     }
@@ -756,10 +848,40 @@ struct Loader : KindReader {
     mo.mu_min = g.number("mu_min", mo.mu_min);
     if (!(mo.mu_min > 0 && mo.mu_min < 1)) g.fail("mu_min", "expected a value in (0, 1)");
     mo.subgrid = g.integer("subgrid", mo.subgrid, 1);
-    if (mo.subgrid > 64) g.fail("subgrid", "expected at most 64 sub-cells per edge");
+    // 3D: n³ sub-cells per cut element
+    const int most = spatial ? 32 : 64;
+    if (mo.subgrid > most)
+      g.fail("subgrid", "expected at most " + std::to_string(most) + " sub-cells per edge");
     mo.band = g.positive("band", mo.band);
+    if (spatial && g.has("offset"))
+      g.fail("offset", "the eroded and dilated designs (an offset level set) are planar only");
     mo.offset = g.number("offset", mo.offset);
     g.finish();
+    return entries;
+  }
+
+  void geometry(const JsonReader& g, Design& d) {
+    const std::string body = g.string("body");
+    if (spatial) {
+      const SolidBody& sb =
+          at_key(g, "body", [&]() -> const SolidBody& { return builder_.solid(body); });
+      for (const auto& other : d.solid_bodies)
+        if (other.body == &sb) g.fail("body", "body '" + sb.name + "' has two geometry entries");
+      SolidGeometrySpec spec;
+      const auto entries = geometry_spec(g, spec, [&](const JsonReader& f, bool& non_design) {
+        return feature3(f, d, sb.mesh, non_design);
+      });
+      at_design(
+          g, [&] { d.add_geometry(sb, std::move(spec)); }, &entries);
+      return;
+    }
+    const FlexibleBody& fb =
+        at_key(g, "body", [&]() -> const FlexibleBody& { return builder_.flexible(body); });
+    for (const auto& other : d.bodies)
+      if (other.body == &fb) g.fail("body", "body '" + fb.name + "' has two geometry entries");
+    GeometrySpec spec;
+    const auto entries = geometry_spec(
+        g, spec, [&](const JsonReader& f, bool& non_design) { return feature(f, d, non_design); });
     at_design(
         g, [&] { d.add_geometry(fb, std::move(spec)); }, &entries);
   }

@@ -313,8 +313,9 @@ void read_path_deviation(KindReader& k, const JsonReader& r, const std::string& 
   k.add_measure(std::make_unique<PathDeviationMeasure>(name, p, std::move(path)));
 }
 
-void read_stress(KindReader& k, const JsonReader& r, const std::string& name) {
-  const FlexibleBody& fb = flexible(k, r);
+}  // namespace
+
+StressMeasure::Options stress_options(const JsonReader& r) {
   StressMeasure::Options o;
   o.aggregation = r.one_of("aggregate", {"ks", "pnorm"}, "ks") == "ks"
                       ? StressMeasure::Aggregation::kKs
@@ -328,7 +329,14 @@ void read_stress(KindReader& k, const JsonReader& r, const std::string& name) {
     r.fail("parameter", "expected a p-norm exponent >= 1");
   o.relaxation = r.positive("relaxation", 0.5);
   if (o.relaxation > 1) r.fail("relaxation", "expected the qp exponent q in (0, 1]");
-  k.add_measure(std::make_unique<StressMeasure>(name, &fb, o));
+  return o;
+}
+
+namespace {
+
+void read_stress(KindReader& k, const JsonReader& r, const std::string& name) {
+  const FlexibleBody& fb = flexible(k, r);
+  k.add_measure(std::make_unique<StressMeasure>(name, &fb, stress_options(r)));
 }
 
 std::vector<ModelKind> point_measures() {

@@ -105,6 +105,8 @@ std::vector<std::string> kind_types_in(const std::vector<ModelKind>& kinds,
 /// The kinds of spatial cases ("dimension": 3; io/spatial_kinds.cpp): joints, drivers, forces and
 /// measures of spatial rigid bodies, named like their planar counterparts where they have one.
 const std::vector<ModelKind>& spatial_model_kinds();
+/// A stress measure's aggregation options ("aggregate", "reference", "parameter", "relaxation").
+StressMeasure::Options stress_options(const JsonReader& r);
 const ModelKind* find_spatial_kind(const std::string& section, const std::string& type);
 std::vector<std::string> spatial_kind_types(const std::string& section);
 

@@ -333,7 +333,7 @@ void write_spatial_vtu(const std::string& path, const SpatialRigidBody& b, const
 }
 
 void write_solid_vtu(const std::string& path, const SolidBody& b, const Vec& q,
-                     const ModelParams& p) {
+                     const ModelParams& p, const Vec* phi) {
   const int nn = b.mesh.num_nodes(), ne = b.mesh.num_elements();
   VtuPiece v;
   std::vector<Vec3> x(static_cast<size_t>(nn));
@@ -382,6 +382,7 @@ void write_solid_vtu(const std::string& path, const SolidBody& b, const Vec& q,
     vm.values.push_back(std::sqrt(1.5 * dev.squaredNorm()));
   }
   v.point_data = {elastic, total};
+  if (phi) v.point_data.push_back({"phi", 1, std::vector<double>(phi->data(), phi->data() + nn)});
   v.cell_data = {{"mu", 1, std::vector<double>(mu.data(), mu.data() + ne)}, std::move(vm)};
   v.write(path);
 }
@@ -422,7 +423,7 @@ ModelVtkFiles write_model_vtk(const std::string& out_dir, const std::string& fol
   for (const auto& b : m.flexible_bodies()) {
     CellArrays cells;
     for (const StressMeasure* sm : stress)
-      if (&sm->body() == b.get()) {
+      if (sm->flexible() == b.get()) {
         State s;
         s.q = q;
         std::vector<double> se;

@@ -56,9 +56,10 @@ void write_spatial_vtu(const std::string& path, const SpatialRigidBody& body, co
 /// A 3D solid body at positions q: its hexahedra and tetrahedra at the deformed nodes, point
 /// data total_displacement (x − X) and elastic_displacement (x less the rigid motion that fits
 /// the nodes best, Kabsch), cell data mu and von_mises (the Cauchy stress at the element centre
-/// from its own strain, solid material).
+/// from its own strain, solid material); with phi, also the level set φ at the nodes (point data
+/// "phi": material where φ > 0; its zero contour is the designed boundary).
 void write_solid_vtu(const std::string& path, const SolidBody& body, const Vec& q,
-                     const ModelParams& p);
+                     const ModelParams& p, const Vec* phi = nullptr);
 /// A design on its mesh (body frame, undeformed): the level set φ at the nodes (material where
 /// φ > 0; a contour at 0 is the features' boundary) and μ_e per element.
 void write_design_vtu(const std::string& path, const Mesh2D& mesh, const Vec& mu, const Vec& phi);

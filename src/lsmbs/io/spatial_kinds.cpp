@@ -329,6 +329,30 @@ std::vector<ModelKind> measures() {
          k.add_measure(std::make_unique<NodeSetMeasure>(name, std::move(dofs)));
        }},
       {"measures",
+       "mass",
+       "the mass of a solid body, Σ_e μ_e ρ V_e [kg] (a design's material volume times ρ)",
+       {req("body", K::kName, "the solid body")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         const std::string b = r.string("body");
+         const SolidBody& sb =
+             k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
+         k.add_measure(std::make_unique<SolidMassMeasure>(name, &sb));
+       }},
+      {"measures",
+       "stress",
+       "aggregated relaxed von Mises stress of a solid body, s_e = μ_e^q σ_vM [Pa]",
+       {req("body", K::kName, "the solid body"),
+        opt("reference", K::kPositive, "σ_ref of the KS aggregate [Pa] (required with ks)"),
+        opt("aggregate", K::kName, "\"ks\" (default) or \"pnorm\""),
+        opt("parameter", K::kPositive, "KS ρ (default 50) or p-norm p (default 8)"),
+        opt("relaxation", K::kPositive, "q in (0, 1] (default 0.5)")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         const std::string b = r.string("body");
+         const SolidBody& sb =
+             k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
+         k.add_measure(std::make_unique<StressMeasure>(name, &sb, stress_options(r)));
+       }},
+      {"measures",
        "combination",
        "c0 + Σ w_i · (a column of an earlier measure)",
        {req("terms", K::kJson, "[{\"measure\": column, \"weight\": w}, …]"),

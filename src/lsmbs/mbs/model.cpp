@@ -124,6 +124,7 @@ SolidBody& Model::add_solid_body(SolidBody b) {
   if (body->field < 0) body->field = add_field(Vec::Ones(body->mesh.num_elements()));
   solid_.push_back(std::move(body));
   SolidBody* sb = solid_.back().get();
+  sb->first_force = static_cast<int>(forces_.size());
   for (int e = 0; e < sb->mesh.num_elements(); ++e) add_force(std::make_unique<SolidForce>(sb, e));
   length_scale_ = std::max(length_scale_ == 1 ? 0.0 : length_scale_, sb->mesh.size());
   return *sb;
@@ -767,12 +768,15 @@ void Model::for_each_param_partial(
 }
 
 int Model::force_of_field_entry(int field, int entry) const {
+  const auto at = [&](int first) {
+    const int e = first + entry;
+    const auto m = forces_[static_cast<size_t>(e)]->material_entry();
+    return m.field == field && m.entry == entry ? e : -1;
+  };
   for (const auto& b : flex_)
-    if (b->field == field) {
-      const int e = b->first_force + entry;
-      const auto m = forces_[static_cast<size_t>(e)]->material_entry();
-      return m.field == field && m.entry == entry ? e : -1;
-    }
+    if (b->field == field) return at(b->first_force);
+  for (const auto& b : solid_)
+    if (b->field == field) return at(b->first_force);
   return -1;
 }
 

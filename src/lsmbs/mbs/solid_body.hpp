@@ -25,6 +25,7 @@ struct SolidBody {
   HexElement::Formulation formulation = HexElement::Formulation::kEnhanced;
   /// Built from the mesh (Model::add_solid_body), one per cell.
   std::vector<std::unique_ptr<SolidElement>> elements;
+  int first_force = -1;  ///< index of element 0's SolidForce in Model::forces()
 
   int node_dof(int node) const { return dof0 + 3 * node; }
   double mass(const ModelParams& p) const;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "lsmbs/fem/solid_stress.hpp"
+
 namespace lsmbs {
 namespace {
 Vec2 point_position(const PointRef& p, const Vec& q) {
@@ -340,14 +342,44 @@ namespace {
 double relaxed(double mu, double q) { return mu > 0 ? std::pow(mu, q) : 0.0; }
 }  // namespace
 
+std::vector<double> StressMeasure::element_centre(int e) const {
+  if (body_) {
+    const Vec2 c = body_->mesh.centroid(e);
+    return {c.x(), c.y()};
+  }
+  Vec3 c = Vec3::Zero();
+  const auto& cell = solid_->mesh.cells[static_cast<size_t>(e)];
+  for (int k : cell) c += solid_->mesh.nodes[static_cast<size_t>(k)];
+  c /= static_cast<double>(cell.size());
+  return {c.x(), c.y(), c.z()};
+}
+
+void StressMeasure::solid_coordinates(int e, const Vec& q, double* x) const {
+  const auto& cell = solid_->mesh.cells[static_cast<size_t>(e)];
+  for (size_t k = 0; k < cell.size(); ++k)
+    for (int i = 0; i < 3; ++i)
+      x[3 * k + static_cast<size_t>(i)] = q[solid_->node_dof(cell[k]) + i];
+}
+
 void StressMeasure::element_stresses(const State& s, const ModelParams& p,
                                      std::vector<double>& out) const {
+  const Vec& mu = p.fields[field()];
+  double x[kMaxLocalDofs];
+  if (solid_) {
+    const SolidBody& b = *solid_;
+    const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
+    out.resize(b.elements.size());
+    for (size_t e = 0; e < b.elements.size(); ++e) {
+      solid_coordinates(static_cast<int>(e), s.q, x);
+      out[e] = relaxed(mu[static_cast<Eigen::Index>(e)], o_.relaxation) *
+               solid_centre_von_mises(*b.elements[e], x, E0, nu);
+    }
+    return;
+  }
   const FlexibleBody& b = *body_;
   const int ne = static_cast<int>(b.elements.size());
-  const Vec& mu = p.fields[b.field];
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
   out.resize(ne);
-  double x[kMaxLocalDofs];
   for (int e = 0; e < ne; ++e) {
     b.element_coordinates(e, s.q, x);
     out[e] = relaxed(mu[e], o_.relaxation) * b.elements[e]->centre_stress(x, E0, nu, false).vm;
@@ -402,12 +434,28 @@ void StressMeasure::gradient(const Model&, const State& s, const ModelParams& p,
   thread_local Vec dq;
   element_stresses(s, p, se);
   aggregate(se, &w);
+  const Vec& mu = p.fields[field()];
+  double x[kMaxLocalDofs], d[kMaxLocalDofs];
+  if (solid_) {
+    const SolidBody& b = *solid_;
+    const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
+    dq.setZero(3 * b.mesh.num_nodes());
+    for (int e = 0; e < static_cast<int>(se.size()); ++e) {
+      if (w[e] == 0) continue;
+      solid_coordinates(e, s.q, x);
+      solid_centre_von_mises(*b.elements[static_cast<size_t>(e)], x, E0, nu, d);
+      const double f = w[e] * relaxed(mu[e], o_.relaxation);
+      const auto& cell = b.mesh.cells[static_cast<size_t>(e)];
+      for (size_t k = 0; k < 3 * cell.size(); ++k) dq[3 * cell[k / 3] + k % 3] += f * d[k];
+    }
+    for (int i = 0; i < dq.size(); ++i)
+      if (dq[i] != 0) g.dq.emplace_back(b.dof0 + i, dq[i]);
+    return;
+  }
   const FlexibleBody& b = *body_;
-  const Vec& mu = p.fields[b.field];
   const double E0 = p.scalars[b.E_param], nu = p.scalars[b.nu_param];
   const int nn = b.mesh.num_nodes();
   dq.setZero(2 * nn);
-  double x[kMaxLocalDofs];
   for (int e = 0; e < static_cast<int>(se.size()); ++e) {
     if (w[e] == 0) continue;
     const int nd = b.element_coordinates(e, s.q, x);
@@ -425,9 +473,8 @@ bool StressMeasure::field_partials(const Model&, const State& s, const ModelPara
   thread_local std::vector<double> se, w;
   element_stresses(s, p, se);
   aggregate(se, &w);
-  const FlexibleBody& b = *body_;
-  const Vec& mu = p.fields[b.field];
-  field = b.field;
+  const Vec& mu = p.fields[this->field()];
+  field = this->field();
   df_dmu.setZero(static_cast<Eigen::Index>(se.size()));
   const double q = o_.relaxation;
   // s_e = μ_e^q σ_vm,e: ∂s_e/∂μ_e = q s_e / μ_e

@@ -299,11 +299,13 @@ class StrainEnergyMeasure : public Measure {
   bool depends_on_params() const override { return true; }
 };
 
-class FlexibleMassMeasure : public Measure {
+/// The mass of a flexible or solid body, Σ_e μ_e ρ0 V_e: state-independent, linear in μ (its ∂/∂p
+/// by a central difference along each parameter direction is exact).
+template <class Body>
+class BodyMassMeasure : public Measure {
  public:
   std::vector<std::string> units() const override { return {"kg"}; }
-  FlexibleMassMeasure(std::string name, const FlexibleBody* b)
-      : Measure(std::move(name)), body_(b) {}
+  BodyMassMeasure(std::string name, const Body* b) : Measure(std::move(name)), body_(b) {}
   void evaluate(const Model&, const State&, const ModelParams& p, double* out) const override {
     *out = body_->mass(p);
   }
@@ -313,21 +315,24 @@ class FlexibleMassMeasure : public Measure {
   bool state_independent() const override { return true; }
 
  private:
-  const FlexibleBody* body_;
+  const Body* body_;
 };
+using FlexibleMassMeasure = BodyMassMeasure<FlexibleBody>;
+using SolidMassMeasure = BodyMassMeasure<SolidBody>;
 
-/// Aggregated von Mises stress of a flexible body (issue 25). For element e, the Cauchy stress
+/// Aggregated von Mises stress of a flexible or a solid body. For element e, the Cauchy stress
 /// σ = F S Fᵀ / det F at the element centre, with S = D(E0, ν) E (the solid material's St
-/// Venant–Kirchhoff stress at the element's strain; plane stress), its von Mises value σ_vm,e,
+/// Venant–Kirchhoff stress at the element's strain; plane stress, or 3D for a solid body:
+/// fem/solid_stress.hpp), its von Mises value σ_vm,e,
 /// and the relaxed stress s_e = μ_e^q σ_vm,e (the qp-approach: with q < 1 a partially filled
 /// element keeps a finite stress as μ_e → 0, and a void element's fictitious stress is scaled
 /// down). The per-step value aggregates over the elements:
 ///  * ks:    f = σ_ref (m + ln Σ_e exp(ρ (s_e/σ_ref − m)) / ρ),  m = max_e s_e/σ_ref;
 ///           max_e s_e ≤ f ≤ max_e s_e + σ_ref ln(N)/ρ,
 ///  * pnorm: f = (Σ_e s_e^P)^(1/P);  max_e s_e ≤ f ≤ N^(1/P) max_e s_e,
-/// and the response aggregates over time. ∂f/∂q is exact (forward-mode duals over the element's
-/// 8 coordinates); ∂f/∂μ_e = (∂f/∂s_e) q μ_e^(q−1) σ_vm,e exactly; at σ_vm,e = 0 (an unstrained
-/// element) the subgradient 0 is used.
+/// and the response aggregates over time. ∂f/∂q is exact (forward-mode duals over a planar
+/// element's coordinates; closed form for a solid one); ∂f/∂μ_e = (∂f/∂s_e) q μ_e^(q−1) σ_vm,e
+/// exactly; at σ_vm,e = 0 (an unstrained element) the subgradient 0 is used.
 class StressMeasure : public Measure {
  public:
   enum class Aggregation { kKs, kPNorm };
@@ -339,6 +344,8 @@ class StressMeasure : public Measure {
   };
   StressMeasure(std::string name, const FlexibleBody* body, Options o)
       : Measure(std::move(name)), body_(body), o_(o) {}
+  StressMeasure(std::string name, const SolidBody* body, Options o)
+      : Measure(std::move(name)), solid_(body), o_(o) {}
   std::vector<std::string> units() const override { return {"Pa"}; }
   void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
   void gradient(const Model& m, const State& s, const ModelParams& p, int c,
@@ -348,13 +355,22 @@ class StressMeasure : public Measure {
                       Vec& df_dmu) const override;
   /// Relaxed stresses s_e of every element (for reporting: the largest and where it sits).
   void element_stresses(const State& s, const ModelParams& p, std::vector<double>& out) const;
-  const FlexibleBody& body() const { return *body_; }
+  /// The body measured: a flexible one (else null) or a solid one (else null).
+  const FlexibleBody* flexible() const { return body_; }
+  const SolidBody* solid() const { return solid_; }
+  const std::string& body_name() const { return body_ ? body_->name : solid_->name; }
+  /// Element e's centre in the body's frame (planar: 2 coordinates; solid: 3, at t = 0).
+  std::vector<double> element_centre(int e) const;
   const Options& options() const { return o_; }
 
  private:
   // aggregate of s (n elements) and its weights ∂f/∂s_e
   double aggregate(const std::vector<double>& s, std::vector<double>* w) const;
-  const FlexibleBody* body_;
+  int field() const { return body_ ? body_->field : solid_->field; }
+  // the solid body's element e: its node coordinates from q into x (3 per node)
+  void solid_coordinates(int e, const Vec& q, double* x) const;
+  const FlexibleBody* body_ = nullptr;
+  const SolidBody* solid_ = nullptr;
   Options o_;
 };
 

@@ -75,6 +75,56 @@ nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params
   return jb;
 }
 
+// One designed solid body at p: its mass and gradient, volumes and the mapping's counts; with an
+// output folder its μ_e and φ on the undeformed mesh as VTU.
+nlohmann::json solid_body_json(const Case& cs, const Vec& p, const ModelParams& params,
+                               const SolidBodyDesign& bd, const SpMat& dmu,
+                               const GeometryRunOptions& o, std::vector<std::string>& files) {
+  const Design& d = *cs.design;
+  const SolidDesignMap& map = *bd.map;
+  const Vec& mu = params.fields[bd.body->field];
+  MapCounts counts;
+  Vec mu_again;
+  map.map(p, mu_again, nullptr, &counts);
+  Vec grad;
+  const double volume = map.material_volume(mu, &dmu, &grad);
+  // m = ρ Σ_e μ_e V_e: ∂m/∂p = ρ Σ_e V_e ∂μ_e/∂p = ρ (1 − μ_min) ∂V/∂p
+  const double rho = params.scalars[bd.body->rho_param], mu_min = map.options().mu_min;
+  double domain = 0;
+  for (double v : map.element_volumes()) domain += v;
+  nlohmann::json g = nlohmann::json::object(), gv = nlohmann::json::object();
+  for (int k = 0; k < d.size(); ++k) {
+    g[d.variables[k].name] = rho * (1 - mu_min) * grad[k];
+    gv[d.variables[k].name] = grad[k];
+  }
+  nlohmann::json jb = {{"body", bd.body->name},
+                       {"kind", "solid"},
+                       {"mass", bd.body->mass(params)},
+                       {"mass_gradient", g},
+                       {"domain_volume", domain},
+                       {"material_volume", volume},
+                       {"material_volume_gradient", gv},
+                       {"cut_elements", counts.cut},
+                       {"band_elements", counts.band},
+                       {"elements", mu.size()},
+                       {"epsilon", map.epsilon()},
+                       {"mu_min", mu_min},
+                       {"subgrid", map.options().subgrid},
+                       {"band", map.options().band}};
+  if (o.out_dir.empty()) return jb;
+  const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
+  const SolidMesh& mesh = bd.body->mesh;
+  const auto values = map.level_set().values(p);
+  Vec phi(mesh.num_nodes());  // on the mesh as built: the body at rest at t = 0
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    phi[i] = map.level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
+  write_solid_vtu(o.out_dir + "/" + stem + ".vtu", *bd.body, cs.model->initial_positions(), params,
+                  &phi);
+  jb["files"] = {{"vtu", stem + ".vtu"}};
+  files.push_back(stem + ".vtu");
+  return jb;
+}
+
 }  // namespace
 
 namespace {
@@ -109,11 +159,14 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
   const auto t0 = std::chrono::steady_clock::now();
   const Design& d = *cs.design;
   ModelParams params = cs.model->params();  // the design is a value: the case is not changed
-  for (const auto& b : d.bodies)
-    for (const auto& f : b.map->level_set().features())
+  const auto degenerate = [&](const auto& features) {
+    for (const auto& f : features)
       if (auto msg = f.check(f.values(p)); !msg.empty())
         throw Error(cs.file, "/design",
                     "feature '" + f.name() + "' is degenerate at this design: " + msg);
+  };
+  for (const auto& b : d.bodies) degenerate(b.map->level_set().features());
+  for (const auto& b : d.solid_bodies) degenerate(b.map->level_set().features());
   std::vector<SpMat> dmu;
   d.apply(p, params, &dmu);
   std::vector<MapCounts> counts(d.bodies.size());  // the mapping's diagnostics at p, per body
@@ -126,6 +179,9 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
   std::vector<std::string> files = {"summary.json"};
   for (size_t b = 0; b < d.bodies.size(); ++b)
     bodies.push_back(body_json(cs, p, params, d.bodies[b], dmu[b], counts[b], o, files));
+  for (size_t b = 0; b < d.solid_bodies.size(); ++b)
+    bodies.push_back(
+        solid_body_json(cs, p, params, d.solid_bodies[b], dmu[d.bodies.size() + b], o, files));
   nlohmann::json S = case_provenance(o.command_line.empty() ? "geometry" : o.command_line, cs);
   S["overrides"] = cs.overrides;
   S["case_name"] = cs.name;
@@ -137,6 +193,7 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
   for (const auto& b : bodies) {
     const std::string who =
         bodies.size() > 1 ? "body '" + b["body"].get<std::string>() + "': " : std::string();
+    if (!b.contains("resolution")) continue;  // a solid body: not judged yet
     const auto& r = b["resolution"];
     if (const auto f = r["pieces_flag"].get<std::string>(); !f.empty())
       S["warnings"].push_back(who + f);

@@ -216,16 +216,14 @@ nlohmann::json stress_json(const Case& cs, const Recorder& rec) {
       const auto it = rec.stress_max_.find(sm->name());
       if (it == rec.stress_max_.end() || it->second.element < 0) continue;
       const auto& mx = it->second;
-      const FlexibleBody& b = sm->body();
-      const Vec2 c = b.mesh.centroid(mx.element);
       const auto& o = sm->options();
       st[sm->name()] = {
-          {"body", b.name},
+          {"body", sm->body_name()},
           {"max_relaxed_von_mises", mx.value},
           {"unit", "Pa"},
           {"element", mx.element},
           {"t", mx.t},
-          {"element_centre_body_frame", {c.x(), c.y()}},
+          {"element_centre_body_frame", sm->element_centre(mx.element)},
           {"aggregate", o.aggregation == StressMeasure::Aggregation::kKs ? "ks" : "pnorm"},
           {"parameter", o.parameter},
           {"reference", o.reference},

@@ -15,6 +15,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/fem/hex_element.hpp"
+#include "lsmbs/fem/solid_stress.hpp"
 
 using namespace lsmbs;
 using Formulation = HexElement::Formulation;
@@ -441,4 +442,46 @@ TEST(SolidElements, MassAndVolumeAreExact) {
   const TetElement t({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)});
   EXPECT_NEAR(t.volume(), 1.0 / 6, 1e-15);
   EXPECT_NEAR(t.unit_mass().sum(), 1.0 / 6, 1e-15);
+}
+
+// The von Mises stress at the element centre (fem/solid_stress.hpp): a homogeneous uniaxial
+// stretch F = diag(λ, 1, 1) with ν = 0 has σ_xx = λ E (λ² − 1)/2 and nothing else (closed form,
+// every element); under a general deformation it equals the von Mises value of F S Fᵀ/det F with
+// S from the element's own Voigt stress (centre_stress), and its derivative with respect to the
+// node coordinates agrees with central differences.
+TEST(SolidElements, CentreVonMisesMatchesClosedFormsAndCentralDifferences) {
+  std::mt19937 rng(7);
+  for (const Element& el : elements()) {
+    const double E = 2e5, lambda = 1.07;
+    std::vector<double> x;
+    for (const Vec3& p : el.X) x.insert(x.end(), {lambda * p.x(), p.y(), p.z()});
+    const double uniaxial = lambda * E * (lambda * lambda - 1) / 2;
+    EXPECT_NEAR(solid_centre_von_mises(*el.e, x.data(), E, 0.0) / uniaxial, 1, 1e-12) << el.name;
+    const double nu = 0.3;
+    x = deformed(el.X, rng, 0.05);
+    const auto S = el.e->centre_stress(x.data(), E, nu);
+    Mat3 St;
+    St << S[0], S[3], S[5], S[3], S[1], S[4], S[5], S[4], S[2];
+    const Mat3 F = el.e->centre_F(x.data());
+    const Mat3 sig = F * St * F.transpose() / F.determinant();
+    const Mat3 dev = sig - sig.trace() / 3 * Mat3::Identity();
+    const double vm_voigt = std::sqrt(1.5 * dev.squaredNorm());
+    std::vector<double> d(x.size());
+    const double vm = solid_centre_von_mises(*el.e, x.data(), E, nu, d.data());
+    EXPECT_NEAR(vm / vm_voigt, 1, 1e-12) << el.name;
+    double worst = 0, scale = 0;
+    for (size_t k = 0; k < x.size(); ++k) {
+      const double h = 1e-6;
+      std::vector<double> xp = x, xm = x;
+      xp[k] += h, xm[k] -= h;
+      const double fd = (solid_centre_von_mises(*el.e, xp.data(), E, nu) -
+                         solid_centre_von_mises(*el.e, xm.data(), E, nu)) /
+                        (2 * h);
+      worst = std::max(worst, std::abs(fd - d[k]));
+      scale = std::max(scale, std::abs(fd));
+    }
+    std::printf("%s: von Mises %.6e, d/dx against fd-central %.1e of %.1e\n", el.name, vm, worst,
+                scale);
+    EXPECT_LT(worst, 1e-7 * scale) << el.name;
+  }
 }
