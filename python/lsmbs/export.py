@@ -33,7 +33,7 @@ import os
 import xml.etree.ElementTree as ET
 
 __all__ = ["load_shape", "feature_points", "bezier_segments", "bspline_area", "write_dxf", "write_svg", "write_step", "write_msh",
-           "component_area", "export", "body_fitted_case"]
+           "component_area", "component_volume", "export", "body_fitted_case"]
 
 MM = 1000.0  # CAD files: millimetres
 
@@ -194,23 +194,28 @@ def _occ_outline(gmsh, shape):
     return tag
 
 
-def _occ_region(gmsh, shape, node, domain, notes):
-    """OCC faces of the material of a region node, within a copy of the domain."""
+def _occ_region(gmsh, shape, node, domain, notes, dim=2, build=None):
+    """OCC entities (faces, or volumes with dim = 3) of the material of a region node, within a
+    copy of the domain; build(gmsh, feature) makes a feature's shape (default: a planar one)."""
     occ = gmsh.model.occ
     feats = shape["features"]
+    build = build or _occ_feature
 
     def copy():
-        return occ.copy([(2, domain)])
+        return occ.copy([(dim, domain)])
+
+    def region(k):
+        return _occ_region(gmsh, shape, k, domain, notes, dim, build)
 
     op = node["op"]
     if op == "feature":
         f = feats[node["feature"]]
-        tool = [(2, _occ_feature(gmsh, f))]
+        tool = [(dim, build(gmsh, f))]
         if f["hole"]:
             return occ.cut(copy(), tool)[0]
         return occ.intersect(copy(), tool)[0]
     if op == "not":
-        inner = _occ_region(gmsh, shape, node["children"][0], domain, notes)
+        inner = region(node["children"][0])
         return occ.cut(copy(), inner)[0] if inner else copy()
     if node.get("ks", 0) > 0:
         notes.append("a %s combined by KS (ks = %g 1/m) is exported with the exact Boolean: the "
@@ -219,9 +224,9 @@ def _occ_region(gmsh, shape, node, domain, notes):
                          math.log(len(node["children"])) / node["ks"]))
     kids = node["children"]
     if op == "and" and all(k["op"] == "feature" and feats[k["feature"]]["hole"] for k in kids):
-        tools = [(2, _occ_feature(gmsh, feats[k["feature"]])) for k in kids]  # the paper's eq. 4
+        tools = [(dim, build(gmsh, feats[k["feature"]])) for k in kids]  # the paper's eq. 4
         return occ.cut(copy(), tools)[0] if tools else copy()
-    parts = [_occ_region(gmsh, shape, k, domain, notes) for k in kids]
+    parts = [region(k) for k in kids]
     acc = parts[0]
     for p in parts[1:]:
         if op == "and":
@@ -481,9 +486,18 @@ def _ellipse_point(f, t):
 
 # ----------------------------------------------------------------------------- STEP, MSH
 def write_step(shape, path, notes=None):
-    """The STEP solid (millimetres): the component's face extruded by the thickness."""
+    """The STEP solid (millimetres): a planar design's face extruded by the thickness, or a solid
+    design's volume."""
     # built in millimetres (OpenCASCADE's dilate would turn circles and ellipses into splines)
-    shape = _scaled(load_shape(shape), MM)
+    shape = load_shape(shape)
+    if shape.get("kind") == "solid":
+        shape = _scaled3(shape, MM)
+        with _Gmsh() as gmsh:
+            _solid_component(gmsh, shape, [] if notes is None else notes)
+            with _quiet_stdout():
+                gmsh.write(os.fspath(path))
+        return os.fspath(path)
+    shape = _scaled(shape, MM)
     with _Gmsh() as gmsh:
         faces = _component(gmsh, shape, [] if notes is None else notes)
         occ = gmsh.model.occ
@@ -492,6 +506,111 @@ def write_step(shape, path, notes=None):
         with _quiet_stdout():  # OpenCASCADE's STEP writer prints its statistics
             gmsh.write(os.fspath(path))
     return os.fspath(path)
+
+
+# ----------------------------------------------------------------------------- solid designs
+# A solid body's shape ("kind": "solid", src/lsmbs/runs/shape.hpp): its box domain less (or with)
+# the 3D features, as OpenCASCADE volumes: spheres and cylinders exactly, a pocket or a
+# through-hole as its planar profile (exact circles and ellipses, a spline through 128 points of
+# a super-ellipse) extruded along the face's w and placed by the feature's frame. A pocket's
+# prism runs from outside the part (w < 0, where the level set has no bound either) to its
+# depth. Super-ellipsoids have no exact CAD solid and are refused.
+_LENGTHS3 = {"cx", "cy", "cz", "a", "b", "c", "r", "length", "depth"}
+
+
+def _scaled3(shape, k):
+    """A solid shape with every length times k."""
+    s = dict(shape)
+    d = dict(shape["domain"])
+    for key in ("lo", "hi"):
+        if key in d:
+            d[key] = [k * x for x in d[key]]
+    s["domain"] = d
+    s["features"] = []
+    for f in shape["features"]:
+        g = dict(f, params={n: (k * v if n in _LENGTHS3 else v) for n, v in f["params"].items()})
+        g["frame"] = dict(f["frame"], origin=[k * x for x in f["frame"]["origin"]])
+        s["features"].append(g)
+    return s
+
+
+def _reach(shape):
+    lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
+    far = max(abs(x) for x in lo + hi)
+    return 4 * (math.dist(lo, hi) + far)
+
+
+def _occ_feature3(gmsh, f, reach):
+    """The OCC volume of a 3D feature's shape (a hole's void, or a solid inclusion)."""
+    occ = gmsh.model.occ
+    p, t, fr = f["params"], f["type"], f["frame"]
+    if t == "sphere":
+        return occ.addSphere(p["cx"], p["cy"], p["cz"], p["r"])
+    if t == "cylinder":
+        w = fr["w"]
+        length = p.get("length", 0.0) or reach
+        c = [p[k] - w[i] * length / 2 for i, k in enumerate(("cx", "cy", "cz"))]
+        return occ.addCylinder(*c, *(w[i] * length for i in range(3)), p["r"])
+    if t == "super_ellipsoid":
+        raise ValueError("feature %r: a super-ellipsoid has no exact CAD solid; STEP export "
+                         "takes spheres, cylinders, pockets and through-holes" % f["name"])
+    u, v, w, o = fr["u"], fr["v"], fr["w"], fr["origin"]
+    p = dict(p)
+    if _det3(u, v, w) < 0:  # a left-handed frame (a named face): (u, −v, w) and the profile mirrored
+        v = [-x for x in v]
+        p["cy"], p["angle"] = -p["cy"], -p.get("angle", 0.0)
+    planar_keys = {"circle": ("cx", "cy", "r"), "ellipse": ("cx", "cy", "a", "b", "d", "angle"),
+                   "super_ellipse": ("cx", "cy", "a", "b", "xi", "eta", "angle")}[f["profile"]]
+    face = _occ_feature(gmsh, {"name": f["name"], "type": f["profile"],
+                               "params": {k: p.get(k, 0.0) for k in planar_keys}})
+    w0, w1 = -reach, (p["depth"] if t == "pocket" else reach)
+    occ.translate([(2, face)], 0, 0, w0)
+    volume = [tag for d, tag in occ.extrude([(2, face)], 0, 0, w1 - w0) if d == 3][0]
+    # placed by rotations and a translation, which keep circles exact (a general affine map
+    # turns them into approximating splines: 0.9 % of a disc's area)
+    a, b, c = _zyx_angles([[u[i], v[i], w[i]] for i in range(3)])
+    for angle, axis in ((c, (1, 0, 0)), (b, (0, 1, 0)), (a, (0, 0, 1))):
+        if angle != 0:
+            occ.rotate([(3, volume)], 0, 0, 0, *axis, angle)
+    occ.translate([(3, volume)], *o)
+    return volume
+
+
+def _det3(u, v, w):
+    return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+            u[2] * (v[0] * w[1] - v[1] * w[0]))
+
+
+def _zyx_angles(R):
+    """(a, b, c) with R = Rz(a) Ry(b) Rx(c) for a rotation matrix R (rows)."""
+    b = math.asin(max(-1.0, min(1.0, -R[2][0])))
+    if abs(math.cos(b)) > 1e-9:
+        return math.atan2(R[1][0], R[0][0]), b, math.atan2(R[2][1], R[2][2])
+    return 0.0, b, math.atan2(-R[1][2], R[1][1])
+
+
+def _solid_component(gmsh, shape, notes):
+    """Builds a solid design's volumes in the current Gmsh model; returns their tags."""
+    if shape["domain"]["type"] != "box":
+        raise ValueError("body %r: its mesh is not a box, and the part's own surface is not known "
+                         "as CAD; STEP export of a solid design takes box meshes" % shape["body"])
+    lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
+    occ = gmsh.model.occ
+    domain = occ.addBox(*lo, *(h - l for l, h in zip(lo, hi)))
+    reach = _reach(shape)
+    vols = _occ_region(gmsh, shape, shape["region"], domain, notes, 3,
+                       lambda g, f: _occ_feature3(g, f, reach))
+    occ.remove([(3, domain)], recursive=True)
+    occ.synchronize()
+    return [t for d, t in vols if d == 3]
+
+
+def component_volume(shape):
+    """Volume of an exported solid design [m³] (OpenCASCADE's exact volume of the Boolean
+    result)."""
+    shape = load_shape(shape)
+    with _Gmsh() as gmsh:
+        return sum(gmsh.model.occ.getMass(3, v) for v in _solid_component(gmsh, shape, []))
 
 
 def _scaled(shape, k):
@@ -565,6 +684,12 @@ def export(shape, out_dir, formats=("dxf", "svg", "step", "msh"), size=None):
     """Writes the formats into out_dir (named after the body); returns {format: path, 'notes':
     [...], 'node_sets': {...}}."""
     shape = load_shape(shape)
+    if shape.get("kind") == "solid":  # a solid design: STEP only
+        if formats == ("dxf", "svg", "step", "msh"):
+            formats = ("step",)
+        for fmt in formats:
+            if fmt != "step":
+                raise ValueError("format %r: a solid design is exported as STEP only" % fmt)
     os.makedirs(os.fspath(out_dir), exist_ok=True)
     stem = os.path.join(os.fspath(out_dir), shape.get("body", "design"))
     out, notes = {}, []

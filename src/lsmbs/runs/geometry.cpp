@@ -120,8 +120,11 @@ nlohmann::json solid_body_json(const Case& cs, const Vec& p, const ModelParams& 
     phi[i] = map.level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
   write_solid_vtu(o.out_dir + "/" + stem + ".vtu", *bd.body, cs.model->initial_positions(), params,
                   &phi);
-  jb["files"] = {{"vtu", stem + ".vtu"}};
+  // the shape as data for CAD (python/lsmbs/export.py: STEP)
+  write_json_atomic(o.out_dir + "/" + stem + "_shape.json", solid_shape_json(bd, p, params));
+  jb["files"] = {{"vtu", stem + ".vtu"}, {"shape", stem + "_shape.json"}};
   files.push_back(stem + ".vtu");
+  files.push_back(stem + "_shape.json");
   return jb;
 }
 

@@ -31,7 +31,55 @@ const char* type_name(Feature::Type t) {
                                              : "bspline";
 }
 
+nlohmann::json vec3(const Vec3& x) { return nlohmann::json::array({x.x(), x.y(), x.z()}); }
+
 }  // namespace
+
+nlohmann::json solid_shape_json(const SolidBodyDesign& b, const Vec& p, const ModelParams& params) {
+  const SolidBody& body = *b.body;
+  const SolidMesh& mesh = body.mesh;
+  Vec3 lo = mesh.nodes.front(), hi = lo;
+  for (const Vec3& x : mesh.nodes) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  double V = 0;
+  for (double v : b.map->element_volumes()) V += v;
+  const double box = (hi - lo).prod();
+  nlohmann::json domain = {{"type", "mesh"}};
+  if (std::abs(V - box) <= 1e-9 * box)
+    domain = {{"type", "box"}, {"lo", vec3(lo)}, {"hi", vec3(hi)}};
+  const LevelSet3& ls = b.map->level_set();
+  nlohmann::json features = nlohmann::json::array();
+  for (const Feature3& f : ls.features()) {
+    nlohmann::json par = nlohmann::json::object();
+    const auto v = f.values(p);
+    const auto names = Feature3::parameter_names(f.type(), f.profile());
+    for (size_t i = 0; i < v.size(); ++i) par[names[i]] = v[i];
+    const Mat3& A = f.frame().axes;
+    nlohmann::json entry = {{"name", f.name()},
+                            {"type", Feature3::type_names()[static_cast<size_t>(f.type())]},
+                            {"hole", f.hole()},
+                            {"params", par},
+                            {"frame",
+                             {{"origin", vec3(f.frame().origin)},
+                              {"u", vec3(A.col(0))},
+                              {"v", vec3(A.col(1))},
+                              {"w", vec3(A.col(2))}}}};
+    if (f.type() == Feature3::Type::kPocket || f.type() == Feature3::Type::kThroughHole)
+      entry["profile"] = type_name(f.profile());
+    features.push_back(entry);
+  }
+  const auto scalar = [&](int i) { return params.scalars[static_cast<size_t>(i)]; };
+  return {{"body", body.name},
+          {"kind", "solid"},
+          {"frame", "ground coordinates at t = 0; lengths in m"},
+          {"domain", domain},
+          {"features", features},
+          {"region", node_json(ls.root())},
+          {"material",
+           {{"E", scalar(body.E_param)},
+            {"nu", scalar(body.nu_param)},
+            {"rho", scalar(body.rho_param)}}},
+          {"mu_min", b.map->options().mu_min}};
+}
 
 nlohmann::json shape_json(const BodyDesign& b, const Vec& p, const ModelParams& params) {
   const FlexibleBody& body = *b.body;

@@ -19,4 +19,13 @@ namespace lsmbs {
 
 nlohmann::json shape_json(const BodyDesign& b, const Vec& p, const ModelParams& params);
 
+/// A designed solid body's shape ("kind": "solid"), in ground coordinates at t = 0, in metres:
+///   domain    {"type": "box", "lo", "hi"} when the mesh fills its bounding box (a box mesh),
+///             else {"type": "mesh"} (the part's own surface is not known as CAD);
+///   features  each 3D feature (level_set_3d.hpp) with its parameter values at the design, its
+///             kind (hole or solid), its frame (origin, axes as the columns u, v, w) and a
+///             pocket's or through-hole's planar profile type;
+///   region    as for planar shapes; material, mu_min.
+nlohmann::json solid_shape_json(const SolidBodyDesign& b, const Vec& p, const ModelParams& params);
+
 }  // namespace lsmbs
