@@ -155,3 +155,18 @@ def test_a_designed_solid_built_in_python_equals_the_shipped_case():
     assert abs(s_built.values["plate_mass"] / closed - 1) < 2e-3
     with pytest.raises(ValueError, match="profile: expected a planar circle"):
         lsmbs.pocket("bad", "ymax", lsmbs.sphere("s", 0, 0, 0, 0.01), depth=0.001)
+
+
+def test_length_scale_constraints_on_a_solid_design_are_refused_by_name(tmp_path):
+    """Length-scale constraints are planar: on a design of solid bodies `lsmbs optimize` exits 2
+    and says so, naming the option (not "the design has no level-set geometry")."""
+    import subprocess
+    from conftest import CLI
+    doc = json.loads(ARM.read_text())
+    doc["optimization"] = {"objective": "plate_mass", "length_scale": {"min_size": 0.005}}
+    case = tmp_path / "arm_ls.json"
+    case.write_text(json.dumps(doc))
+    p = subprocess.run([CLI, "optimize", str(case), "-o", str(tmp_path / "o"), "-q"],
+                       capture_output=True, text=True)
+    assert p.returncode == 2, p.stderr
+    assert "/optimization/length_scale: length-scale constraints are planar only" in p.stderr, p.stderr

@@ -168,7 +168,10 @@ void DesignProblem::add_length_scales() {
   const Design& d = design();
   if (d.bodies.empty())
     throw SetupError("optimization.length_scale",
-                     "the design has no level-set geometry to constrain (design.geometry)");
+                     d.solid_bodies.empty()
+                         ? "the design has no level-set geometry to constrain (design.geometry)"
+                         : "length-scale constraints are planar only: the design's geometry is on "
+                           "solid bodies (docs/case-format.md, \"Designs of solid bodies\")");
   for (const BodyDesign& b : d.bodies) {
     const double h = median_element_size(b.body->mesh);
     const double size = L.min_size >= 0 ? L.min_size : spec_.judge.min_elements * h;
