@@ -117,6 +117,38 @@ void bind_static(py::module_& m) {
       "Static equilibrium at time t (drivers and loads at t; no inertia), as `lsmbs static`");
 }
 
+// A designed solid body as lsmbs.geometry gives it: its mesh, μ_e, the nodal level set, the mass
+// ρ0 Σ_e μ_e V_e and its gradient ρ0 Σ_e V_e ∂μ_e/∂p (dmu: elements × variables), its shape.
+static py::dict solid_geometry(const SolidBodyDesign& bd, const Vec& p, const ModelParams& params,
+                               const SpMat& dmu) {
+  const SolidBody& body = *bd.body;
+  const SolidMesh& mesh = body.mesh;
+  Mat nodes(mesh.num_nodes(), 3);
+  Vec phi(mesh.num_nodes());
+  const auto values = bd.map->level_set().values(p);
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    nodes.row(i) = mesh.nodes[static_cast<size_t>(i)].transpose();
+    phi[i] = bd.map->level_set().evaluate(mesh.nodes[static_cast<size_t>(i)], values, nullptr);
+  }
+  py::list cells, types;
+  Vec rho_v(mesh.num_elements());
+  const double rho0 = params.scalars[static_cast<size_t>(body.rho_param)];
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const auto& c = mesh.cells[static_cast<size_t>(e)];
+    cells.append(py::array_t<int>(static_cast<py::ssize_t>(c.size()), c.data()));
+    types.append(c.size() == 8 ? "hex8" : "tet4");
+    rho_v[e] = rho0 * body.elements[static_cast<size_t>(e)]->volume();
+  }
+  const Vec grad = dmu.transpose() * rho_v;
+  return py::dict(py::arg("nodes") = array(nodes), py::arg("cells") = cells,
+                  py::arg("cell_types") = types, py::arg("quads") = py::none(),
+                  py::arg("mu") = array(params.fields[static_cast<size_t>(body.field)]),
+                  py::arg("phi") = array(phi), py::arg("mass") = body.mass(params),
+                  py::arg("mass_gradient") = array(grad),
+                  py::arg("shape") = json_to_python(solid_shape_json(bd, p, params)),
+                  py::arg("resolution") = py::none());
+}
+
 // lsmbs.geometry: the design mapped on the meshes.
 void bind_geometry(py::module_& m) {
   m.def(
@@ -170,6 +202,9 @@ void bind_geometry(py::module_& m) {
                        py::arg("resolution") = json_to_python(
                            resolution_json(judge_resolution(mesh, bd.map->level_set(), values))));
         }
+        for (size_t b = 0; b < cs->design->solid_bodies.size(); ++b)
+          bodies[py::str(cs->design->solid_bodies[b].body->name)] = solid_geometry(
+              cs->design->solid_bodies[b], p, params, dmu[cs->design->bodies.size() + b]);
         return bodies;
       },
       py::arg("case").none(false), py::arg("design") = py::none(),
@@ -177,7 +212,8 @@ void bind_geometry(py::module_& m) {
       "quadrilaterals), μ_e, the nodal level set φ (material "
       "where φ > 0), the mass and its gradient, the shape (for lsmbs.export: outline, features at "
       "the design, region, node sets) and the resolution (ligaments, holes and pieces against "
-      "what the mesh resolves)");
+      "what the mesh resolves). A solid body: nodes N × 3, cells of hex8 or tet4, the shape of "
+      "its 3D features ('kind': 'solid'), resolution None (not judged)");
 }
 
 // lsmbs.verify: the verification report of a case file.

@@ -7,6 +7,8 @@ OUT/final_design/<body>_shape.json):
     python3 scripts/export_design.py SHAPE.json -o DIR --formats dxf,svg --size 0.0025
     python3 scripts/export_design.py SHAPE.json -o DIR --case CASE.json   # also a case file of
         # the body-fitted design (DIR/<case>_body_fitted.json) that `lsmbs simulate` runs
+    python3 scripts/export_design.py OUT/plate_shape.json -o DIR   # a solid body's design
+        # ("kind": "solid"): STEP only (the default --formats becomes step)
 
 Needs Debian's python3-ezdxf and python3-gmsh (scripts/setup-deps.sh); not the compiled lsmbs
 module. Exit 2 for a bad argument or shape file, with what was expected.
@@ -32,26 +34,39 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("shape", help="a <body>_shape.json file")
     ap.add_argument("-o", "--out", required=True, help="output folder")
-    ap.add_argument("--formats", default="dxf,svg,step,msh")
+    ap.add_argument("--formats", default=None,
+                    help="comma-separated dxf, svg, step, msh (default: all four; a solid's: step)")
     ap.add_argument("--size", type=float, default=None,
                     help="element size of the body-fitted mesh [m] (default: the fixed mesh's)")
     ap.add_argument("--case", default=None,
                     help="the case file of the design: also write a case with the body-fitted mesh")
     a = ap.parse_args()
-    formats = [f for f in a.formats.split(",") if f]
-    bad = [f for f in formats if f not in ("dxf", "svg", "step", "msh")]
-    if bad:
-        sys.exit(print("export_design: --formats: unknown %s (expected dxf, svg, step, msh)" %
-                       ", ".join(bad), file=sys.stderr) or 2)
+
+    def fail(msg):
+        sys.exit(print("export_design: " + msg, file=sys.stderr) or 2)
+
     if a.size is not None and not a.size > 0:
-        sys.exit(print("export_design: --size: expected a positive length in m", file=sys.stderr) or 2)
+        fail("--size: expected a positive length in m")
     try:
         shape = json.loads(pathlib.Path(a.shape).read_text())
-        for key in ("body", "outline", "features", "region", "node_sets", "thickness", "element_size"):
+        if not isinstance(shape, dict):
+            raise ValueError("expected a JSON object (a <body>_shape.json of lsmbs geometry)")
+        solid = shape.get("kind") == "solid"
+        keys = (("body", "domain", "features", "region") if solid else
+                ("body", "outline", "features", "region", "node_sets", "thickness", "element_size"))
+        for key in keys:
             if key not in shape:
-                raise ValueError("no \"%s\" (expected a <body>_shape.json of lsmbs geometry)" % key)
+                raise ValueError("no \"%s\" (expected the <body>_shape.json that lsmbs geometry "
+                                 "writes for a %s body)" % (key, "solid" if solid else "planar"))
     except (OSError, ValueError) as e:
-        sys.exit(print("export_design: %s: %s" % (a.shape, e), file=sys.stderr) or 2)
+        fail("%s: %s" % (a.shape, e))
+    formats = [f for f in (a.formats or ("step" if solid else "dxf,svg,step,msh")).split(",") if f]
+    bad = [f for f in formats if f not in ("dxf", "svg", "step", "msh")]
+    if bad:
+        fail("--formats: unknown %s (expected dxf, svg, step, msh)" % ", ".join(bad))
+    if solid and (formats != ["step"] or a.case or a.size is not None):
+        fail("%s is a solid body's design: it is exported as STEP only (--formats step; "
+             "no --case or --size: a body-fitted mesh of a solid is not written)" % a.shape)
     if a.case and "msh" not in formats:
         formats.append("msh")
     ex = load_export()

@@ -235,3 +235,43 @@ def test_a_solid_design_exports_as_its_closed_form_volume(tmp_path):
         export.component_volume(blob)
     with pytest.raises(ValueError, match="a solid design is exported as STEP only"):
         export.export(shape, tmp_path / "cad", ("dxf",))
+
+
+def test_a_solid_design_through_lsmbs_geometry_and_the_export_script(tmp_path):
+    """The two other routes to a solid design's CAD: lsmbs.geometry(case)["plate"] carries the
+    same shape as the file `lsmbs geometry` writes, with the mass ρ0 Σ μ_e V_e and its gradient
+    (against central differences of the mass over the variables' values, and the closed-form
+    volume within the band's bias); scripts/export_design.py writes the STEP of a solid shape
+    (its default formats become step) and refuses a planar format for it with exit 2."""
+    import subprocess
+    import sys
+    from conftest import run_cli
+    case_file = os.path.join(ROOT, "data/spatial/solid_arm.json")
+    run_cli("geometry", case_file, "-o", str(tmp_path / "g"), "--quiet")
+    written = export.load_shape(tmp_path / "g" / "plate_shape.json")
+    case = lsmbs.load_case(case_file)
+    g = lsmbs.geometry(case)["plate"]
+    assert g["shape"]["features"] == written["features"] and g["resolution"] is None
+    assert g["nodes"].shape == (21 * 3 * 5, 3) and set(g["cell_types"]) == {"hex8"}
+    t, r1, r2, depth = 0.01, 0.02, 0.016, 0.004
+    volume = 0.4 * t * 0.08 - math.pi * (r1 ** 2 + r2 ** 2) * t - super_ellipse_area(0.05, 0.025, 4) * depth
+    assert g["mass"] == pytest.approx(2700 * volume, rel=2e-3)
+    # central differences: the floor's band is thin in depth (μ's third derivative there is
+    # large), so its step is 1e-8 (measured: 3.6e-6 off at 1e-6, 4e-8 at 1e-7, 7e-9 at 1e-8)
+    p0 = [r1, r2, depth]
+    for j, h in enumerate((1e-6, 1e-6, 1e-8)):
+        up, down = list(p0), list(p0)
+        up[j] += h
+        down[j] -= h
+        fd = (lsmbs.geometry(case, up)["plate"]["mass"] -
+              lsmbs.geometry(case, down)["plate"]["mass"]) / (2 * h)
+        assert g["mass_gradient"][j] == pytest.approx(fd, rel=1e-6)
+    script = os.path.join(ROOT, "scripts/export_design.py")
+    p = subprocess.run([sys.executable, script, str(tmp_path / "g" / "plate_shape.json"), "-o",
+                        str(tmp_path / "cad")], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert step_volume(tmp_path / "cad" / "plate.step") == pytest.approx(
+        volume * 1e9, rel=1.5e-2 * super_ellipse_area(0.05, 0.025, 4) * depth / volume)
+    p = subprocess.run([sys.executable, script, str(tmp_path / "g" / "plate_shape.json"), "-o",
+                        str(tmp_path / "cad2"), "--formats", "dxf"], capture_output=True, text=True)
+    assert p.returncode == 2 and "exported as STEP only" in p.stderr

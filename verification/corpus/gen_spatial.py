@@ -2,9 +2,9 @@
 """Seeded generator of random, valid spatial mechanisms as lsmbs case files ("dimension": 3;
 docs/case-format.md, "Spatial cases").
 
-    gen_spatial.py --seed N [-o case.json] [--family F]
+    gen_spatial.py --seed N [-o case.json] [--family F] [--solid]
 
-Importable: ``generate(seed, family=None) -> dict``. The family is chosen by the seed
+Importable: ``generate(seed, family=None, solid=False) -> dict``. The family is chosen by the seed
 (``FAMILY_CYCLE[seed % 6]``); everything else is drawn from ``random.Random(seed)``:
 
 - ``chain``         1-3 rods hung from the ground by spherical, universal or revolute joints with
@@ -18,6 +18,21 @@ Importable: ``generate(seed, family=None) -> dict``. The family is chosen by the
 - ``pendulum``      a body on a spherical, cylindrical or planar joint, held by one or two spatial
                     spring–dampers, loaded by a force or a torque in the ground or the body frame
                     (constant or ramp laws), a torsion spring on a cylindrical joint's angle.
+
+With ``solid=True`` (``--solid``) the family comes from ``SOLID_CYCLE[seed % 3]`` instead, a
+flexible 3D solid body (a box of enhanced hexahedra, docs/case-format.md "Solid bodies") in each:
+
+- ``solid_cantilever`` a bar clamped to the ground at one end, a rigid tip body tied to the
+                    other loaded by a force (constant or ramp), gravity along a random direction;
+- ``solid_arm``     a plate clamped to a hub turned by a motor (a speed ramp) about an axis
+                    across the plate, a payload at its tip; a hole drilled through the plate
+                    (its radius a design variable: a 3D level set);
+- ``solid_pendulum`` a bar tied to a rigid hub on a spherical joint, released with a spin about
+                    a random axis (large 3D rotations of a flexible body).
+
+Design variables of the solid families: E, ρ, ν, the tip body's mass, the load scale, the hole's
+radius; responses: a face's mean position, the elongation between the end faces, the strain and
+kinetic energies, the aggregated von Mises stress, the mass.
 
 Every body has mass and three positive principal moments obeying the triangle inequality, at a
 random orientation. Joints are assembled where the bodies are (the frames coincide at t = 0), so
@@ -34,6 +49,7 @@ import math
 import random
 
 FAMILY_CYCLE = ["chain", "slider_crank", "pendulum", "chain", "pendulum", "slider_crank"]
+SOLID_CYCLE = ["solid_cantilever", "solid_arm", "solid_pendulum"]
 G = 9.81
 
 
@@ -107,6 +123,8 @@ class Builder:
         self.params = []     # (parameter, value, lower, upper)
         self.responses = []  # (measure column, aggregate)
         self.choices = {}
+        self.variables_extra, self.geometry = [], None  # design variables of a level set
+        self.gravity = [0, 0, -G]
         self.h = rng.choice([1e-3, 5e-4])
         self.t_end = rng.choice([0.3, 0.5])
 
@@ -281,12 +299,146 @@ def gen_pendulum(B):
               ("average", "rms", "integral"))
 
 
-def generate(seed, family=None):
+MATERIALS = {"steel": (2.1e11, 0.3, 7850), "aluminium": (7.0e10, 0.33, 2700)}
+
+
+def solid_bar(B, name, length, width, depth, n, origin, subgrid=None):
+    """A box solid body along x from origin: length × width (y) × depth (z), n × 1 × 1 bricks
+    (n × 2 × 1 for a plate wider than deep); E, ρ, ν of a random metal, their parameters design
+    candidates."""
+    rng = B.rng
+    metal = rng.choice(sorted(MATERIALS))
+    E, nu, rho = MATERIALS[metal]
+    B.choices["material"] = metal
+    ny = 2 if width > 2 * depth else 1
+    B.bodies.append({"name": name, "type": "solid",
+                     "mesh": {"type": "box", "origin": origin, "size": [length, width, depth],
+                              "elements": [n, ny, 1]},
+                     "material": {"E": E, "nu": nu, "rho": rho}})
+    B.param(name + ".E", E)
+    B.param(name + ".rho", rho, 0.3)
+    if rng.random() < 0.3:
+        B.params.append((name + ".nu", nu, 0.2, 0.4))
+    return E, rho
+
+
+def solid_measures(B, name, far_face):
+    rng = B.rng
+    B.measure({"name": "tip", "type": "node_set_position", "body": name, "node_set": far_face},
+              ["tip." + rng.choice("xyz")])
+    B.measure({"name": "stretch", "type": "elongation", "body": name, "a": "xmin",
+               "b": far_face}, ["stretch"])
+    B.measure({"name": "se", "type": "strain_energy"}, ["se"], ("final", "average", "integral"))
+    B.measure({"name": "energy", "type": "kinetic_energy"}, ["energy"], ("average", "integral"))
+
+
+def stress_measure(B, name, sigma):
+    B.measure({"name": "stress", "type": "stress", "body": name, "reference": sigma},
+              ["stress"], ("final", "average"))
+
+
+def gen_solid_cantilever(B):
+    rng = B.rng
+    L, w = rng.uniform(0.3, 0.8), rng.uniform(0.02, 0.05)
+    n = rng.randint(4, 8)
+    B.h, B.t_end = 5e-4, rng.choice([0.02, 0.04])
+    E, rho = solid_bar(B, "bar", L, w, w, n, [0, -w / 2, -w / 2])
+    mt = rng.uniform(0.2, 2.0)
+    B.body("tip", mt, box_inertia(rng, mt), [L + 0.01, 0, 0], rotation(rng))
+    B.param("tip.mass", mt)
+    B.joints += [
+        {"name": "clamp", "type": "solid_connection", "solid": "bar", "node_set": "xmin",
+         "body": "ground"},
+        {"name": "tie", "type": "solid_connection", "solid": "bar", "node_set": "xmax",
+         "body": "tip"}]
+    # a load of the order of the bar's weight times 1–10, across and along
+    F = rng.uniform(1, 10) * rho * L * w * w * G
+    f = {"name": "push", "type": "point_force", "body": "tip", "at": [L + 0.01, 0, 0]}
+    d = unit(add(random_dir(rng), [1, 0, 0], rng.uniform(-0.5, 0.5)))
+    if rng.random() < 0.5:
+        f["force"] = [F * x for x in d]
+        B.choices["load"] = "constant"
+    else:
+        for key, x in zip(("fx", "fy", "fz"), d):
+            f[key] = {"type": "ramp", "from": 0, "speed": F * x / 0.01, "ramp_time": 0.01}
+        B.choices["load"] = "ramp"
+    B.forces.append(f)
+    B.param("push.scale", 1.0)
+    B.gravity = [G * x for x in random_dir(rng)]
+    solid_measures(B, "bar", "xmax")
+    # the root's bending stress of the load, F L / (w³/6), as the KS reference
+    stress_measure(B, "bar", F * L * 6 / w ** 3)
+
+
+def gen_solid_arm(B):
+    rng = B.rng
+    L, width, t = rng.uniform(0.2, 0.4), rng.uniform(0.04, 0.08), rng.uniform(0.006, 0.012)
+    n = rng.choice([8, 10])
+    B.h, B.t_end = 5e-4, 0.03
+    solid_bar(B, "plate", L, width, t, n, [0, -width / 2, -t / 2])
+    B.body("hub", 0.5, [1e-3, 1e-3, 1e-3], [0, 0, 0], rotation(rng))
+    mp = rng.uniform(0.1, 1.0)
+    B.body("payload", mp, box_inertia(rng, mp), [L + 0.01, 0, 0], rotation(rng))
+    B.param("payload.mass", mp)
+    angle = rng.uniform(0, math.pi)  # the hub's axis, across the plate (in the y–z plane)
+    axis = [0, math.cos(angle), math.sin(angle)]
+    B.choices["axis"] = "%.3f rad from y" % angle
+    omega = rng.uniform(5, 15)
+    B.joints += [
+        {"name": "shoulder", "type": "revolute", "a": "ground", "b": "hub", "at": [0, 0, 0],
+         "axis": axis},
+        {"name": "motor", "type": "rotation_driver", "joint": "shoulder",
+         "law": {"type": "ramp", "from": 0, "speed": omega, "ramp_time": 0.015}},
+        {"name": "root", "type": "solid_connection", "solid": "plate", "node_set": "xmin",
+         "body": "hub"},
+        {"name": "tip", "type": "solid_connection", "solid": "plate", "node_set": "xmax",
+         "body": "payload"}]
+    r = rng.uniform(0.2, 0.3) * width
+    B.variables_extra.append({"name": "r_hole", "initial": r, "lower": 0.5 * r,
+                              "upper": min(1.5 * r, 0.4 * width)})
+    B.geometry = [{"body": "plate", "subgrid": 8, "features": [
+        {"name": "hole", "type": "through_hole", "face": "zmax", "profile": "circle",
+         "cx": rng.uniform(0.3, 0.6) * L, "cy": 0, "r": "r_hole"}]}]
+    B.gravity = [0, 0, -G]
+    solid_measures(B, "plate", "xmax")
+    B.measure({"name": "mass", "type": "mass", "body": "plate"}, ["mass"], ("final",))
+    stress_measure(B, "plate", 1e7)
+
+
+def gen_solid_pendulum(B):
+    rng = B.rng
+    L, w = rng.uniform(0.2, 0.5), rng.uniform(0.015, 0.04)
+    n = rng.randint(4, 6)
+    B.h, B.t_end = 5e-4, rng.choice([0.03, 0.05])
+    solid_bar(B, "bar", L, w, w, n, [0, -w / 2, -w / 2])
+    mh = rng.uniform(0.2, 1.0)
+    spin = rng.uniform(2, 8)
+    wdir = random_dir(rng)
+    hub = B.body("hub", mh, box_inertia(rng, mh), [0, 0, 0], rotation(rng),
+                 angular_velocity=[spin * x for x in wdir])
+    hub["velocity"] = [0, 0, 0]
+    B.param("hub.mass", mh)
+    B.joints += [
+        {"name": "ball", "type": "spherical", "a": "ground", "b": "hub", "at": [0, 0, 0]},
+        {"name": "root", "type": "solid_connection", "solid": "bar", "node_set": "xmin",
+         "body": "hub"}]
+    B.gravity = [G * x for x in unit(add(random_dir(rng), [0, 0, -1.5]))]
+    solid_measures(B, "bar", "xmax")
+    stress_measure(B, "bar", 1e6)
+
+
+GENERATORS = {"chain": gen_chain, "slider_crank": gen_slider_crank, "pendulum": gen_pendulum,
+              "solid_cantilever": gen_solid_cantilever, "solid_arm": gen_solid_arm,
+              "solid_pendulum": gen_solid_pendulum}
+
+
+def generate(seed, family=None, solid=False):
     rng = random.Random(seed)
-    family = family or FAMILY_CYCLE[seed % len(FAMILY_CYCLE)]
+    cycle = SOLID_CYCLE if solid else FAMILY_CYCLE
+    family = family or cycle[seed % len(cycle)]
     B = Builder(seed, rng)
     B.choices["family"] = family
-    {"chain": gen_chain, "slider_crank": gen_slider_crank, "pendulum": gen_pendulum}[family](B)
+    GENERATORS[family](B)
     responses, seen = [], set()
     for i, (col, agg) in enumerate(B.responses):
         name = "r%d_%s_%s" % (i, col.replace(".", "_"), agg)
@@ -298,17 +450,21 @@ def generate(seed, family=None):
     for i, (p, v, lo, up) in enumerate(picked):
         variables.append({"name": "p%d" % i, "initial": v, "lower": lo, "upper": up})
         parameters.append({"parameter": p, "variable": "p%d" % i})
+    design = {"variables": variables + B.variables_extra, "parameters": parameters}
+    if B.geometry:
+        design["geometry"] = B.geometry
     return {
         "name": "spatial_corpus_%d" % seed,
         "description": "gen_spatial.py seed %d (%s): %s" % (
             seed, family, "; ".join("%s=%s" % (k, v) for k, v in B.choices.items())),
-        "_generator": {"seed": seed, "family": family, "spatial": True},
+        "_generator": dict({"seed": seed, "family": family, "spatial": True},
+                           **({"solid": True} if solid else {})),
         "dimension": 3,
-        "gravity": [0, 0, -G],
+        "gravity": B.gravity,
         "bodies": B.bodies,
         "joints": B.joints,
         "forces": B.forces,
-        "design": {"variables": variables, "parameters": parameters},
+        "design": design,
         "simulation": {"t_end": B.t_end, "h": B.h},
         "output": {"measures": B.measures, "responses": responses},
     }
@@ -317,10 +473,11 @@ def generate(seed, family=None):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seed", type=int, required=True)
-    ap.add_argument("--family", choices=sorted(set(FAMILY_CYCLE)))
+    ap.add_argument("--family", choices=sorted(GENERATORS))
+    ap.add_argument("--solid", action="store_true", help="the solid-body families (SOLID_CYCLE)")
     ap.add_argument("-o", "--out")
     a = ap.parse_args()
-    text = json.dumps(generate(a.seed, a.family), indent=1)
+    text = json.dumps(generate(a.seed, a.family, a.solid), indent=1)
     if a.out:
         with open(a.out, "w") as f:
             f.write(text + "\n")

@@ -176,7 +176,7 @@ def run_seed(seed, a):
     os.makedirs(d)
     rec = {"seed": seed}
     try:
-        case = (gen_spatial.generate(seed) if a.spatial
+        case = (gen_spatial.generate(seed, solid=a.solid) if a.spatial or a.solid
                 else gen_mechanisms.generate(seed, with_new_loads=a.with_new_loads))
     except Exception as e:  # a generator bug: report it as such
         rec.update({"status": "generator_error", "message": "%s: %s" % (type(e).__name__, e)})
@@ -537,6 +537,9 @@ def main(argv=None):
     ap.add_argument("--with-new-loads", action="store_true", help="generate torque / rotational spring loads")
     ap.add_argument("--spatial", action="store_true",
                     help="spatial mechanisms (gen_spatial.py: chains, slider-cranks, pendulums)")
+    ap.add_argument("--solid", action="store_true",
+                    help="spatial mechanisms with a flexible 3D solid body (gen_spatial.py --solid: "
+                         "cantilevers, arms with a drilled plate, pendulums)")
     ap.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     a = ap.parse_args(argv)
     a.lsmbs = os.path.abspath(a.lsmbs)

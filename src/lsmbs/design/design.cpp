@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/mbs/model_builder.hpp"
@@ -133,6 +134,68 @@ void binding_range(const Design& d, const std::vector<ParamBinding>& params,
   }
 }
 
+// Distance between two axis-aligned boxes [a0, a1] and [b0, b1] (0 where they overlap).
+template <int N>
+double box_gap(const Eigen::Matrix<double, N, 1>& a0, const Eigen::Matrix<double, N, 1>& a1,
+               const Eigen::Matrix<double, N, 1>& b0, const Eigen::Matrix<double, N, 1>& b1) {
+  return (a0 - b1).cwiseMax(b0 - a1).cwiseMax(0.0).norm();
+}
+
+// Whether some parameter values within [lo, hi] could bring a 3D feature onto an element of the
+// mesh (conservative: the elements' bounding boxes, and a shape inside a simple hull). A sphere,
+// capped cylinder or super-ellipsoid (ξ ≥ 2: inside the box |u| ≤ a, |v| ≤ b, |w| ≤ c) lies in a
+// ball about its centre of radius r, √(r² + L²/4) or |(a, b, c)|; a through-cylinder, a pocket
+// or a through-hole in a cylinder of radius R about a line along the frame's w through the
+// centre (R: r, or the planar profile's reach d·max(a, b) or |(a, b)|). The centre ranges over
+// the box of its bounds; its image under the frame's Aᵀ over the box's interval image.
+bool solid_feature_can_reach(const Feature3& f, const std::vector<double>& lo,
+                             const std::vector<double>& hi, const SolidMesh& mesh) {
+  using T = Feature3::Type;
+  const Mat3& A = f.frame().axes;
+  bool line = f.type() == T::kPocket || f.type() == T::kThroughHole;
+  double R = 0;
+  Vec3 c0 = Vec3::Zero(), c1 = Vec3::Zero();  // the centre's box (body frame, or (u, v) on a line)
+  if (line) {
+    const Feature::Type p = f.profile();
+    R = p == Feature::Type::kCircle    ? hi[2]
+        : p == Feature::Type::kEllipse ? hi[4] * std::max(hi[2], hi[3])
+                                       : std::hypot(hi[2], hi[3]);
+    const Vec3 o = A.transpose() * f.frame().origin;  // x = o + A(u, v, w): Aᵀx = Aᵀo + (u, v, w)
+    c0 << o[0] + lo[0], o[1] + lo[1], 0;
+    c1 << o[0] + hi[0], o[1] + hi[1], 0;
+  } else {
+    c0 << lo[0], lo[1], lo[2];
+    c1 << hi[0], hi[1], hi[2];
+    if (f.type() == T::kSphere)
+      R = hi[3];
+    else if (f.type() == T::kSuperEllipsoid)
+      R = Vec3(hi[3], hi[4], hi[5]).norm();
+    else if (lo[4] > 0)  // a capped cylinder
+      R = std::hypot(hi[3], hi[4] / 2);
+    else {  // a cylinder through everything: a line along its axis
+      R = hi[3];
+      line = true;
+      Vec3 a = Vec3::Zero(), b = Vec3::Zero();
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          a[i] += std::min(A(j, i) * c0[j], A(j, i) * c1[j]),
+              b[i] += std::max(A(j, i) * c0[j], A(j, i) * c1[j]);
+      c0 = a, c1 = b;
+      c0[2] = c1[2] = 0;
+    }
+  }
+  for (const auto& cell : mesh.cells) {
+    Vec3 e0 = Vec3::Constant(std::numeric_limits<double>::infinity()), e1 = -e0;
+    for (int n : cell) {
+      const Vec3& x = mesh.nodes[static_cast<size_t>(n)];
+      const Vec3 y = line ? Vec3(A.col(0).dot(x), A.col(1).dot(x), 0) : x;
+      e0 = e0.cwiseMin(y), e1 = e1.cwiseMax(y);
+    }
+    if (box_gap<3>(e0, e1, c0, c1) <= R) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void Design::add_geometry(const SolidBody& body, SolidGeometrySpec spec) {
@@ -157,16 +220,22 @@ void Design::add_geometry(const SolidBody& body, SolidGeometrySpec spec) {
   bd.num_design_features = nd;
   bd.map = std::make_unique<SolidDesignMap>(
       body.mesh, LevelSet3(std::move(feats), std::move(root), size()), spec.options);
+  // as for planar bodies (below): a feature wholly outside is refused when no variable moves it,
+  // or when no values within the bounds can bring it onto an element
   for (int k : bd.map->features_outside_mesh(initial())) {
     const Feature3& f = bd.map->level_set().features()[static_cast<size_t>(k)];
     bool moved = false;
     for (const auto& b : f.params()) moved = moved || (b.variable >= 0 && b.scale != 0);
-    if (moved) continue;  // the runs warn while it lies outside (features_outside)
+    binding_range(*this, f.params(), lo, hi);
+    if (moved && solid_feature_can_reach(f, lo, hi, body.mesh)) continue;
     throw SetupError("design.geometry",
                      std::string(k >= nd ? "non-design feature '" : "feature '") + f.name() +
                          "' lies wholly outside body '" + body.name +
-                         "' (it overlaps no element) and no design variable moves it: it has no "
-                         "effect; check its centre, size and frame against the mesh",
+                         "' (it overlaps no element), and " +
+                         (moved ? "no values of its design variables within their bounds bring "
+                                  "it in"
+                                : "no design variable moves it") +
+                         ": it has no effect; check its centre, size and frame against the mesh",
                      f.name());
   }
   solid_bodies.push_back(std::move(bd));
@@ -278,30 +347,52 @@ std::vector<ParamDirection> Design::apply_with_directions(const Vec& p, ModelPar
   return dirs;
 }
 
+namespace {
+
+// A tie that persists one band away along every axis: the features coincide over an area (not
+// where two crossing features switch, a curve or line that μ's integral does not see).
+template <class LS, class Point>
+int count_ties(const LS& ls, const std::vector<Point>& nodes, const Vec& p, double eps,
+               Point& first) {
+  const auto values = ls.values(p);
+  const double tol = 1e-7 * eps;
+  int ties = 0;
+  for (const Point& x : nodes) {
+    if (std::abs(ls.evaluate(x, values, nullptr)) > 12 * eps) continue;  // μ does not see it
+    bool tie = ls.tie_at(x, values, tol);
+    for (int k = 0; k < x.size() && tie; ++k)
+      tie = ls.tie_at(x + eps * Point::Unit(k), values, tol);
+    if (tie && ties++ == 0) first = x;
+  }
+  return ties;
+}
+
+template <class Point>
+std::string coincidence_message(const std::string& body, int ties, const Point& first) {
+  std::string at;
+  for (int k = 0; k < first.size(); ++k) at += (k ? ", " : "") + std::to_string(first[k]);
+  return "body '" + body + "': two level-set features coincide at this design (" +
+         std::to_string(ties) + " mesh nodes near the boundary, the first at (" + at +
+         ") in the body frame): their exact min/max combination has a kink here, and the "
+         "gradient is the derivative of one of them only (one-sided; central differences "
+         "average the two). Move one feature, or combine them with \"ks\" "
+         "(docs/case-format.md)";
+}
+
+}  // namespace
+
 std::string Design::coincident_features(const Vec& p) const {
   for (const BodyDesign& b : bodies) {
-    const LevelSet& ls = b.map->level_set();
-    const auto values = ls.values(p);
-    const double eps = b.map->epsilon();
-    int ties = 0;
     Vec2 first = Vec2::Zero();
-    for (const Vec2& x : b.body->mesh.nodes) {
-      if (std::abs(ls.evaluate(x, values, nullptr)) > 12 * eps) continue;  // μ does not see it
-      // a tie that persists one band away in x and in y: the features coincide over an area
-      // (not where two crossing features switch, a curve that μ's integral does not see)
-      const double tol = 1e-7 * eps;
-      if (ls.tie_at(x, values, tol) && ls.tie_at(x + Vec2(eps, 0), values, tol) &&
-          ls.tie_at(x + Vec2(0, eps), values, tol) && ties++ == 0)
-        first = x;
-    }
-    if (ties > 0)
-      return "body '" + b.body->name + "': two level-set features coincide at this design (" +
-             std::to_string(ties) + " mesh nodes near the boundary, the first at (" +
-             std::to_string(first.x()) + ", " + std::to_string(first.y()) +
-             ") in the body frame): their exact min/max combination has a kink here, and the "
-             "gradient is the derivative of one of them only (one-sided; central differences "
-             "average the two). Move one feature, or combine them with \"ks\" "
-             "(docs/case-format.md)";
+    if (const int ties =
+            count_ties(b.map->level_set(), b.body->mesh.nodes, p, b.map->epsilon(), first))
+      return coincidence_message(b.body->name, ties, first);
+  }
+  for (const SolidBodyDesign& b : solid_bodies) {
+    Vec3 first = Vec3::Zero();
+    if (const int ties =
+            count_ties(b.map->level_set(), b.body->mesh.nodes, p, b.map->epsilon(), first))
+      return coincidence_message(b.body->name, ties, first);
   }
   return {};
 }

@@ -18,6 +18,12 @@ constexpr double kHexCorner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1,
 
 }  // namespace
 
+std::string SolidMesh::node_set_names() const {
+  std::string s;
+  for (const auto& [name, nodes] : node_sets) s += (s.empty() ? "" : ", ") + name;
+  return s.empty() ? "no node sets" : s;
+}
+
 double SolidMesh::size() const {
   if (nodes.empty()) return 0;
   Vec3 lo = nodes[0], hi = nodes[0];

@@ -19,6 +19,8 @@ struct SolidMesh {
   int num_elements() const { return static_cast<int>(cells.size()); }
   /// The largest extent of the bounding box.
   double size() const;
+  /// "xmin, xmax, …" (or "no node sets"): what an error about a missing node set offers.
+  std::string node_set_names() const;
   /// The box [origin, origin + size] in n[0] × n[1] × n[2] hexahedra, with the node sets of its
   /// six faces: xmin, xmax, ymin, ymax, zmin, zmax.
   static SolidMesh box(const Vec3& origin, const Vec3& size, const std::array<int, 3>& n);

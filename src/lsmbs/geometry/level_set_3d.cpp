@@ -141,7 +141,17 @@ T Feature3::distance(const Vec3& x, const T* th, double refine_within) const {
 template double Feature3::distance<double>(const Vec3&, const double*, double) const;
 template Dual Feature3::distance<Dual>(const Vec3&, const Dual*, double) const;
 
-double Feature3::bound(const Vec3& x, const double* th, double refine_within) const {
+double Feature3::bound(const Vec3& x, const double* th, double refine_within, double rho) const {
+  if ((type_ == Type::kPocket || type_ == Type::kThroughHole) &&
+      !profile_.exact_distance(std::vector<double>(th, th + profile_size(profile_.type())))) {
+    const Vec3 uvw = frame_.axes.transpose() * (x - frame_.origin);
+    const double L = profile_.far_bound(
+        Vec2(uvw.x(), uvw.y()), rho, std::vector<double>(th, th + profile_size(profile_.type())));
+    const double B2 =
+        L != 0 && std::abs(L) >= refine_within ? std::copysign(std::abs(L) + rho, L) : 0.0;
+    if (type_ == Type::kThroughHole) return B2;
+    return std::max(B2, uvw.z() - th[profile_size(profile_.type())]);  // the floor: exact
+  }
   const double D = distance<double>(x, th, refine_within);
   if (type_ != Type::kSuperEllipsoid || D >= 0) return D;
   // inside a super-ellipsoid: (1 − g)·min(a, b, c) ≤ the distance to its surface
@@ -193,10 +203,20 @@ double LevelSet3::evaluate(const Vec3& x, const std::vector<std::vector<double>>
   return evaluate_csg(root_, leaf, grad, nv_);
 }
 
-double LevelSet3::bound(const Vec3& x, const std::vector<std::vector<double>>& theta) const {
+bool LevelSet3::tie_at(const Vec3& x, const std::vector<std::vector<double>>& theta,
+                       double tol) const {
+  Gradient grad;
+  bool tie = false;
+  const auto leaf = [&](int f, Gradient* g) { return feature_distance(f, x, theta, g); };
+  evaluate_csg(root_, leaf, &grad, nv_, &tol, &tie);
+  return tie;
+}
+
+double LevelSet3::bound(const Vec3& x, const std::vector<std::vector<double>>& theta,
+                        double rho) const {
   const auto leaf = [&](int f, Gradient*) {
     const Feature3& F = features_[static_cast<size_t>(f)];
-    const double b = F.bound(x, theta[static_cast<size_t>(f)].data(), refine_within_);
+    const double b = F.bound(x, theta[static_cast<size_t>(f)].data(), refine_within_, rho);
     return F.hole() ? b : -b;
   };
   return evaluate_csg(root_, leaf, nullptr, nv_);

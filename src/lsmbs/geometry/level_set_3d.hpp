@@ -25,6 +25,11 @@
 // ξ ≥ 2 (required) it is a lower bound outside (g is convex and homogeneous), and inside the
 // distance is at least (1 − g)·min(a, b, c) (g is 1/min(a, b, c)-Lipschitz): bound() returns
 // these, which lets the mapping call an element uniform only where no boundary can reach it.
+// A super-ellipse profile's D₀ = φ/|∇φ| (feature.hpp) is no distance (it grows without bound
+// towards the centre): bound() takes the ball of radius ρ about x that the caller asks about and
+// gives sign(L)(|L| + ρ) from the profile's lower bound L of |D₀| over that disc
+// (Feature::far_bound), where |L| reaches the refinement radius (so distance() is D₀ there),
+// else 0 (no claim).
 #include <string>
 #include <vector>
 
@@ -68,9 +73,10 @@ class Feature3 {
   /// third order (Feature::distance).
   template <class T>
   T distance(const Vec3& x, const T* theta, double refine_within) const;
-  /// A signed value with the sign of distance() whose magnitude is at most the true distance
-  /// from x to the shape's boundary (see the header).
-  double bound(const Vec3& x, const double* theta, double refine_within) const;
+  /// A signed value B with the sign of distance() at x such that, where |B| > ρ + t for a t ≥ 0,
+  /// distance() keeps that sign and exceeds t in magnitude over the ball of radius ρ about x (an
+  /// exact distance itself; see the header).
+  double bound(const Vec3& x, const double* theta, double refine_within, double rho) const;
 
  private:
   std::string name_;
@@ -98,7 +104,10 @@ class LevelSet3 {
   /// The tree over the features' bound(): where |bound| exceeds a length, no boundary lies
   /// within it (up to slack(): a KS-smoothed min/max lies below the exact one by up to
   /// ln(children)/ks).
-  double bound(const Vec3& x, const std::vector<std::vector<double>>& theta) const;
+  double bound(const Vec3& x, const std::vector<std::vector<double>>& theta, double rho) const;
+  /// Whether an exact min/max of the tree has two children within tol of each other at x whose
+  /// derivatives differ (coinciding features: a kink of D in p; LevelSet::tie_at).
+  bool tie_at(const Vec3& x, const std::vector<std::vector<double>>& theta, double tol) const;
   double slack() const { return slack_; }
   void set_refine_within(double d) { refine_within_ = d; }
 

@@ -145,7 +145,7 @@ void SolidDesignMap::map(const Vec& p, Vec& mu, SpMat* dmu_dp, MapCounts* counts
   const double tail = kTailBands * eps_ + ls_.slack(), mmin = opt_.mu_min;
   MapCounts local;
   for (int e = 0; e < ne; ++e) {
-    const double b = ls_.bound(centre_[e], theta);
+    const double b = ls_.bound(centre_[e], theta, radius_[e]);
     if (std::abs(b) > radius_[e] + tail) {
       mu[e] = b > 0 ? 1.0 : mmin;
       continue;
@@ -187,7 +187,7 @@ std::vector<int> SolidDesignMap::features_outside_mesh(const Vec& p) const {
   for (size_t f = 0; f < features.size(); ++f) {
     bool reaches = false;
     for (int e = 0; e < num_elements() && !reaches; ++e)
-      reaches = features[f].bound(centre_[e], theta[f].data(), 0) <= radius_[e];
+      reaches = features[f].bound(centre_[e], theta[f].data(), 0, radius_[e]) <= radius_[e];
     if (!reaches) outside.push_back(static_cast<int>(f));
   }
   return outside;

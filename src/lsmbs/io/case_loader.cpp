@@ -764,7 +764,15 @@ struct Loader : KindReader {
       if (!(axis.norm() > 0)) f.fail("axis", "expected a non-zero direction");
       frame.axes = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), axis).toRotationMatrix();
     } else if (type == Feature3::Type::kSuperEllipsoid && f.has("orientation")) {
-      frame.axes = orientation(f.child("orientation"));
+      const JsonReader o = f.child("orientation");
+      frame.axes = orientation(o);
+      const Mat3& R = frame.axes;
+      const double off = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
+      if (off > 1e-9 || R.determinant() < 0)
+        o.fail("expected a rotation (orthonormal columns, determinant +1, to 1e-9): |RᵀR − I| = " +
+               format_g(off) + ", det R = " + format_g(R.determinant()) +
+               "; the semi-axes a, b, c size the shape (give {\"axis\": [x, y, z], \"angle\": "
+               "rad}, or the matrix to full precision)");
     }
     std::vector<ParamBinding> ps;
     for (const std::string& key : Feature3::parameter_names(type, profile))

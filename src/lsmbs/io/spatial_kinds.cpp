@@ -224,6 +224,49 @@ const SpatialJointInfo& joint_of(KindReader& k, const JsonReader& r) {
                   [&]() -> const SpatialJointInfo& { return k.builder().spatial_joint_info(j); });
 }
 
+// A point {"body": name, "at": [x, y, z]} (at: t = 0; default the centre of mass) or
+// {"ground": [x, y, z]}, under key.
+SpatialPoint spatial_point(KindReader& k, const JsonReader& parent, const char* key) {
+  const JsonReader r = parent.child(key);
+  SpatialPoint pt;
+  if (r.has("ground")) {
+    pt.d = r.vec3("ground");
+  } else {
+    const SpatialRigidBody& b = body_of(k, r);
+    pt.dof0 = b.dof0;
+    pt.d = offset_of(b, r);
+  }
+  r.finish();
+  return pt;
+}
+
+const SolidBody& solid_of(KindReader& k, const JsonReader& r) {
+  const std::string b = r.string("body");
+  return k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
+}
+
+/// The nodes of the solid body's node set named by r[key].
+const std::vector<int>& node_set_of(const SolidBody& sb, const JsonReader& r, const char* key) {
+  const std::string set = r.string(key);
+  const auto it = sb.mesh.node_sets.find(set);
+  if (it == sb.mesh.node_sets.end())
+    r.fail(key, "solid body '" + sb.name + "' has no node set '" + set + "' (it has " +
+                    sb.mesh.node_set_names() + ")");
+  return it->second;
+}
+
+std::vector<int> node_dofs(const SolidBody& sb, const std::vector<int>& nodes) {
+  std::vector<int> dofs;
+  for (int n : nodes) dofs.push_back(sb.node_dof(n));
+  return dofs;
+}
+
+Vec3 mean_position(const SolidBody& sb, const std::vector<int>& nodes) {
+  Vec3 x = Vec3::Zero();
+  for (int n : nodes) x += sb.mesh.nodes[static_cast<size_t>(n)];
+  return x / static_cast<double>(nodes.size());
+}
+
 std::vector<ModelKind> measures() {
   const KindKey body = req("body", K::kName, "the body");
   const KindKey at = opt("at", K::kVec3, "the point at t = 0 (default: the centre of mass) [m]");
@@ -314,28 +357,50 @@ std::vector<ModelKind> measures() {
          k.add_constraint_force(name, j);
        }},
       {"measures",
+       "distance",
+       "|x_b − x_a| between two points of rigid bodies or the ground [m]",
+       {req("a", K::kJson, "{\"body\": name, \"at\": [x, y, z]} or {\"ground\": [x, y, z]}"),
+        req("b", K::kJson, "the other point, likewise")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         k.add_measure(std::make_unique<SpatialDistanceMeasure>(name, spatial_point(k, r, "a"),
+                                                                spatial_point(k, r, "b"), 0.0));
+       }},
+      {"measures",
        "node_set_position",
        "the mean position of a solid body's node set, x, y, z [m]",
        {req("body", K::kName, "the solid body"), req("node_set", K::kName, "its node set")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
-         const std::string b = r.string("body"), set = r.string("node_set");
-         const SolidBody& sb =
-             k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
-         const auto it = sb.mesh.node_sets.find(set);
-         if (it == sb.mesh.node_sets.end())
-           r.fail("node_set", "solid body '" + b + "' has no node set '" + set + "'");
-         std::vector<int> dofs;
-         for (int n : it->second) dofs.push_back(sb.node_dof(n));
-         k.add_measure(std::make_unique<NodeSetMeasure>(name, std::move(dofs)));
+         const SolidBody& sb = solid_of(k, r);
+         k.add_measure(
+             std::make_unique<NodeSetMeasure>(name, node_dofs(sb, node_set_of(sb, r, "node_set"))));
+       }},
+      {"measures",
+       "elongation",
+       "the distance between the mean positions of two node sets minus its value at t = 0 [m]",
+       {req("body", K::kName, "the solid body"), req("a", K::kName, "one node set"),
+        req("b", K::kName, "the other node set")},
+       [](KindReader& k, const JsonReader& r, const std::string& name) {
+         const SolidBody& sb = solid_of(k, r);
+         const auto &a = node_set_of(sb, r, "a"), &b = node_set_of(sb, r, "b");
+         const double d0 = (mean_position(sb, b) - mean_position(sb, a)).norm();
+         if (!(d0 > 0))
+           r.fail("b", "the node sets' mean positions coincide: their distance has no direction");
+         k.add_measure(std::make_unique<NodeSetDistanceMeasure>(name, node_dofs(sb, a),
+                                                                node_dofs(sb, b), d0));
+       }},
+      {"measures",
+       "strain_energy",
+       "the strain energy of the flexible and solid bodies [J]",
+       {},
+       [](KindReader& k, const JsonReader&, const std::string& name) {
+         k.add_measure(std::make_unique<StrainEnergyMeasure>(name));
        }},
       {"measures",
        "mass",
        "the mass of a solid body, Σ_e μ_e ρ V_e [kg] (a design's material volume times ρ)",
        {req("body", K::kName, "the solid body")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
-         const std::string b = r.string("body");
-         const SolidBody& sb =
-             k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
+         const SolidBody& sb = solid_of(k, r);
          k.add_measure(std::make_unique<SolidMassMeasure>(name, &sb));
        }},
       {"measures",
@@ -347,9 +412,7 @@ std::vector<ModelKind> measures() {
         opt("parameter", K::kPositive, "KS ρ (default 50) or p-norm p (default 8)"),
         opt("relaxation", K::kPositive, "q in (0, 1] (default 0.5)")},
        [](KindReader& k, const JsonReader& r, const std::string& name) {
-         const std::string b = r.string("body");
-         const SolidBody& sb =
-             k.at_key(r, "body", [&]() -> const SolidBody& { return k.builder().solid(b); });
+         const SolidBody& sb = solid_of(k, r);
          k.add_measure(std::make_unique<StressMeasure>(name, &sb, stress_options(r)));
        }},
       {"measures",

@@ -561,6 +561,13 @@ double Model::strain_energy(const Vec& q, const ModelParams& p) const {
       W += b->elements[e]->strain_energy(x, p.fields[b->field][e] * E0, nu, t);
     }
   }
+  for (const auto& b : solid_) {
+    double x[kMaxLocalDofs];
+    for (int e = 0; e < b->mesh.num_elements(); ++e) {
+      b->element_coordinates(e, q, x);
+      W += b->elements[static_cast<size_t>(e)]->strain_energy(x, b->element_E(e, p), b->nu(p));
+    }
+  }
   return W;
 }
 

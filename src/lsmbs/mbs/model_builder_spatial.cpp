@@ -348,15 +348,6 @@ const SolidBody& ModelBuilder::solid(const std::string& name) const {
   return *b;
 }
 
-namespace {
-// "xmin, xmax, …": the node sets a message offers
-std::string set_names(const SolidMesh& m) {
-  std::string s;
-  for (const auto& [name, nodes] : m.node_sets) s += (s.empty() ? "" : ", ") + name;
-  return s;
-}
-}  // namespace
-
 void ModelBuilder::solid_connection(const std::string& name, const std::string& solid_body,
                                     const std::string& node_set, const std::string& body) {
   const Entity e{"joint", name};
@@ -369,7 +360,7 @@ void ModelBuilder::solid_connection(const std::string& name, const std::string& 
   if (set == sb->mesh.node_sets.end())
     fail(e, "node_set",
          "solid body '" + solid_body + "' has no node set '" + node_set + "' (it has " +
-             set_names(sb->mesh) + ")");
+             sb->mesh.node_set_names() + ")");
   const SpatialRigidBody* rb = spatial_or_ground(e, "body", body);
   // nodes tied before (two faces sharing an edge): once to the same body, never to another
   std::map<int, const ConstraintElement*> tied;

@@ -10,6 +10,17 @@ double SolidBody::mass(const ModelParams& p) const {
   return m * p.scalars[static_cast<size_t>(rho_param)];
 }
 
+int SolidBody::element_coordinates(int e, const Vec& q, double* x) const {
+  const auto& c = mesh.cells[static_cast<size_t>(e)];
+  for (size_t i = 0; i < c.size(); ++i)
+    for (int k = 0; k < 3; ++k) x[3 * i + static_cast<size_t>(k)] = q[node_dof(c[i]) + k];
+  return 3 * static_cast<int>(c.size());
+}
+
+double SolidBody::element_E(int e, const ModelParams& p) const {
+  return p.fields[static_cast<size_t>(field)][e] * p.scalars[static_cast<size_t>(E_param)];
+}
+
 SolidForce::SolidForce(const SolidBody* body, int element) : body_(body), e_(element) {
   const auto& c = body->mesh.cells[static_cast<size_t>(element)];
   n_ = 3 * c.size();

@@ -29,6 +29,12 @@ struct SolidBody {
 
   int node_dof(int node) const { return dof0 + 3 * node; }
   double mass(const ModelParams& p) const;
+  /// Element e's nodal coordinates gathered from q (3 per node, in the cell's order); returns
+  /// their number.
+  int element_coordinates(int e, const Vec& q, double* x) const;
+  /// E_e = μ_e E0 and ν of element e (eq. 3).
+  double element_E(int e, const ModelParams& p) const;
+  double nu(const ModelParams& p) const { return p.scalars[static_cast<size_t>(nu_param)]; }
 };
 
 /// One element of a solid body as a ForceElement: consistent inertia, internal force, weight.

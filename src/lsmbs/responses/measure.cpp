@@ -285,7 +285,7 @@ void KineticEnergyMeasure::gradient(const Model& m, const State& s, const ModelP
 
 void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelParams& p, int,
                                    MeasureGradient& g) const {
-  // ∂W/∂q = f_int of the flexible bodies
+  // ∂W/∂q = f_int of the flexible and solid bodies
   for (const auto& b : m.flexible_bodies()) {
     const double t = p.scalars[b->thickness_param], nu = p.scalars[b->nu_param],
                  E0 = p.scalars[b->E_param];
@@ -294,6 +294,16 @@ void StrainEnergyMeasure::gradient(const Model& m, const State& s, const ModelPa
       const int nd = b->element_coordinates(e, s.q, x);
       b->elements[e]->internal_force(x, p.fields[b->field][e] * E0, nu, t, f, nullptr);
       for (int k = 0; k < nd; ++k) g.dq.emplace_back(b->element_dof(e, k), f[k]);
+    }
+  }
+  for (const auto& b : m.solid_bodies()) {
+    double x[kMaxLocalDofs], f[kMaxLocalDofs];
+    for (int e = 0; e < b->mesh.num_elements(); ++e) {
+      const int nd = b->element_coordinates(e, s.q, x);
+      b->elements[static_cast<size_t>(e)]->internal_force(x, b->element_E(e, p), b->nu(p), f,
+                                                          nullptr);
+      const auto& cell = b->mesh.cells[static_cast<size_t>(e)];
+      for (int k = 0; k < nd; ++k) g.dq.emplace_back(b->node_dof(cell[k / 3]) + k % 3, f[k]);
     }
   }
 }

@@ -54,6 +54,58 @@ void NodeSetMeasure::gradient(const Model&, const State&, const ModelParams&, in
   for (int d : dofs_) g.dq.emplace_back(d + c, 1.0 / static_cast<double>(dofs_.size()));
 }
 
+// ------------------------------------------------------------------ SpatialDistanceMeasure
+Vec3 SpatialPoint::position(const Vec& q) const {
+  if (dof0 < 0) return d;
+  Vec3 x = q.segment<3>(dof0);
+  for (int k = 0; k < 3; ++k) x += d[k] * q.segment<3>(dof0 + 3 + 3 * k);
+  return x;
+}
+
+void SpatialDistanceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                      double* out) const {
+  *out = (b_.position(s.q) - a_.position(s.q)).norm() - ref_;
+}
+
+void SpatialDistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int,
+                                      MeasureGradient& g) const {
+  const Vec3 u = (b_.position(s.q) - a_.position(s.q)).normalized();
+  for (const auto& [pt, sign] : {std::pair{a_, -1.0}, std::pair{b_, 1.0}}) {
+    if (pt.dof0 < 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      g.dq.emplace_back(pt.dof0 + c, sign * u[c]);
+      for (int k = 0; k < 3; ++k) g.dq.emplace_back(pt.dof0 + 3 + 3 * k + c, sign * u[c] * pt.d[k]);
+    }
+  }
+}
+
+// ------------------------------------------------------------------ NodeSetDistanceMeasure
+NodeSetDistanceMeasure::NodeSetDistanceMeasure(std::string name, std::vector<int> a_dofs,
+                                               std::vector<int> b_dofs, double reference)
+    : Measure(std::move(name)), a_(std::move(a_dofs)), b_(std::move(b_dofs)), ref_(reference) {}
+
+Vec3 NodeSetDistanceMeasure::span(const Vec& q) const {
+  Vec3 xa = Vec3::Zero(), xb = Vec3::Zero();
+  for (int d : a_) xa += q.segment<3>(d);
+  for (int d : b_) xb += q.segment<3>(d);
+  return xb / static_cast<double>(b_.size()) - xa / static_cast<double>(a_.size());
+}
+
+void NodeSetDistanceMeasure::evaluate(const Model&, const State& s, const ModelParams&,
+                                      double* out) const {
+  *out = span(s.q).norm() - ref_;
+}
+
+void NodeSetDistanceMeasure::gradient(const Model&, const State& s, const ModelParams&, int,
+                                      MeasureGradient& g) const {
+  // ∂|d|/∂x̄_b = d/|d| = −∂|d|/∂x̄_a, and ∂x̄/∂x_i = 1/n
+  const Vec3 u = span(s.q).normalized();
+  for (int d : a_)
+    for (int k = 0; k < 3; ++k) g.dq.emplace_back(d + k, -u[k] / static_cast<double>(a_.size()));
+  for (int d : b_)
+    for (int k = 0; k < 3; ++k) g.dq.emplace_back(d + k, u[k] / static_cast<double>(b_.size()));
+}
+
 // ------------------------------------------------------------------ BodyAxisMeasure
 BodyAxisMeasure::BodyAxisMeasure(std::string name, int dof0, const Vec3& u)
     : Measure(std::move(name)), dof0_(dof0), u_(u) {}

@@ -44,6 +44,48 @@ class NodeSetMeasure : public Measure {
   std::vector<int> dofs_;
 };
 
+/// A point of a spatial rigid body at principal-frame offset d (x = r + Σ d_k e_k, linear in
+/// q), or a fixed ground point d (dof0 < 0).
+struct SpatialPoint {
+  int dof0 = -1;
+  Vec3 d = Vec3::Zero();
+  Vec3 position(const Vec& q) const;
+};
+
+/// |x_b − x_a| minus `reference` (0 for a distance, the distance at t = 0 for an elongation)
+/// between two points of rigid bodies or the ground; ∂/∂q = ±u·∂x/∂q, u the unit direction.
+class SpatialDistanceMeasure : public Measure {
+ public:
+  SpatialDistanceMeasure(std::string name, SpatialPoint a, SpatialPoint b, double reference)
+      : Measure(std::move(name)), a_(a), b_(b), ref_(reference) {}
+  std::vector<std::string> units() const override { return {"m"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+
+ private:
+  SpatialPoint a_, b_;
+  double ref_;
+};
+
+/// The distance between the mean positions of two node sets of solid bodies, x̄_b − x̄_a, minus
+/// `reference` (their distance at t = 0 for an elongation): a solid part's stretch between two
+/// faces, the 3D counterpart of the planar elongation (eq. 42).
+class NodeSetDistanceMeasure : public Measure {
+ public:
+  NodeSetDistanceMeasure(std::string name, std::vector<int> a_dofs, std::vector<int> b_dofs,
+                         double reference);
+  std::vector<std::string> units() const override { return {"m"}; }
+  void evaluate(const Model& m, const State& s, const ModelParams& p, double* out) const override;
+  void gradient(const Model& m, const State& s, const ModelParams& p, int c,
+                MeasureGradient& g) const override;
+
+ private:
+  Vec3 span(const Vec& q) const;
+  std::vector<int> a_, b_;
+  double ref_;
+};
+
 /// A body-fixed direction u (principal-frame components) in ground components: the body's
 /// orientation as the images of chosen axes (a unit u stays unit up to the frame constraints).
 class BodyAxisMeasure : public Measure {
