@@ -41,25 +41,6 @@ SolidBodyOptions material(double nu = 0) {
   return o;
 }
 
-template <class F>
-IntegratorSummary integrate(ModelBuilder& b, const Model& model, double h, double t_end, F f) {
-  State s0 = b.initial_state();
-  SparseLU lu;
-  lu.analyze(model.pattern());
-  const Status st =
-      project_initial_state(model, model.params(), s0, lu, 1e-13, nullptr, &b.held_velocities());
-  EXPECT_TRUE(st.ok()) << st.message;
-  struct Obs : checks::GridRecorder {
-    F* f = nullptr;
-    void record(const State& s) override { (*f)(s); }
-  } obs;
-  obs.f = &f;
-  GeneralizedAlphaOptions o;
-  o.h = h;
-  o.t_end = t_end;
-  return GeneralizedAlpha(o).run(model, model.params(), s0, {&obs});
-}
-
 // The mean of the node set's z (or radial distance from the z axis) at a state
 double mean_z(const SolidBody& b, const std::string& set, const State& s) {
   double z = 0;
@@ -145,7 +126,7 @@ TEST(SolidBody, ACantileverUnderItsWeightSwingsAboutTheBeamTheorysDeflection) {
   const auto model = b.build();
   const SolidBody& beam = *model->solid_bodies()[0];
   std::vector<double> t, z;
-  const auto run = integrate(b, *model, T1 / 100, 3 * T1, [&](const State& s) {
+  const auto run = checks::integrate(b, *model, T1 / 100, 3 * T1, [&](const State& s) {
     t.push_back(s.t);
     z.push_back(mean_z(beam, "xmax", s));
   });
@@ -184,7 +165,7 @@ TEST(SolidBody, ABarSpinningOnAHubStretchesAsTheClosedFormSays) {
   const auto& tip = bar_.mesh.node_sets.at("xmax");
   double sum = 0;
   int count = 0;
-  const auto run = integrate(b, *model, 0.002, 2.0, [&](const State& s) {
+  const auto run = checks::integrate(b, *model, 0.002, 2.0, [&](const State& s) {
     if (s.t < 1.5) return;
     double r = 0;  // each tip node's radial distance from the axle, less its own at t = 0
     for (int n : tip)
@@ -214,8 +195,8 @@ TEST(SolidBody, AClampAndATieToAWeldedHubMoveAlike) {
     }
     const auto model = b.build();
     const SolidBody& beam = *model->solid_bodies()[0];
-    const auto run = integrate(b, *model, 0.004, 0.4,
-                               [&](const State& s) { z[tie].push_back(mean_z(beam, "xmax", s)); });
+    const auto run = checks::integrate(
+        b, *model, 0.004, 0.4, [&](const State& s) { z[tie].push_back(mean_z(beam, "xmax", s)); });
     ASSERT_TRUE(run.ok) << run.message;
   }
   ASSERT_EQ(z[0].size(), z[1].size());

@@ -25,26 +25,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Runs generalized-α from the builder's consistent initial state, calling f at every step.
-template <class F>
-IntegratorSummary integrate(ModelBuilder& b, const Model& model, double h, double t_end, F f) {
-  State s0 = b.initial_state();
-  SparseLU lu;
-  lu.analyze(model.pattern());
-  const Status st =
-      project_initial_state(model, model.params(), s0, lu, 1e-13, nullptr, &b.held_velocities());
-  EXPECT_TRUE(st.ok()) << st.message;
-  struct Obs : checks::GridRecorder {
-    F* f = nullptr;
-    void record(const State& s) override { (*f)(s); }
-  } obs;
-  obs.f = &f;
-  GeneralizedAlphaOptions o;
-  o.h = h;
-  o.t_end = t_end;
-  return GeneralizedAlpha(o).run(model, model.params(), s0, {&obs});
-}
-
 SpatialBodyOptions body(double m, const Vec3& I, const Vec3& x, const Mat3& R = Mat3::Identity()) {
   SpatialBodyOptions o;
   o.mass = m, o.inertia = I, o.position = x, o.orientation = R;
@@ -75,7 +55,7 @@ TEST(SpatialBuilder, DrivenSliderCrankFollowsTheClosedFormLoopClosure) {
   const auto model = b.build();
   EXPECT_EQ(model->nq() - model->nc(), 0);  // driven: no freedom left
   double err = 0, turns = 0;
-  const auto run = integrate(b, *model, 5e-4, 0.3, [&](const State& s) {
+  const auto run = checks::integrate(b, *model, 5e-4, 0.3, [&](const State& s) {
     const double th = s.q[theta];
     const double y_ref = crank * std::cos(th) +
                          std::sqrt(rod * rod - offset * offset - std::pow(crank * std::sin(th), 2));
@@ -104,7 +84,7 @@ TEST(SpatialBuilder, TorsionSpringOnARevoluteAngleOscillatesAtItsFrequency) {
   const auto model = b.build();
   const double w = std::sqrt(k / I_axis);
   double err = 0;
-  const auto run = integrate(b, *model, 1e-3, 2.0, [&](const State& s) {
+  const auto run = checks::integrate(b, *model, 1e-3, 2.0, [&](const State& s) {
     err = std::max(err, std::abs(s.q[theta] - th0 * (1 - std::cos(w * s.t))));
   });
   ASSERT_TRUE(run.ok) << run.message;
@@ -128,7 +108,7 @@ TEST(SpatialBuilder, MassOnASpatialSpringUnderAConstantForce) {
   const auto model = b.build();
   const double w = std::sqrt(k / m), x_static = F / k;
   double err = 0;
-  const auto run = integrate(b, *model, 1e-4, 0.5, [&](const State& s) {
+  const auto run = checks::integrate(b, *model, 1e-4, 0.5, [&](const State& s) {
     const double x = u.dot(Vec3(s.q.segment<3>(r))) - 0.5;  // stretch
     err = std::max(err, std::abs(x - x_static * (1 - std::cos(w * s.t))));
   });

@@ -170,3 +170,25 @@ def test_length_scale_constraints_on_a_solid_design_are_refused_by_name(tmp_path
                        capture_output=True, text=True)
     assert p.returncode == 2, p.stderr
     assert "/optimization/length_scale: length-scale constraints are planar only" in p.stderr, p.stderr
+
+
+def test_optimizing_a_solid_design_says_it_is_not_judged(tmp_path):
+    """`lsmbs optimize` on data/spatial/solid_arm.json (mass under a stress bound, two
+    evaluations): the judgement is planar only, so summary.json's judgement is null and a warning
+    says the solid design is not judged; the KKT line names every measure it judges by,
+    complementarity included."""
+    import subprocess
+    from conftest import CLI
+    doc = json.loads(ARM.read_text())
+    doc["optimization"] = {"objective": "plate_mass",
+                           "constraints": [{"response": "peak_stress", "upper": 6e7}],
+                           "optimizer": "mma", "stop": {"max_evaluations": 2}}
+    case = tmp_path / "arm.json"
+    case.write_text(json.dumps(doc))
+    p = subprocess.run([CLI, "optimize", str(case), "-o", str(tmp_path / "out"), "--no-check"],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert s["judgement"] is None
+    assert any("solid body 'plate' is not judged" in w for w in s["warnings"]), s["warnings"]
+    assert "complementarity" in p.stdout, p.stdout

@@ -1,12 +1,17 @@
 #pragma once
 // Building blocks of the spatial tests: a rigid body in natural coordinates with its frame
-// constraints, a zero state, and an observer of the output grid.
+// constraints, a zero state, an observer of the output grid, and a generalized-α run of a built
+// model that calls back at every grid point.
+#include <gtest/gtest.h>
+
 #include <array>
 #include <memory>
 #include <string>
 
 #include "lsmbs/integrators/generalized_alpha.hpp"
+#include "lsmbs/integrators/initial_state.hpp"
 #include "lsmbs/mbs/model.hpp"
+#include "lsmbs/mbs/model_builder.hpp"
 #include "lsmbs/mbs/spatial.hpp"
 
 namespace lsmbs::checks {
@@ -53,5 +58,26 @@ struct GridRecorder : StepObserver {
     return true;
   }
 };
+
+// Runs generalized-α (step h to t_end) from the builder's initial state projected onto the
+// constraints (consistent), calling f at every grid point.
+template <class F>
+IntegratorSummary integrate(ModelBuilder& b, const Model& model, double h, double t_end, F f) {
+  State s0 = b.initial_state();
+  SparseLU lu;
+  lu.analyze(model.pattern());
+  const Status st =
+      project_initial_state(model, model.params(), s0, lu, 1e-13, nullptr, &b.held_velocities());
+  EXPECT_TRUE(st.ok()) << st.message;
+  struct Obs : GridRecorder {
+    F* f = nullptr;
+    void record(const State& s) override { (*f)(s); }
+  } obs;
+  obs.f = &f;
+  GeneralizedAlphaOptions o;
+  o.h = h;
+  o.t_end = t_end;
+  return GeneralizedAlpha(o).run(model, model.params(), s0, {&obs});
+}
 
 }  // namespace lsmbs::checks

@@ -105,9 +105,10 @@ void print_outcome(const lsmbs::OptimizeRun& run, const lsmbs::Design& d, const 
   if (const auto& kkt = res.kkt)
     std::printf(
         "  KKT: %d active constraints, %d free variables, %d at lower / %d at upper bounds; "
-        "stationarity %.2e, bound-sign violation %.2e: %s (kkt_tolerance %.2g)\n",
+        "stationarity %.2e, complementarity %.2e, bound-sign violation %.2e: %s "
+        "(kkt_tolerance %.2g)\n",
         kkt->active_constraints, kkt->free_variables, kkt->at_lower, kkt->at_upper,
-        kkt->stationarity, kkt->bound_sign_violation,
+        kkt->stationarity, kkt->complementarity, kkt->bound_sign_violation,
         kkt->satisfied() ? "satisfied" : "not satisfied", kkt->tolerance);
   std::printf("  stopped on '%s': %s\n", res.stop_reason.c_str(),
               res.converged ? "converged" : "not converged");

@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <string_view>
+#include <utility>
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/file_check.hpp"
@@ -15,6 +17,8 @@
 namespace lsmbs {
 
 namespace {
+
+constexpr long long kMaxCount = 100000000;  // counts above this are not a mesh lsmbs can hold
 
 struct Reader {
   std::istream& in;
@@ -66,6 +70,37 @@ struct Reader {
     if (!v) fail("expected " + what + " (a finite number), got " + shown(field));
     return *v;
   }
+  // The first line of $Nodes or $Elements, "numBlocks numItems minTag maxTag" (item: "node" or
+  // "element"): the numbers of blocks and items.
+  std::pair<long long, long long> section_header(const std::string& item) const {
+    const auto hd =
+        fields(4, "the numbers of blocks and " + item + "s, the smallest and largest tag");
+    const long long nblocks = integer(hd[0], "the number of " + item + " blocks", 0, kMaxCount);
+    const long long n = integer(hd[1], "the number of " + item + "s", 0, kMaxCount);
+    integer(hd[2], "the smallest " + item + " tag", 0);
+    integer(hd[3], "the largest " + item + " tag", 0);
+    return {nblocks, n};
+  }
+  // A block's header "entityDim entityTag third count" (third: what the block kind puts there),
+  // its entity declared in $Entities when the file has one.
+  struct Block {
+    int edim;
+    long long etag, third, count;
+  };
+  Block block_header(const std::string& item, const std::string& third, long long third_lo,
+                     long long third_hi,
+                     const std::set<std::pair<int, long long>>& entities) const {
+    const std::string a = item == "element" ? "an " : "a ";
+    const auto bh =
+        fields(4, a + item + " block: entity dimension, entity tag, " + third + ", count");
+    Block b{static_cast<int>(integer(bh[0], "the entity dimension", 0, 3)),
+            integer(bh[1], "the entity tag", 1), integer(bh[2], third, third_lo, third_hi),
+            integer(bh[3], "the number of " + item + "s in the block", 0, kMaxCount)};
+    if (!entities.empty() && !entities.count({b.edim, b.etag}))
+      fail("the " + item + " block's entity " + std::to_string(b.etag) + " of dimension " +
+           std::to_string(b.edim) + " is not declared in $Entities");
+    return b;
+  }
   // The end marker of a section on the next line.
   void end(const std::string& section) {
     const std::string marker = "$End" + section.substr(1);
@@ -76,8 +111,6 @@ struct Reader {
            ", whose counts say its data ends here), got " + shown(text));
   }
 };
-
-constexpr long long kMaxCount = 100000000;  // counts above this are not a mesh lsmbs can hold
 
 // Lower-dimensional elements that carry node sets (their physical groups).
 struct SetCarrier {
@@ -215,24 +248,15 @@ MshFile read_msh41(const std::string& path, int dim, const std::vector<MshCellTy
     } else if (s == "$Nodes") {
       rd.next_in(s);
       const int header = rd.line;
-      const auto hd = rd.fields(4, "the numbers of blocks and nodes, the smallest and largest tag");
-      const long long nblocks = rd.integer(hd[0], "the number of node blocks", 0, kMaxCount);
-      const long long nnodes = rd.integer(hd[1], "the number of nodes", 0, kMaxCount);
-      rd.integer(hd[2], "the smallest node tag", 0);
-      rd.integer(hd[3], "the largest node tag", 0);
+      const auto [nblocks, nnodes] = rd.section_header("node");
       m.nodes.reserve(static_cast<size_t>(std::min(nnodes, 10000000LL)));  // a claim, not data
       long long total = 0;
       for (long long b = 0; b < nblocks; ++b) {
         rd.next_in(s);
-        const auto bh =
-            rd.fields(4, "a node block: entity dimension, entity tag, parametric, count");
-        const int edim = static_cast<int>(rd.integer(bh[0], "the entity dimension", 0, 3));
-        const long long etag = rd.integer(bh[1], "the entity tag", 1);
-        const bool parametric = rd.integer(bh[2], "parametric (0 or 1)", 0, 1) == 1;
-        const long long nb = rd.integer(bh[3], "the number of nodes in the block", 0, kMaxCount);
-        if (!entities.empty() && !entities.count({edim, etag}))
-          rd.fail("the node block's entity " + std::to_string(etag) + " of dimension " +
-                  std::to_string(edim) + " is not declared in $Entities");
+        const auto blk = rd.block_header("node", "parametric (0 or 1)", 0, 1, entities);
+        const int edim = blk.edim;
+        const bool parametric = blk.third == 1;
+        const long long nb = blk.count;
         total += nb;
         if (total > nnodes)
           rd.fail("more nodes than the " + std::to_string(nnodes) + " announced on line " +
@@ -267,21 +291,14 @@ MshFile read_msh41(const std::string& path, int dim, const std::vector<MshCellTy
       if (!seen.count("$Nodes")) rd.fail("$Elements before $Nodes");
       rd.next_in(s);
       const int header = rd.line;
-      const auto hd =
-          rd.fields(4, "the numbers of blocks and elements, the smallest and largest tag");
-      const long long nblocks = rd.integer(hd[0], "the number of element blocks", 0, kMaxCount);
-      const long long nelem = rd.integer(hd[1], "the number of elements", 0, kMaxCount);
-      rd.integer(hd[2], "the smallest element tag", 0);
-      rd.integer(hd[3], "the largest element tag", 0);
+      const auto [nblocks, nelem] = rd.section_header("element");
       long long total = 0;
       for (long long b = 0; b < nblocks; ++b) {
         rd.next_in(s);
-        const auto bh =
-            rd.fields(4, "an element block: entity dimension, entity tag, element type, count");
-        const int edim = static_cast<int>(rd.integer(bh[0], "the entity dimension", 0, 3));
-        const long long etag = rd.integer(bh[1], "the entity tag", 1);
-        const long long etype = rd.integer(bh[2], "the element type", 1);
-        const long long nb = rd.integer(bh[3], "the number of elements in the block", 0, kMaxCount);
+        const auto blk = rd.block_header("element", "the element type", 1,
+                                         std::numeric_limits<long long>::max(), entities);
+        const int edim = blk.edim;
+        const long long etag = blk.etag, etype = blk.third, nb = blk.count;
         // points and lines (and in 3D triangles and quadrangles) carry node sets; cells are of
         // the types given
         int nn = 0, tdim = 0;

@@ -239,26 +239,35 @@ struct Loader : KindReader {
     at_entry(r, [&] { builder_.spatial_body(name, o); });
   }
 
+  // The Gmsh file of a mesh entry {"type": "gmsh", "file", "scale"} (2D: Mesh2D, 3D: SolidMesh),
+  // its coordinates times scale; a file's error names the case entry that referenced it.
+  template <class MeshT>
+  MeshT gmsh_mesh(const JsonReader& m) {
+    const std::string f = resolve(m.string("file"));
+    MeshT mesh;
+    try {
+      mesh = MeshT::read_gmsh(f);
+    } catch (const Error& e) {
+      throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() +
+                  "/file)");
+    }
+    const double sc = m.positive("scale", 1.0);
+    for (auto& x : mesh.nodes) {
+      x *= sc;
+      if (!x.allFinite() || x.norm() > 1e100)  // beyond 1e100 m the element integrals overflow
+        m.fail("scale",
+               "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
+    }
+    return mesh;
+  }
+
   // A 3D solid body ("dimension": 3, "type": "solid"): a box of hexahedra or a Gmsh mesh of
   // tetrahedra and hexahedra, St Venant–Kirchhoff.
   void solid_body(const JsonReader& r, const std::string& name) {
     const JsonReader m = r.child("mesh");
     SolidMesh mesh;
     if (m.one_of("type", {"box", "gmsh"}) == "gmsh") {
-      const std::string f = resolve(m.string("file"));
-      try {
-        mesh = SolidMesh::read_gmsh(f);
-      } catch (const Error& e) {
-        throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() +
-                    "/file)");
-      }
-      const double sc = m.positive("scale", 1.0);
-      for (auto& x : mesh.nodes) {
-        x *= sc;
-        if (!x.allFinite() || x.norm() > 1e100)
-          m.fail("scale",
-                 "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
-      }
+      mesh = gmsh_mesh<SolidMesh>(m);
       if (mesh.num_elements() > kMaxSolidElements)
         m.fail("file", "the mesh has " + std::to_string(mesh.num_elements()) +
                            " cells; a solid body has at most " +
@@ -349,21 +358,7 @@ struct Loader : KindReader {
       if (m.has("cells"))
         m.fail("cells",
                "applies to rectangle meshes; a Gmsh file's cells are the elements it lists");
-      const std::string f = resolve(m.string("file"));
-      try {
-        mesh = Mesh2D::read_gmsh(f);
-      } catch (const Error& e) {
-        throw Error(std::string(e.what()) + " (referenced from " + cs.file + ": " + m.path() +
-                    "/file)");
-      }
-      const double sc = m.positive("scale", 1.0);
-      for (auto& x : mesh.nodes) {
-        x *= sc;
-        if (!x.allFinite() ||
-            x.norm() > 1e100)  // lengths beyond 1e100 m overflow in the element integrals
-          m.fail("scale",
-                 "the scaled mesh coordinates are out of range (scale " + format_g(sc) + ")");
-      }
+      mesh = gmsh_mesh<Mesh2D>(m);
     }
     m.finish();
     FlexibleBodyOptions o;

@@ -315,6 +315,15 @@ void read_path_deviation(KindReader& k, const JsonReader& r, const std::string& 
 
 }  // namespace
 
+std::vector<KindKey> stress_keys(const std::string& body_doc, bool body_positional) {
+  KindKey body = kw("body", K::kName, body_doc, true);
+  body.positional = body_positional;
+  return {body, kw("reference", K::kPositive, "σ_ref of the KS aggregate [Pa] (required with ks)"),
+          kw("aggregate", K::kName, "\"ks\" (default) or \"pnorm\""),
+          kw("parameter", K::kPositive, "KS ρ (default 50) or p-norm p (default 8)"),
+          kw("relaxation", K::kPositive, "q in (0, 1] (default 0.5)")};
+}
+
 StressMeasure::Options stress_options(const JsonReader& r) {
   StressMeasure::Options o;
   o.aggregation = r.one_of("aggregate", {"ks", "pnorm"}, "ks") == "ks"
@@ -429,15 +438,9 @@ std::vector<ModelKind> model_measures() {
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          k.add_measure(std::make_unique<FlexibleMassMeasure>(name, &flexible(k, r)));
        }},
-      {"measures",
-       "stress",
+      {"measures", "stress",
        "aggregated relaxed von Mises stress of a flexible body, s_e = μ_e^q σ_vM [Pa]",
-       {kw("body", K::kName, "the flexible body", true),
-        kw("reference", K::kPositive, "σ_ref of the KS aggregate [Pa] (required with ks)"),
-        kw("aggregate", K::kName, "\"ks\" (default) or \"pnorm\""),
-        kw("parameter", K::kPositive, "KS ρ (default 50) or p-norm p (default 8)"),
-        kw("relaxation", K::kPositive, "q in (0, 1] (default 0.5)")},
-       read_stress},
+       stress_keys("the flexible body", false), read_stress},
       {"measures",
        "frame_position",
        "a point's position in a rigid body's frame [m]",

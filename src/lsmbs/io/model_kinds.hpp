@@ -107,6 +107,9 @@ std::vector<std::string> kind_types_in(const std::vector<ModelKind>& kinds,
 const std::vector<ModelKind>& spatial_model_kinds();
 /// A stress measure's aggregation options ("aggregate", "reference", "parameter", "relaxation").
 StressMeasure::Options stress_options(const JsonReader& r);
+/// Its kind's keys: `body` (documented as `body_doc`; Python passes it by position where
+/// `body_positional`) and the options stress_options reads.
+std::vector<KindKey> stress_keys(const std::string& body_doc, bool body_positional);
 const ModelKind* find_spatial_kind(const std::string& section, const std::string& type);
 std::vector<std::string> spatial_kind_types(const std::string& section);
 

@@ -403,14 +403,9 @@ std::vector<ModelKind> measures() {
          const SolidBody& sb = solid_of(k, r);
          k.add_measure(std::make_unique<SolidMassMeasure>(name, &sb));
        }},
-      {"measures",
-       "stress",
+      {"measures", "stress",
        "aggregated relaxed von Mises stress of a solid body, s_e = μ_e^q σ_vM [Pa]",
-       {req("body", K::kName, "the solid body"),
-        opt("reference", K::kPositive, "σ_ref of the KS aggregate [Pa] (required with ks)"),
-        opt("aggregate", K::kName, "\"ks\" (default) or \"pnorm\""),
-        opt("parameter", K::kPositive, "KS ρ (default 50) or p-norm p (default 8)"),
-        opt("relaxation", K::kPositive, "q in (0, 1] (default 0.5)")},
+       stress_keys("the solid body", true),
        [](KindReader& k, const JsonReader& r, const std::string& name) {
          const SolidBody& sb = solid_of(k, r);
          k.add_measure(std::make_unique<StressMeasure>(name, &sb, stress_options(r)));

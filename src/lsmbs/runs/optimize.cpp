@@ -111,6 +111,10 @@ std::vector<std::string> warnings_of(const Case& cs, const OptimizeRun& run) {
   if (auto x = d.coincident_features(res.p); !x.empty()) w.push_back("final design: " + x);
   if (run.judgement)
     for (const auto& f : run.judgement->flags()) w.push_back("final design: " + f);
+  for (const auto& b : d.solid_bodies)
+    w.push_back("final design: the design of solid body '" + b.body->name +
+                "' is not judged (the judgement of resolution and load paths is planar only; "
+                "docs/designs.md): check its ligaments against the mesh in the VTU's mu and phi");
   return w;
 }
 

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -15,6 +17,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/fem/hex_element.hpp"
+#include "lsmbs/fem/solid_mesh.hpp"
 #include "lsmbs/fem/solid_stress.hpp"
 
 using namespace lsmbs;
@@ -187,19 +190,16 @@ struct HexMesh {
   }
 };
 
-// A beam [0, L] × [0, b] × [0, h] of nx × ny × nz bricks
+// A beam [0, L] × [0, b] × [0, h] of nx × ny × nz bricks (the box mesher of solid bodies)
 HexMesh box(double L, double b, double h, int nx, int ny, int nz) {
+  const SolidMesh sm = SolidMesh::box(Vec3::Zero(), Vec3(L, b, h), {nx, ny, nz});
   HexMesh m;
-  const auto id = [&](int i, int j, int k) { return i + (nx + 1) * (j + (ny + 1) * k); };
-  for (int k = 0; k <= nz; ++k)
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i) m.X.emplace_back(L * i / nx, b * j / ny, h * k / nz);
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        m.cells.push_back({id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
-                           id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1),
-                           id(i, j + 1, k + 1)});
+  m.X = sm.nodes;
+  for (const auto& c : sm.cells) {
+    std::array<int, 8> cell{};
+    std::copy(c.begin(), c.end(), cell.begin());
+    m.cells.push_back(cell);
+  }
   return m;
 }
 
