@@ -332,6 +332,16 @@ TEST(SpatialCase, TheSolidCantileverOnAGmshMeshIsTheBoxOne) {
     std::printf("%s: box %.12e, Gmsh %.12e\n", r, box.responses.at(r), gmsh.responses.at(r));
     EXPECT_NEAR(gmsh.responses.at(r) / box.responses.at(r), 1, 1e-9) << r;
   }
+  // the formulation is a brick's: given for a mesh of tetrahedra only, it is refused
+  j["bodies"][0]["mesh"] = {{"type", "gmsh"}, {"file", "meshes/cube_tets.msh"}};
+  j["bodies"][0]["formulation"] = "full";
+  std::string e = "no error";
+  try {
+    load_case_json(j, "tets.json", dir);
+  } catch (const std::exception& x) {
+    e = x.what();
+  }
+  EXPECT_NE(e.find("/bodies/0/formulation: applies to hexahedra"), std::string::npos) << e;
 }
 
 // A bar of a solid body hanging from the ground under its weight (ν = 0, so the stress is

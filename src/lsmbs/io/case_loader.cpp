@@ -302,6 +302,10 @@ struct Loader : KindReader {
     o.formulation = r.one_of("formulation", {"enhanced", "full"}, "enhanced") == "full"
                         ? HexElement::Formulation::kFull
                         : HexElement::Formulation::kEnhanced;
+    if (r.has("formulation") && std::none_of(mesh.cells.begin(), mesh.cells.end(),
+                                             [](const auto& c) { return c.size() == 8; }))
+      r.fail("formulation",
+             "applies to hexahedra; this mesh has tetrahedra only (constant strain, no variants)");
     r.finish();
     at_entry(r, [&] { builder_.solid_body(name, std::move(mesh), o); });
   }
