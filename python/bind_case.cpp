@@ -83,6 +83,18 @@ void bind_options(py::module_& m) {
             else
               throw py::value_error("ordering '" + n + "': expected amd or nested_dissection");
           })
+      .def_property(
+          "linear_solver",
+          [](const GeneralizedAlphaOptions& o) {
+            return std::string(SparseLU::solver_name(o.linear_solver));
+          },
+          [](GeneralizedAlphaOptions& o, const std::string& n) {
+            using S = SparseLU::Solver;
+            if (n == "auto" || n == "klu" || n == "umfpack")
+              o.linear_solver = n == "auto" ? S::kAuto : n == "klu" ? S::kKlu : S::kUmfpack;
+            else
+              throw py::value_error("linear_solver '" + n + "': expected auto, klu or umfpack");
+          })
       .def_readwrite("force_floor", &GeneralizedAlphaOptions::force_floor)
       .def("validate", &GeneralizedAlphaOptions::validate,
            "'' when valid, else 'field: what is expected'")

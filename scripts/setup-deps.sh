@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # Installs the Debian packages lsmbs builds and tests with, only those missing.
 # Idempotent, non-interactive, quiet when everything is present.
-#   scripts/setup-deps.sh [--with-gmsh] [--with-vtk]
+#   scripts/setup-deps.sh [--with-gmsh] [--with-vtk] [--with-hypre]
 set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
   libsundials-dev libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev
+  # an optimized BLAS for UMFPACK's frontal matrices (3D solid meshes: 3.4x faster factorizations
+  # than the reference BLAS, docs/performance.md); serial, so that results do not depend on
+  # thread counts. Debian's alternatives make it the libblas.so.3 every program loads.
+  libopenblas0-serial
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev zlib1g-dev
   libcairo2-dev fonts-dejavu-core
   clang-format
@@ -22,11 +26,14 @@ packages=(
 # .msh files are committed; lsmbs itself reads .msh and needs no Gmsh)
 # --with-vtk: also VTK's Python module, with which tests/python/test_vtk_reader.py reads the
 # VTU/VTM/PVD output as ParaView does (skipped where `import vtk` fails; lsmbs needs no VTK)
+# --with-hypre: also hypre (with MPI), for the AMG benchmark bench/amg_block.cpp (built with
+# -DLSMBS_BUILD_BENCH=ON; docs/performance.md, "Linear solvers on 3D meshes"; lsmbs needs no hypre)
 for arg in "$@"; do
   case $arg in
     --with-gmsh) packages+=(gmsh) ;;
     --with-vtk) packages+=(python3-vtk9) ;;
-    *) echo "setup-deps: unknown option $arg (expected --with-gmsh or --with-vtk)" >&2; exit 2 ;;
+    --with-hypre) packages+=(libhypre-dev) ;;
+    *) echo "setup-deps: unknown option $arg (expected --with-gmsh, --with-vtk or --with-hypre)" >&2; exit 2 ;;
   esac
 done
 

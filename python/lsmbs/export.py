@@ -605,6 +605,86 @@ def _solid_component(gmsh, shape, notes):
     return [t for d, t in vols if d == 3]
 
 
+def write_msh_solid(shape, path, size, layers=1):
+    """A body-fitted hexahedral mesh (Gmsh 4.1 ASCII, metres) of a solid design whose features
+    are all through-holes across one pair of opposite faces of its box: the part is a prism, so
+    its section (the exact OpenCASCADE volume's face on the lower side) is meshed by
+    quadrilaterals of edge about `size` (Gmsh's blossom full-quad recombination) and extruded
+    through the thickness in `layers` layers of hexahedra. Node sets: the box's faces on which
+    the part has surface (xmin ... zmax, the names a box mesh gives them), and the volume
+    "component". Returns (path, {node set: surfaces})."""
+    shape = load_shape(shape)
+    if shape.get("kind") != "solid":
+        raise ValueError("write_msh_solid takes a solid design (a planar one: write_msh)")
+    lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
+    axes = set()
+    for f in shape["features"]:
+        if f["type"] != "through_hole":
+            raise ValueError("feature %r (%s): a body-fitted hexahedral mesh is made of parts that "
+                             "are prisms, whose features are all through-holes" %
+                             (f["name"], f["type"]))
+        w = f["frame"]["w"]
+        k = max(range(3), key=lambda i: abs(w[i]))
+        if abs(abs(w[k]) - 1) > 1e-12:
+            raise ValueError("feature %r: its axis is not along an edge of the box" % f["name"])
+        axes.add(k)
+    if len(axes) > 1:
+        raise ValueError("the through-holes run along different axes: the part is not a prism")
+    k = axes.pop() if axes else 2
+    thickness = hi[k] - lo[k]
+    with _Gmsh() as gmsh:
+        occ = gmsh.model.occ
+        vols = _solid_component(gmsh, shape, [])
+        # OpenCASCADE pads bounding boxes (by 1e-7 m, 5e-6 m on planar faces): a face lies in a
+        # plane of the box when its box is within a twentieth of the box's thinnest extent
+        tol = 0.05 * min(h - l for l, h in zip(lo, hi))
+        bottom = []
+        for _, t in gmsh.model.getBoundary([(3, v) for v in vols], combined=True, oriented=False):
+            box = gmsh.model.getBoundingBox(2, abs(t))
+            if abs(box[k] - lo[k]) < tol and abs(box[k + 3] - lo[k]) < tol:
+                bottom.append(abs(t))
+        section = occ.copy([(2, t) for t in bottom])
+        occ.remove([(3, v) for v in vols], recursive=True)
+        d = [0.0, 0.0, 0.0]
+        d[k] = thickness
+        out = occ.extrude(section, *d, numElements=[layers], recombine=True)
+        occ.synchronize()
+        volumes = [t for dim, t in out if dim == 3]
+        opt = gmsh.option.setNumber
+        opt("Mesh.MeshSizeMax", size)
+        opt("Mesh.MeshSizeMin", size / 4)
+        opt("Mesh.MeshSizeFromCurvature", 12)
+        opt("Mesh.Algorithm", 6)
+        opt("Mesh.RecombineAll", 1)
+        opt("Mesh.RecombinationAlgorithm", 3)  # blossom full-quad: no triangle is left
+        opt("Mesh.ElementOrder", 1)
+        opt("Mesh.MshFileVersion", 4.1)
+        opt("Mesh.Binary", 0)
+        found = {}
+        surfaces = gmsh.model.getBoundary([(3, v) for v in volumes], combined=True,
+                                          oriented=False)
+        for axis, name in enumerate("xyz"):
+            for side, plane in (("min", lo[axis]), ("max", hi[axis])):
+                on = []
+                for _, t in surfaces:
+                    box = gmsh.model.getBoundingBox(2, abs(t))
+                    if abs(box[axis] - plane) < tol and abs(box[axis + 3] - plane) < tol:
+                        on.append(abs(t))
+                if on:
+                    g = gmsh.model.addPhysicalGroup(2, sorted(set(on)))
+                    gmsh.model.setPhysicalName(2, g, name + side)
+                    found[name + side] = sorted(set(on))
+        g = gmsh.model.addPhysicalGroup(3, volumes)
+        gmsh.model.setPhysicalName(3, g, "component")
+        gmsh.model.mesh.generate(3)
+        kinds = set(gmsh.model.mesh.getElementTypes(3))
+        if kinds != {5}:  # 5: the 8-node hexahedron
+            raise RuntimeError("the extruded mesh has elements other than hexahedra (Gmsh types "
+                               "%s)" % sorted(kinds))
+        gmsh.write(os.fspath(path))
+    return os.fspath(path), found
+
+
 def component_volume(shape):
     """Volume of an exported solid design [m³] (OpenCASCADE's exact volume of the Boolean
     result)."""

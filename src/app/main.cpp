@@ -323,6 +323,7 @@ void add_verify_and_bench(CommandLine& cl) {
       ->capture_default_str()
       ->transform(cl.int_range)
       ->check(CLI::Range(1, 2));
+  ben->add_option("--set", cl.common.sets, kSetHelp);
 }
 
 void add_sweep(CommandLine& cl) {

@@ -26,16 +26,18 @@ int bench_command(const CommonArgs& c, BenchArgs a) {
     if (!SensitivityOptions::parse_matrix(m, mm))
       throw Error("--matrices " + m + ": expected last, converged or refined");
   }
+  bo.overrides = case_overrides(c.case_file, c.sets, /*design_as_initial=*/true);
   bo.on_loaded = [&](const Case& cs) { claim_output(c, *cs.model); };
   const auto J = run_bench(c.case_file, bo);
   std::printf(
-      "lsmbs bench: step %.3f ms, floor %.3f ms (residual %.3f + matrix %.3f + KLU %.3f): ratio "
-      "%.2f\n",
+      "lsmbs bench: step %.3f ms, floor %.3f ms (residual %.3f + matrix %.3f + %s %.3f): "
+      "ratio %.2f\n",
       1e3 * J["primal"]["seconds_per_step"].get<double>(),
       1e3 * J["floor_seconds"]["total"].get<double>(),
       1e3 * J["floor_seconds"]["residual"].get<double>(),
       1e3 * J["floor_seconds"]["iteration_matrix"].get<double>(),
-      1e3 * J["floor_seconds"]["klu_refactor_and_solve"].get<double>(),
+      J["model"]["linear_solver"].get<std::string>() == "umfpack" ? "UMFPACK" : "KLU",
+      1e3 * J["floor_seconds"]["factor_and_solve"].get<double>(),
       J["primal"]["step_over_floor"].get<double>());
   for (auto it = J["sensitivities"].begin(); it != J["sensitivities"].end(); ++it)
     std::printf("  %-26s %.2f x primal\n", it.key().c_str(),

@@ -165,6 +165,12 @@ lsmbs::CaseOverride parse_override(const std::string& s) {
 
 lsmbs::Case load_case_with_sets(const std::string& file, const std::vector<std::string>& sets,
                                 bool design_as_initial) {
+  return lsmbs::load_case(file, case_overrides(file, sets, design_as_initial));
+}
+
+std::vector<lsmbs::CaseOverride> case_overrides(const std::string& file,
+                                                const std::vector<std::string>& sets,
+                                                bool design_as_initial) {
   check_sets(file, sets);
   std::vector<lsmbs::CaseOverride> overrides;
   nlohmann::json doc;  // read only to find design variables by name (design_as_initial)
@@ -187,7 +193,7 @@ lsmbs::Case load_case_with_sets(const std::string& file, const std::vector<std::
     overrides.push_back(
         {"/design/variables/" + std::to_string(k) + "/initial", value, "--set " + s});
   }
-  return lsmbs::load_case(file, overrides);
+  return overrides;
 }
 
 lsmbs::Vec design_point(const lsmbs::Case& cs, const std::vector<std::string>& sets) {

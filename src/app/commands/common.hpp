@@ -29,6 +29,10 @@ void check_sets(const std::string& case_file, const std::vector<std::string>& se
 /// (optimize), the variable's initial value.
 Case load_case_with_sets(const std::string& file, const std::vector<std::string>& sets,
                          bool design_as_initial = false);
+/// The overrides load_case_with_sets applies (checked the same way).
+std::vector<CaseOverride> case_overrides(const std::string& file,
+                                         const std::vector<std::string>& sets,
+                                         bool design_as_initial);
 /// The case's initial design with the --set overrides (each checked against its bounds).
 Vec design_point(const Case& cs, const std::vector<std::string>& sets);
 /// Claims the output folder for a run of `model` once its case has loaded (io/output_folder.hpp:

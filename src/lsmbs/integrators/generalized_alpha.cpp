@@ -356,7 +356,9 @@ bool AlphaRun::start(State s0) {
   if (s0.lambda.size() != nc_) s0.lambda.setZero(nc_);
 
   lu_.set_ordering(opt_.ordering);
+  lu_.set_solver(opt_.linear_solver);
   lu_.analyze(model_.pattern());
+  sum_.linear_solver = SparseLU::solver_name(lu_.solver_used());
   const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
   if (opt_.project_initial)
     if (auto st = project_initial_state(model_, p_, s0, lu_, 1e-13 * L_); !st.ok())
@@ -405,7 +407,9 @@ bool AlphaRun::start_from(const GridCheckpoint& from, long grid_end) {
       from.state.lambda.size() != nc_ || from.acc_like.size() != nq_ || !(from.k > 0))
     return fail("resume: the checkpoint does not belong to this model");
   lu_.set_ordering(opt_.ordering);
+  lu_.set_solver(opt_.linear_solver);
   lu_.analyze(model_.pattern());
+  sum_.linear_solver = SparseLU::solver_name(lu_.solver_used());
   sum_.k = k_ = from.k;
   sum_.zeta = zeta_ = from.zeta;
   cur_ = from.state;

@@ -57,6 +57,8 @@ struct GeneralizedAlphaOptions {
   /// Fill-reducing ordering of the KLU analysis (SparseLU::Ordering; case key "ordering":
   /// "amd" or "nested_dissection").
   SparseLU::Ordering ordering = SparseLU::Ordering::kAmd;
+  /// The sparse LU (SparseLU::Solver; case key "linear_solver": "auto", "klu" or "umfpack").
+  SparseLU::Solver linear_solver = SparseLU::Solver::kAuto;
   int max_halvings = 6;  ///< step-halving retries of one step (h / 2^k)
   double k = 0;          ///< constraint scaling of eq. (7); 0: automatic
   double zeta = 0;       ///< augmented-Lagrangian penalty of eq. (7); 0: automatic (= k)
@@ -101,7 +103,8 @@ struct IntegratorSummary {
   } seconds;
   std::vector<double> halving_times;
   double k = 0, zeta = 0;
-  double force_floor = 0;  ///< largest per-row round-off floor met [N] (residual_floor_N)
+  std::string linear_solver;  ///< the factorization the run used ("klu" or "umfpack")
+  double force_floor = 0;     ///< largest per-row round-off floor met [N] (residual_floor_N)
   double wall_seconds = 0;
   RunStatus status() const;
   std::string report() const;  ///< outcome and counts, one paragraph

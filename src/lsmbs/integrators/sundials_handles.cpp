@@ -93,6 +93,7 @@ LinearSolver new_sparse_lu_solver(const Context& ctx, double pivot_tolerance,
   if (!S) return nullptr;
   auto* c = new SparseLuContent;
   c->lu.set_ordering(SparseLU::Ordering::kColamd);
+  c->lu.set_solver(SparseLU::Solver::kKlu);  // SUNLinSol_KLU's policy, step by step
   c->lu.set_pivot_tolerance(pivot_tolerance);
   c->fresh_each_setup = fresh_each_setup;
   S->content = c;

@@ -618,6 +618,12 @@ struct Loader : KindReader {
     o.ordering = r.one_of("ordering", {"amd", "nested_dissection"}, "amd") == "amd"
                      ? SparseLU::Ordering::kAmd
                      : SparseLU::Ordering::kNestedDissection;
+    {
+      const std::string ls = r.one_of("linear_solver", {"auto", "klu", "umfpack"}, "auto");
+      o.linear_solver = ls == "auto"  ? SparseLU::Solver::kAuto
+                        : ls == "klu" ? SparseLU::Solver::kKlu
+                                      : SparseLU::Solver::kUmfpack;
+    }
     o.k = r.non_negative("k", 0.0);
     o.zeta = r.non_negative("zeta", 0.0);
     o.force_floor = r.non_negative("force_floor", o.force_floor);

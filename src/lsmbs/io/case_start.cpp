@@ -45,6 +45,7 @@ void prepare_conditions(Case& cs, const Vec* design) {
     copy("consistent_start", o.consistent_start, b.consistent_start);
     copy("project_initial", o.project_initial, b.project_initial);
     copy("newton", o.newton, b.newton), copy("ordering", o.ordering, b.ordering);
+    copy("linear_solver", o.linear_solver, b.linear_solver);
     copy("k", o.k, b.k), copy("zeta", o.zeta, b.zeta);
     if (k.cs->model->parameter_names() == names)
       for (size_t i = 0; i < names.size(); ++i) {

@@ -1,8 +1,12 @@
 #pragma once
-// SparseLU — KLU (SuiteSparse) behind a small C++ interface (DESIGN.md §Core interfaces 3):
-// analyze(pattern) once per model, factor(values) per Newton iteration (klu_refactor reusing
-// the pivot sequence when it stays well conditioned, a full klu_factor otherwise), and
+// SparseLU — a sparse direct LU (SuiteSparse) behind a small C++ interface (DESIGN.md §Core
+// interfaces 3): analyze(pattern) once per model, factor(values) per Newton iteration, and
 // solve() on a block of right-hand sides in one call (sensitivity back-solves).
+// Two factorizations stand behind it (Solver): KLU (klu_refactor reusing the pivot sequence when
+// it stays well conditioned, a full klu_factor otherwise), made for matrices that fill little —
+// every planar model — and UMFPACK's multifrontal LU (dense frontal matrices through BLAS 3, a
+// fresh threshold-pivoting factorization each time), for the matrices of 3D solid meshes whose
+// factors fill ten times and more (docs/performance.md, "Linear solvers on 3D meshes").
 #include <memory>
 #include <optional>
 #include <span>
@@ -23,8 +27,9 @@ class SparseLU {
 
   /// Fill-reducing ordering of the symbolic analysis (of each block of KLU's block triangular
   /// form): KLU's default AMD, nested dissection (METIS through CHOLMOD on the pattern of
-  /// A + Aᵀ, KLU's user-ordering hook) — asymptotically less fill on large 2-D meshes — or
-  /// COLAMD (SUNDIALS' SUNLinSol_KLU default, kept for the IDAS reference runs).
+  /// A + Aᵀ, KLU's user-ordering hook) — asymptotically less fill on large 2-D and 3-D meshes —
+  /// or COLAMD (SUNDIALS' SUNLinSol_KLU default, kept for the IDAS reference runs). UMFPACK
+  /// orders A + Aᵀ by AMD, or by METIS for kNestedDissection.
   enum class Ordering { kAmd, kNestedDissection, kColamd };
   void set_ordering(Ordering o) { ordering_ = o; }
   Ordering ordering() const { return ordering_; }
@@ -32,6 +37,18 @@ class SparseLU {
     return o == Ordering::kAmd                ? "amd"
            : o == Ordering::kNestedDissection ? "nested_dissection"
                                               : "colamd";
+  }
+  /// Which factorization: kAuto decides at analyze() from KLU's fill estimate of the pattern
+  /// (UMFPACK above auto_fill_threshold() nonzeros in L + U), kKlu and kUmfpack force one. The
+  /// decision depends only on the pattern, so the same model always gets the same solver.
+  enum class Solver { kAuto, kKlu, kUmfpack };
+  static double auto_fill_threshold();
+  void set_solver(Solver s) { solver_ = s; }
+  Solver solver() const { return solver_; }
+  /// The factorization analyze() chose (kKlu or kUmfpack; kAuto before analyze()).
+  Solver solver_used() const { return used_; }
+  static const char* solver_name(Solver s) {
+    return s == Solver::kAuto ? "auto" : s == Solver::kKlu ? "klu" : "umfpack";
   }
   /// KLU's partial-pivoting threshold (Common.tol, default 0.001): a diagonal entry is kept as
   /// pivot down to this fraction of its column's largest entry; 1 is plain partial pivoting.
@@ -45,11 +62,17 @@ class SparseLU {
   void share_analysis(const SparseLU& other);
   /// Nonzeros of the last factorization's L and U (fill-in).
   long factor_nonzeros() const;
+  /// KLU's estimate of the nonzeros of L and U from the symbolic analysis (AMD or the chosen
+  /// ordering; what kAuto decides on).
+  double estimated_factor_nonzeros() const;
   /// Numeric factorization of values laid out on the analyzed pattern.
-  /// On a singular matrix returns kSingular with the offending column in singular_column().
+  /// On a singular matrix returns kSingular with the offending column in singular_column() (with
+  /// UMFPACK, the column is found by a KLU factorization of the same values: the diagnostics do
+  /// not depend on the solver).
   Status factor(std::span<const double> values);
   /// The steps of factor() on their own, for a caller with its own refactorization policy:
-  /// refactor() reuses the last pivot sequence (false when KLU fails or there is none);
+  /// refactor() reuses the last pivot sequence (false when KLU fails or there is none; UMFPACK
+  /// has no such step and factorizes afresh);
   /// estimate_rcond() is KLU's cheap reciprocal condition estimate of the factorization, and
   /// estimate_condition() its 1-norm condition estimate (klu_condest) with the values factorized
   /// (nullopt when KLU fails).
@@ -84,10 +107,13 @@ class SparseLU {
 
  private:
   struct Impl;
+  Status factor_umfpack(std::span<const double> values);
   std::unique_ptr<Impl> impl_;
   mutable Counters counters_;
   int singular_col_ = -1;
   Ordering ordering_ = Ordering::kAmd;
+  Solver solver_ = Solver::kAuto;
+  Solver used_ = Solver::kAuto;
 };
 
 }  // namespace lsmbs

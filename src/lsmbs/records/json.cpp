@@ -19,6 +19,7 @@ void to_json(nlohmann::json& j, const GeneralizedAlphaOptions& o) {
        {"newton", GeneralizedAlphaOptions::newton_name(o.newton)},
        {"max_halvings", o.max_halvings},
        {"ordering", SparseLU::ordering_name(o.ordering)},
+       {"linear_solver", SparseLU::solver_name(o.linear_solver)},
        {"k", o.k},
        {"zeta", o.zeta}};
 }
@@ -49,6 +50,7 @@ void to_json(nlohmann::json& j, const IntegratorSummary& s) {
          {"solve", s.seconds.solve}}},
        {"k", s.k},
        {"zeta", s.zeta},
+       {"linear_solver", s.linear_solver},
        {"residual_floor_N", s.force_floor},
        {"wall_seconds", s.wall_seconds}};
 }

@@ -24,6 +24,9 @@ struct BenchOptions {
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
   std::string command_line;
+  /// Changes to the case document before it loads (--set: JSON pointers, design variables'
+  /// initial values).
+  std::vector<CaseOverride> overrides;
   /// Called once the case has loaded and passed its checks, before anything is written.
   std::function<void(const Case&)> on_loaded;
 };

@@ -130,6 +130,7 @@ class Backward {
     explicit_.setZero(nr_, cs.design->size());
     semi_sum_.setZero(nr_, cs.design->size());
     lu_.set_ordering(cs.simulation.ordering);
+    lu_.set_solver(cs.simulation.linear_solver);
     lu_.analyze(m_.pattern());
   }
 

@@ -181,6 +181,8 @@ void hold_given_velocities(Study& cs) {
   if (given.empty() || m.nc() == 0 || !cs.simulation.project_initial) return;
   held.resize(m.nq(), 0);
   SparseLU lu;
+  lu.set_ordering(cs.simulation.ordering);
+  lu.set_solver(cs.simulation.linear_solver);
   lu.analyze(m.pattern());
   ProjectionReport rep;
   State s = cs.initial;
@@ -208,6 +210,8 @@ void check_initial_placement(const Study& cs, const State& placed) {
   const Model& m = *cs.model;
   if (m.nc() == 0 || !cs.simulation.project_initial) return;
   SparseLU lu;
+  lu.set_ordering(cs.simulation.ordering);
+  lu.set_solver(cs.simulation.linear_solver);
   lu.analyze(m.pattern());
   State s = placed;
   if (!project_initial_state(m, m.params(), s, lu, 1e-13 * m.length_scale()).ok()) return;

@@ -158,3 +158,123 @@ TEST(SparseLU, SharedAnalysisKeepsTwoIndependentFactorizations) {
   EXPECT_LT((Y - B.partialPivLu().solve(R)).norm() / Y.norm(), 1e-12);
   EXPECT_GT((X - Y).norm(), 1e-3 * X.norm()) << "different matrices";
 }
+
+// UMFPACK's multifrontal LU behind the same interface: with AMD and with METIS, A x = b and
+// Aᵀ x = b for several right-hand sides against a dense LU of the same matrix, twice (a second
+// numeric factorization of new values on the one symbolic analysis).
+TEST(SparseLU, UmfpackSolvesLikeADenseLU) {
+  for (auto o : {SparseLU::Ordering::kAmd, SparseLU::Ordering::kNestedDissection}) {
+    auto p = make(90, 13);
+    SparseLU lu;
+    lu.set_solver(SparseLU::Solver::kUmfpack);
+    lu.set_ordering(o);
+    lu.analyze(p.asmb.pattern());
+    EXPECT_EQ(lu.solver_used(), SparseLU::Solver::kUmfpack);
+    for (int round = 0; round < 2; ++round) {
+      ASSERT_TRUE(lu.factor(p.vals).ok());
+      const Mat A = Mat(p.asmb.to_sparse(p.vals));
+      Mat B = Mat::Random(90, 3), X = B, Y = B;
+      lu.solve(X);
+      lu.solve_transpose(std::span<double>(Y.data(), Y.size()), 3);
+      EXPECT_LT((X - A.partialPivLu().solve(B)).norm() / X.norm(), 1e-12);
+      EXPECT_LT((Y - A.transpose().partialPivLu().solve(B)).norm() / Y.norm(), 1e-12);
+      EXPECT_GT(lu.factor_nonzeros(), p.asmb.pattern().n);
+      EXPECT_GT(lu.rcond(), 0.0);
+      for (auto& v : p.vals) v *= -1.3;
+      for (int i = 0; i < 90; ++i) p.asmb.add_diagonal(p.vals, i, 0.2 * i);
+    }
+    EXPECT_EQ(lu.counters().symbolic, 1);
+    EXPECT_EQ(lu.counters().full_factorizations, 2);
+  }
+}
+
+// The singular-matrix diagnostics do not depend on the solver: UMFPACK's failure names the
+// column KLU names.
+TEST(SparseLU, UmfpackReportsTheSingularColumnAsKluDoes) {
+  SparsityBuilder sb(4);
+  sb.add_diagonal();
+  BlockAssembler a(sb.finalize());
+  std::vector<double> v(a.pattern().nnz(), 0.0);
+  for (int i : {0, 1, 3}) a.add_diagonal(v, i, 1.0 + i);
+  SparseLU lu;
+  lu.set_solver(SparseLU::Solver::kUmfpack);
+  lu.analyze(a.pattern());
+  EXPECT_FALSE(lu.factor(v).ok());
+  EXPECT_EQ(lu.singular_column(), 2);
+  EXPECT_FALSE(lu.factored());
+}
+
+TEST(SparseLU, UmfpackSharedAnalysisKeepsTwoIndependentFactorizations) {
+  auto p = make(50, 17), q = p;
+  for (auto& v : q.vals) v *= 0.6;
+  for (int i = 0; i < 50; ++i) q.asmb.add_diagonal(q.vals, i, -0.1 * i);
+  SparseLU a, b;
+  a.set_solver(SparseLU::Solver::kUmfpack);
+  a.analyze(p.asmb.pattern());
+  b.share_analysis(a);
+  EXPECT_EQ(b.solver_used(), SparseLU::Solver::kUmfpack);
+  ASSERT_TRUE(a.factor(p.vals).ok());
+  ASSERT_TRUE(b.factor(q.vals).ok());
+  const Mat A = Mat(p.asmb.to_sparse(p.vals)), B = Mat(q.asmb.to_sparse(q.vals));
+  Mat R = Mat::Random(50, 2), X = R, Y = R;
+  a.solve(X);
+  b.solve(Y);
+  EXPECT_LT((X - A.partialPivLu().solve(R)).norm() / X.norm(), 1e-12);
+  EXPECT_LT((Y - B.partialPivLu().solve(R)).norm() / Y.norm(), 1e-12);
+  EXPECT_EQ(b.counters().symbolic, 0);
+}
+
+// The automatic choice: KLU for a pattern that fills little (a 2-D grid of 3,600 unknowns),
+// UMFPACK for one whose KLU factors would fill past the threshold (the 7-point Laplacian of a
+// 3-D grid of 24³ unknowns); both solve the 3-D system to the residual a direct solver gives.
+TEST(SparseLU, AutomaticChoiceFollowsTheEstimatedFill) {
+  auto grid = [](int m, int dim) {
+    const int n = dim == 2 ? m * m : m * m * m;
+    SparsityBuilder sb(n);
+    std::vector<std::pair<int, int>> edges;
+    for (int k = 0; k < n; ++k) {
+      const int i = k % m, j = (k / m) % m, l = k / (m * m);
+      if (i + 1 < m) edges.emplace_back(k, k + 1);
+      if (j + 1 < m) edges.emplace_back(k, k + m);
+      if (dim == 3 && l + 1 < m) edges.emplace_back(k, k + m * m);
+    }
+    for (auto [a, b] : edges) {
+      std::vector<int> d = {a, b};
+      sb.add_block(d, d);
+    }
+    sb.add_diagonal();
+    auto asmb = std::make_unique<BlockAssembler>(sb.finalize());
+    std::vector<double> vals(asmb->pattern().nnz(), 0.0);
+    for (size_t e = 0; e < edges.size(); ++e)
+      asmb->add(vals, static_cast<int>(e), Eigen::Matrix2d{{1, -1}, {-1, 1}});
+    for (int i = 0; i < n; ++i) asmb->add_diagonal(vals, i, 1e-2);
+    return std::make_pair(std::move(asmb), vals);
+  };
+  {
+    auto [asmb, vals] = grid(60, 2);
+    SparseLU lu;
+    lu.analyze(asmb->pattern());
+    EXPECT_EQ(lu.solver_used(), SparseLU::Solver::kKlu);
+    EXPECT_LT(lu.estimated_factor_nonzeros(), SparseLU::auto_fill_threshold());
+  }
+  auto [asmb, vals] = grid(24, 3);
+  SparseLU lu;
+  lu.analyze(asmb->pattern());
+  EXPECT_GT(lu.estimated_factor_nonzeros(), SparseLU::auto_fill_threshold());
+  EXPECT_EQ(lu.solver_used(), SparseLU::Solver::kUmfpack);
+  ASSERT_TRUE(lu.factor(vals).ok());
+  const int n = asmb->pattern().n;
+  Vec b = Vec::LinSpaced(n, -1, 1), x = b;
+  lu.solve(x);
+  const SpMat A = asmb->to_sparse(vals);
+  SparseLU klu;
+  klu.set_solver(SparseLU::Solver::kKlu);
+  klu.analyze(asmb->pattern());
+  ASSERT_TRUE(klu.factor(vals).ok());
+  Vec y = b;
+  klu.solve(y);
+  std::printf("3-D grid 24^3: residual UMFPACK %.2e, KLU %.2e; |x_umf - x_klu| / |x| %.2e\n",
+              (A * x - b).norm() / b.norm(), (A * y - b).norm() / b.norm(),
+              (x - y).norm() / y.norm());
+  EXPECT_LT((A * x - b).norm() / b.norm(), 1e-12);
+}
