@@ -33,7 +33,7 @@ import os
 import xml.etree.ElementTree as ET
 
 __all__ = ["load_shape", "feature_points", "bezier_segments", "bspline_area", "write_dxf", "write_svg", "write_step", "write_msh",
-           "component_area", "component_volume", "export", "body_fitted_case"]
+           "write_msh_solid", "component_area", "component_volume", "export", "body_fitted_case"]
 
 MM = 1000.0  # CAD files: millimetres
 
@@ -605,17 +605,28 @@ def _solid_component(gmsh, shape, notes):
     return [t for d, t in vols if d == 3]
 
 
-def write_msh_solid(shape, path, size, layers=1):
+def write_msh_solid(shape, path, size, layers=None):
     """A body-fitted hexahedral mesh (Gmsh 4.1 ASCII, metres) of a solid design whose features
-    are all through-holes across one pair of opposite faces of its box: the part is a prism, so
-    its section (the exact OpenCASCADE volume's face on the lower side) is meshed by
-    quadrilaterals of edge about `size` (Gmsh's blossom full-quad recombination) and extruded
-    through the thickness in `layers` layers of hexahedra. Node sets: the box's faces on which
-    the part has surface (xmin ... zmax, the names a box mesh gives them), and the volume
-    "component". Returns (path, {node set: surfaces})."""
+    are all through-holes along one edge direction of its box: the part is then a prism, so its
+    section (the exact OpenCASCADE volume's face on the lower side) is meshed by quadrilaterals
+    of edge about `size` (Gmsh's blossom full-quad recombination) and extruded along the holes'
+    axis in `layers` layers of hexahedra (default: the prism's length over `size`, at least one).
+    Node sets: the box's faces on which the part has surface (xmin ... zmax, the names a box mesh
+    gives them), and the volume "component". Returns (path, {node set: surfaces}).
+
+    The mesh is checked before it is written: hexahedra only, every section quadrilateral convex
+    and of one orientation, and the section's area within 5 % of the holes' area of the exact
+    one (the polygons inscribed in a circle of 12 segments lose 4.5 %); a size too coarse for a
+    feature fails one of these, with the advice to lower it. Gmsh runs in a child process: an
+    abort inside it (it has some on meshes it cannot recombine) becomes a RuntimeError."""
     shape = load_shape(shape)
     if shape.get("kind") != "solid":
         raise ValueError("write_msh_solid takes a solid design (a planar one: write_msh)")
+    if not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
+        raise ValueError("size %r: expected a positive element size in metres" % (size,))
+    if layers is not None and (isinstance(layers, bool) or not isinstance(layers, int)
+                               or layers < 1):
+        raise ValueError("layers %r: expected a whole number of at least 1" % (layers,))
     lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
     axes = set()
     for f in shape["features"]:
@@ -631,7 +642,41 @@ def write_msh_solid(shape, path, size, layers=1):
     if len(axes) > 1:
         raise ValueError("the through-holes run along different axes: the part is not a prism")
     k = axes.pop() if axes else 2
-    thickness = hi[k] - lo[k]
+    extent = [h - l for l, h in zip(lo, hi)]
+    if size > min(extent[i] for i in range(3) if i != k):
+        raise ValueError("size %g m: above the section's smaller side (%g m)" %
+                         (size, min(extent[i] for i in range(3) if i != k)))
+    if layers is None:
+        layers = max(1, round(extent[k] / size))
+    import multiprocessing
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    child = ctx.Process(target=_msh_solid_child, args=(queue, shape, os.fspath(path), size,
+                                                       layers, k))
+    child.start()
+    child.join()
+    if queue.empty():
+        raise RuntimeError("Gmsh stopped while meshing body %r (exit code %s) at size %g m: a "
+                           "feature too small or too close to another for that size; try a "
+                           "smaller size" % (shape.get("body"), child.exitcode, size))
+    ok, result = queue.get()
+    if not ok:
+        raise RuntimeError(result)
+    return os.fspath(path), result
+
+
+def _msh_solid_child(queue, shape, path, size, layers, k):
+    """write_msh_solid's Gmsh work, in a child process: puts (True, node sets) or (False,
+    message)."""
+    try:
+        queue.put((True, _msh_solid(shape, path, size, layers, k)))
+    except Exception as e:  # noqa: BLE001 - handed to the parent
+        queue.put((False, str(e)))
+
+
+def _msh_solid(shape, path, size, layers, k):
+    lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
+    u, v = [i for i in range(3) if i != k]
     with _Gmsh() as gmsh:
         occ = gmsh.model.occ
         vols = _solid_component(gmsh, shape, [])
@@ -639,14 +684,21 @@ def write_msh_solid(shape, path, size, layers=1):
         # plane of the box when its box is within a twentieth of the box's thinnest extent
         tol = 0.05 * min(h - l for l, h in zip(lo, hi))
         bottom = []
-        for _, t in gmsh.model.getBoundary([(3, v) for v in vols], combined=True, oriented=False):
+        for _, t in gmsh.model.getBoundary([(3, w) for w in vols], combined=True, oriented=False):
             box = gmsh.model.getBoundingBox(2, abs(t))
             if abs(box[k] - lo[k]) < tol and abs(box[k + 3] - lo[k]) < tol:
                 bottom.append(abs(t))
+        if not bottom:
+            raise RuntimeError("body %r: the design leaves no material" % shape.get("body"))
+        exact = sum(occ.getMass(2, t) for t in bottom)
         section = occ.copy([(2, t) for t in bottom])
-        occ.remove([(3, v) for v in vols], recursive=True)
+        occ.remove([(3, w) for w in vols], recursive=True)
+        if len(section) > 1:  # faces of an OR region share their edges: one mesh on them
+            occ.removeAllDuplicates()
+        occ.synchronize()
+        section = gmsh.model.getEntities(2)
         d = [0.0, 0.0, 0.0]
-        d[k] = thickness
+        d[k] = hi[k] - lo[k]
         out = occ.extrude(section, *d, numElements=[layers], recombine=True)
         occ.synchronize()
         volumes = [t for dim, t in out if dim == 3]
@@ -661,7 +713,7 @@ def write_msh_solid(shape, path, size, layers=1):
         opt("Mesh.MshFileVersion", 4.1)
         opt("Mesh.Binary", 0)
         found = {}
-        surfaces = gmsh.model.getBoundary([(3, v) for v in volumes], combined=True,
+        surfaces = gmsh.model.getBoundary([(3, w) for w in volumes], combined=True,
                                           oriented=False)
         for axis, name in enumerate("xyz"):
             for side, plane in (("min", lo[axis]), ("max", hi[axis])):
@@ -677,12 +729,37 @@ def write_msh_solid(shape, path, size, layers=1):
         g = gmsh.model.addPhysicalGroup(3, volumes)
         gmsh.model.setPhysicalName(3, g, "component")
         gmsh.model.mesh.generate(3)
-        kinds = set(gmsh.model.mesh.getElementTypes(3))
-        if kinds != {5}:  # 5: the 8-node hexahedron
-            raise RuntimeError("the extruded mesh has elements other than hexahedra (Gmsh types "
-                               "%s)" % sorted(kinds))
-        gmsh.write(os.fspath(path))
-    return os.fspath(path), found
+        types, _, nodes = gmsh.model.mesh.getElements(3)
+        if list(types) != [5]:  # 5: the 8-node hexahedron
+            raise RuntimeError("body %r: the section's mesh kept triangles at size %g m (Gmsh "
+                               "element types %s, 6 a prism): try a smaller size" %
+                               (shape.get("body"), size, sorted(int(t) for t in types)))
+        tags, xyz, _ = gmsh.model.mesh.getNodes()
+        at = {int(n): (xyz[3 * i + u], xyz[3 * i + v], xyz[3 * i + k]) for i, n in enumerate(tags)}
+        area, signs = 0.0, set()
+        for h in nodes[0].reshape(-1, 8):
+            q = [at[int(n)] for n in h[:4]]  # the source quadrilateral of an extruded hexahedron
+            if max(abs(p[2] - lo[k]) for p in q) > tol:
+                continue  # not in the first layer
+            for i in range(4):
+                a, b, c = q[i - 1], q[i], q[(i + 1) % 4]
+                signs.add((b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]) > 0)
+            area += 0.5 * sum(q[i][0] * q[(i + 1) % 4][1] - q[(i + 1) % 4][0] * q[i][1]
+                              for i in range(4))
+        area = abs(area)
+        holes = (hi[u] - lo[u]) * (hi[v] - lo[v]) - exact
+        if len(signs) != 1:
+            raise RuntimeError("body %r: the section's mesh has quadrilaterals that are not convex "
+                               "or are folded at size %g m: try a smaller size" %
+                               (shape.get("body"), size))
+        if abs(area - exact) > 0.05 * holes + 1e-9 * exact:
+            raise RuntimeError("body %r: the section's mesh covers %.6g m² where the part's "
+                               "section is %.6g m² (%.1f %% of the holes' area off) at size %g m: "
+                               "a feature is too small for that size; try a smaller size" %
+                               (shape.get("body"), area, exact, 100 * abs(area - exact) / holes,
+                                size))
+        gmsh.write(path)
+    return found
 
 
 def component_volume(shape):
@@ -795,6 +872,10 @@ def body_fitted_case(case, body, msh, out):
     with open(os.fspath(case)) as f:
         doc = json.load(f)
     base = os.path.dirname(os.path.abspath(os.fspath(case)))
+    meshed = [b["name"] for b in doc["bodies"] if isinstance(b.get("mesh"), dict)]
+    if body not in meshed:
+        raise ValueError("body %r: %s has no such body with a mesh (it has %s)" %
+                         (body, os.fspath(case), ", ".join(meshed) or "none"))
     for b in doc["bodies"]:
         mesh = b.get("mesh")
         if b["name"] == body:

@@ -107,3 +107,19 @@ def test_an_unknown_solver_is_refused_with_its_path(tmp_path):
     case = lsmbs.load_case(str(PLANAR))
     with pytest.raises(ValueError, match="expected auto, klu or umfpack"):
         case.simulation.linear_solver = "pardiso"
+
+
+def test_static_equilibrium_takes_the_solver_and_records_it(tmp_path):
+    """lsmbs static factorizes with the case's linear_solver too (it ignored the key before):
+    the solid arm's equilibrium by UMFPACK against KLU's, and summary.json says which ran."""
+    out = {}
+    for solver in ("klu", "umfpack"):
+        o = tmp_path / solver
+        p = subprocess.run([CLI, "static", str(SOLID_ARM), "-o", str(o), "-q",
+                            "--set", "/simulation/linear_solver=" + solver],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        out[solver] = json.loads((o / "summary.json").read_text())
+        assert out[solver]["counts"]["linear_solver"] == solver
+    for k, v in out["klu"]["responses"].items():
+        assert out["umfpack"]["responses"][k] == pytest.approx(v, rel=1e-9, abs=1e-15), k

@@ -36,7 +36,10 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
   s.a.setZero(nq);
   if (s.lambda.size() != nc) s.lambda.setZero(nc);
   SparseLU lu;
+  lu.set_solver(o.linear_solver);
+  lu.set_ordering(o.ordering);
   lu.analyze(model.pattern());
+  res.linear_solver = SparseLU::solver_name(lu.solver_used());
   std::vector<double> vals;
   const Coefficients cK{0, 0, 1};
   double k = o.k;

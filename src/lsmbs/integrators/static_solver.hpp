@@ -6,6 +6,7 @@
 #include <string>
 
 #include "lsmbs/core/status.hpp"
+#include "lsmbs/linalg/sparse_lu.hpp"
 #include "lsmbs/mbs/model.hpp"
 
 namespace lsmbs {
@@ -16,6 +17,9 @@ struct StaticOptions {
   double tol_phi = 1e-12;
   int max_iter = 50;
   double k = 0;  ///< 0: automatic (mean |diag K_t|)
+  /// the sparse LU and its ordering (the case's "simulation" keys of the same names)
+  SparseLU::Solver linear_solver = SparseLU::Solver::kAuto;
+  SparseLU::Ordering ordering = SparseLU::Ordering::kAmd;
 
   /// Empty string when valid, otherwise "field: what is expected".
   std::string validate() const;
@@ -26,6 +30,7 @@ struct StaticResult {
   int iterations = 0;
   double residual_norm = 0;
   std::string message;
+  std::string linear_solver;  ///< the factorization used ("klu" or "umfpack")
   RunStatus status() const;
   std::string report() const;  ///< outcome and counts, one paragraph
 };

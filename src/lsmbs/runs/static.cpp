@@ -78,6 +78,8 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   so.max_iter = o.max_iter;
   so.tol_phi = cs.simulation.tol_phi;
   so.k = cs.simulation.k;
+  so.linear_solver = cs.simulation.linear_solver;
+  so.ordering = cs.simulation.ordering;
   res.solver = solve_static(m, params, res.state, so);
   res.columns = cs.measure_columns();
   res.measures.assign(res.columns.size(), NAN);
@@ -109,7 +111,8 @@ StaticRunResult run_static(const Case& cs, const StaticRunOptions& o) {
   if (cs.design) S["design"] = design_json(cs, o.design_point);
   S["model"] = {{"dofs", m.nq()}, {"constraints", m.nc()}};
   S["counts"] = {{"newton_iterations", res.solver.iterations},
-                 {"residual_norm", res.solver.residual_norm}};
+                 {"residual_norm", res.solver.residual_norm},
+                 {"linear_solver", res.solver.linear_solver}};
   nlohmann::json measures = nlohmann::json::object();
   for (size_t i = 0; i < res.columns.size(); ++i)
     measures[res.columns[i]] =

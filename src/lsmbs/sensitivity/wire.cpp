@@ -101,6 +101,7 @@ void put(Writer& w, const IntegratorSummary& s) {
   w.raw(s.seconds);
   w.vec(s.halving_times);
   w.raw(s.k), w.raw(s.zeta), w.raw(s.force_floor), w.raw(s.wall_seconds);
+  w.str(s.linear_solver);
 }
 IntegratorSummary get_summary(Reader& rd) {
   IntegratorSummary s;
@@ -116,6 +117,7 @@ IntegratorSummary get_summary(Reader& rd) {
   s.halving_times = rd.vec();
   s.k = rd.raw<double>(), s.zeta = rd.raw<double>(), s.force_floor = rd.raw<double>();
   s.wall_seconds = rd.raw<double>();
+  s.linear_solver = rd.str();
   return s;
 }
 
