@@ -8,7 +8,8 @@ OUT/final_design/<body>_shape.json):
     python3 scripts/export_design.py SHAPE.json -o DIR --case CASE.json   # also a case file of
         # the body-fitted design (DIR/<case>_body_fitted.json) that `lsmbs simulate` runs
     python3 scripts/export_design.py OUT/plate_shape.json -o DIR   # a solid body's design
-        # ("kind": "solid"): STEP only (the default --formats becomes step)
+        # ("kind": "solid"): STEP and its mid-section's picture (the default --formats becomes
+        # step,png; msh, a body-fitted hexahedral mesh of a through-hole design, needs --size)
 
 Needs Debian's python3-ezdxf and python3-gmsh (scripts/setup-deps.sh); not the compiled lsmbs
 module. Exit 2 for a bad argument or shape file, with what was expected.
@@ -35,7 +36,8 @@ def main():
     ap.add_argument("shape", help="a <body>_shape.json file")
     ap.add_argument("-o", "--out", required=True, help="output folder")
     ap.add_argument("--formats", default=None,
-                    help="comma-separated dxf, svg, step, msh (default: all four; a solid's: step)")
+                    help="comma-separated dxf, svg, step, msh (default: all four); a solid's: step, "
+                    "png, msh (default: step,png)")
     ap.add_argument("--size", type=float, default=None,
                     help="element size of the body-fitted mesh [m] (default: the fixed mesh's)")
     ap.add_argument("--case", default=None,
@@ -60,13 +62,16 @@ def main():
                                  "writes for a %s body)" % (key, "solid" if solid else "planar"))
     except (OSError, ValueError) as e:
         fail("%s: %s" % (a.shape, e))
-    formats = [f for f in (a.formats or ("step" if solid else "dxf,svg,step,msh")).split(",") if f]
-    bad = [f for f in formats if f not in ("dxf", "svg", "step", "msh")]
+    formats = [f for f in (a.formats or ("step,png" if solid else "dxf,svg,step,msh")).split(",")
+               if f]
+    known = ("step", "png", "msh") if solid else ("dxf", "svg", "step", "msh")
+    bad = [f for f in formats if f not in known]
     if bad:
-        fail("--formats: unknown %s (expected dxf, svg, step, msh)" % ", ".join(bad))
-    if solid and (formats != ["step"] or a.case or a.size is not None):
-        fail("%s is a solid body's design: it is exported as STEP only (--formats step; "
-             "no --case or --size: a body-fitted mesh of a solid is not written)" % a.shape)
+        fail("--formats: %s not written for a %s body's design (expected %s)" %
+             (", ".join(bad), "solid" if solid else "planar", ", ".join(known)))
+    if solid and (a.case or "msh" in formats) and a.size is None:
+        fail("%s is a solid body's design: its body-fitted hexahedral mesh (msh, --case) needs "
+             "--size" % a.shape)
     if a.case and "msh" not in formats:
         formats.append("msh")
     ex = load_export()
@@ -76,7 +81,7 @@ def main():
         out["case"] = ex.body_fitted_case(a.case, shape["body"], out["msh"],
                                           os.path.join(a.out, stem + "_body_fitted.json"))
     for k, v in out.items():
-        if k in ("dxf", "svg", "step", "msh", "case"):
+        if k in ("dxf", "svg", "step", "png", "msh", "case"):
             print("%-5s %s" % (k, v))
     for name, curves in out.get("node_sets", {}).items():
         if not curves:

@@ -125,7 +125,7 @@ def main():
             cad.mkdir(parents=True, exist_ok=True)
             msh, sets_found = ex.write_msh_solid(shape, cad / "plate.msh", h, c["layers"])
             files = {"msh": msh, "node_sets": sets_found}
-            ex.export(shape, folder / "final_design", ("step",))  # the optimum as CAD
+            ex.export(shape, folder / "final_design", ("step", "png"))  # CAD and a section
         else:
             h = shape["element_size"] / 2
             files = ex.export(shape, cad, ("msh",), size=h)

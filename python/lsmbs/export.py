@@ -33,7 +33,7 @@ import os
 import xml.etree.ElementTree as ET
 
 __all__ = ["load_shape", "feature_points", "bezier_segments", "bspline_area", "write_dxf", "write_svg", "write_step", "write_msh",
-           "write_msh_solid", "component_area", "component_volume", "export", "body_fitted_case"]
+           "write_msh_solid", "write_section_png", "component_area", "component_volume", "export", "body_fitted_case"]
 
 MM = 1000.0  # CAD files: millimetres
 
@@ -605,6 +605,92 @@ def _solid_component(gmsh, shape, notes):
     return [t for d, t in vols if d == 3]
 
 
+def write_section_png(shape, path, axis=None, at=None, width=1200):
+    """A picture of a solid design: its section by the plane across `axis` (0, 1, 2; default the
+    box's thinnest direction) at `at` (default the box's middle), cut from the exact OpenCASCADE
+    volume: material grey, the cut's edges black, axes in millimetres. Returns the section's
+    area [m²] (the exact volume's, by Gmsh's OpenCASCADE), the figure's check against the CAD."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+    shape = load_shape(shape)
+    if shape.get("kind") != "solid":
+        raise ValueError("write_section_png takes a solid design (a planar one: lsmbs geometry "
+                         "draws it)")
+    lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
+    extent = [h - l for l, h in zip(lo, hi)]
+    k = min(range(3), key=lambda i: extent[i]) if axis is None else axis
+    if k not in (0, 1, 2):
+        raise ValueError("axis %r: expected 0, 1 or 2" % (axis,))
+    c = 0.5 * (lo[k] + hi[k]) if at is None else at
+    if not lo[k] <= c <= hi[k]:
+        raise ValueError("at %g m: outside the part's box [%g, %g] along axis %d" %
+                         (c, lo[k], hi[k], k))
+    u, v = [i for i in range(3) if i != k]
+    with _Gmsh() as gmsh:
+        occ = gmsh.model.occ
+        vols = _solid_component(gmsh, shape, [])
+        corner = list(lo)
+        corner[k] = c
+        size = [0.0, 0.0, 0.0]
+        size[u], size[v] = 2 * extent[u], 2 * extent[v]
+        corner[u] -= extent[u] / 2
+        corner[v] -= extent[v] / 2
+        plane = occ.addRectangle(0, 0, 0, size[u], size[v])
+        # the rectangle lies in z = 0 with sides along x and y: turn it into the (u, v) plane
+        if k == 0:
+            occ.rotate([(2, plane)], 0, 0, 0, 0, 1, 0, -math.pi / 2)  # z -> x, x -> -z
+            occ.rotate([(2, plane)], 0, 0, 0, 1, 0, 0, math.pi / 2)
+        elif k == 1:
+            occ.rotate([(2, plane)], 0, 0, 0, 1, 0, 0, math.pi / 2)
+        box = occ.getBoundingBox(2, plane)
+        occ.translate([(2, plane)], *[corner[i] - box[i] for i in range(3)])
+        cut, _ = occ.intersect([(3, w) for w in vols], [(2, plane)], removeObject=True,
+                               removeTool=True)
+        occ.synchronize()
+        faces = [t for d, t in cut if d == 2]
+        area = sum(occ.getMass(2, t) for t in faces)
+        h = max(extent[u], extent[v]) / 200
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 36)
+        gmsh.model.mesh.generate(2)
+        tags, xyz, _ = gmsh.model.mesh.getNodes()
+        at_node = {int(n): (1e3 * xyz[3 * i + u], 1e3 * xyz[3 * i + v]) for i, n in enumerate(tags)}
+        triangles = []
+        for f in faces:
+            types, _, nodes = gmsh.model.mesh.getElements(2, f)
+            for t, ns in zip(types, nodes):
+                m = {2: 3, 3: 4}[int(t)]
+                triangles += [[at_node[int(n)] for n in ns[j:j + m]] for j in range(0, len(ns), m)]
+        edges = []
+        for _, e in gmsh.model.getBoundary([(2, f) for f in faces], combined=False,
+                                           oriented=False):
+            lo_t, hi_t = gmsh.model.getParametrizationBounds(1, abs(e))
+            ts = [lo_t[0] + (hi_t[0] - lo_t[0]) * j / 512 for j in range(513)]
+            p = gmsh.model.getValue(1, abs(e), ts)
+            edges.append(([1e3 * p[3 * j + u] for j in range(513)],
+                          [1e3 * p[3 * j + v] for j in range(513)]))
+    names = "xyz"
+    aspect = extent[v] / extent[u]
+    fig, ax = plt.subplots(figsize=(width / 100, max(2.0, width / 100 * aspect + 1.2)), dpi=100)
+    ax.add_collection(PolyCollection(triangles, facecolors="0.55", edgecolors="face",
+                                     linewidths=0.3))
+    for xs, ys in edges:
+        ax.plot(xs, ys, color="black", linewidth=0.8)
+    ax.set_xlim(1e3 * lo[u], 1e3 * hi[u])
+    ax.set_ylim(1e3 * lo[v], 1e3 * hi[v])
+    ax.set_aspect("equal")
+    ax.set_xlabel("%s [mm]" % names[u])
+    ax.set_ylabel("%s [mm]" % names[v])
+    ax.set_title("body %s: section %s = %.4g mm (area %.6g mm²)" %
+                 (shape.get("body", ""), names[k], 1e3 * c, 1e6 * area))
+    fig.tight_layout()
+    fig.savefig(os.fspath(path))
+    plt.close(fig)
+    return area
+
+
 def write_msh_solid(shape, path, size, layers=None):
     """A body-fitted hexahedral mesh (Gmsh 4.1 ASCII, metres) of a solid design whose features
     are all through-holes along one edge direction of its box: the part is then a prism, so its
@@ -841,12 +927,16 @@ def export(shape, out_dir, formats=("dxf", "svg", "step", "msh"), size=None):
     """Writes the formats into out_dir (named after the body); returns {format: path, 'notes':
     [...], 'node_sets': {...}}."""
     shape = load_shape(shape)
-    if shape.get("kind") == "solid":  # a solid design: STEP only
+    solid = shape.get("kind") == "solid"
+    if solid:  # a solid design: STEP, its mid-section's picture, a body-fitted hexahedral mesh
         if formats == ("dxf", "svg", "step", "msh"):
-            formats = ("step",)
+            formats = ("step", "png")
         for fmt in formats:
-            if fmt != "step":
-                raise ValueError("format %r: a solid design is exported as STEP only" % fmt)
+            if fmt not in ("step", "png", "msh"):
+                raise ValueError("format %r: a solid design is exported as STEP, png (its "
+                                 "section) and msh (body-fitted hexahedra)" % fmt)
+        if "msh" in formats and size is None:
+            raise ValueError("format 'msh' of a solid design: give the element size")
     os.makedirs(os.fspath(out_dir), exist_ok=True)
     stem = os.path.join(os.fspath(out_dir), shape.get("body", "design"))
     out, notes = {}, []
@@ -857,8 +947,13 @@ def export(shape, out_dir, formats=("dxf", "svg", "step", "msh"), size=None):
             out["svg"] = write_svg(shape, stem + ".svg", notes)
         elif fmt == "step":
             out["step"] = write_step(shape, stem + ".step", notes)
+        elif fmt == "msh" and solid:
+            out["msh"], out["node_sets"] = write_msh_solid(shape, stem + ".msh", size)
         elif fmt == "msh":
             out["msh"], out["node_sets"] = write_msh(shape, stem + ".msh", size, notes)
+        elif fmt == "png" and solid:
+            write_section_png(shape, stem + "_section.png")
+            out["png"] = stem + "_section.png"
         else:
             raise ValueError("format %r: expected dxf, svg, step or msh" % fmt)
     out["notes"] = sorted(set(notes))

@@ -212,7 +212,7 @@ def test_a_solid_design_exports_as_its_closed_form_volume(tmp_path):
     assert export.component_volume(shape) == pytest.approx(plate - holes - pocket,
                                                            abs=1.5e-2 * pocket)
     out = export.export(shape, tmp_path / "cad")
-    assert sorted(out) == ["notes", "step"]
+    assert sorted(out) == ["notes", "png", "step"]  # a solid's default: STEP and its section
     assert step_volume(out["step"]) == pytest.approx((plate - holes - pocket) * 1e9,
                                                      abs=1.5e-2 * pocket * 1e9)  # mm³
     gmsh.initialize(readConfigFiles=False)
@@ -233,7 +233,7 @@ def test_a_solid_design_exports_as_its_closed_form_volume(tmp_path):
         region={"op": "feature", "feature": 0})
     with pytest.raises(ValueError, match="'blob': a super-ellipsoid has no exact CAD solid"):
         export.component_volume(blob)
-    with pytest.raises(ValueError, match="a solid design is exported as STEP only"):
+    with pytest.raises(ValueError, match="a solid design is exported as STEP, png .* and msh"):
         export.export(shape, tmp_path / "cad", ("dxf",))
 
 
@@ -274,7 +274,11 @@ def test_a_solid_design_through_lsmbs_geometry_and_the_export_script(tmp_path):
         volume * 1e9, rel=1.5e-2 * super_ellipse_area(0.05, 0.025, 4) * depth / volume)
     p = subprocess.run([sys.executable, script, str(tmp_path / "g" / "plate_shape.json"), "-o",
                         str(tmp_path / "cad2"), "--formats", "dxf"], capture_output=True, text=True)
-    assert p.returncode == 2 and "exported as STEP only" in p.stderr
+    assert p.returncode == 2 and "dxf not written for a solid body's design" in p.stderr
+    assert (tmp_path / "cad" / "plate_section.png").stat().st_size > 10_000
+    p = subprocess.run([sys.executable, script, str(tmp_path / "g" / "plate_shape.json"), "-o",
+                        str(tmp_path / "cad3"), "--formats", "msh"], capture_output=True, text=True)
+    assert p.returncode == 2 and "needs --size" in p.stderr
 
 
 def test_a_through_hole_design_meshes_body_fitted_in_hexahedra(tmp_path):
@@ -338,3 +342,29 @@ def test_a_through_hole_design_meshes_body_fitted_in_hexahedra(tmp_path):
     assert summary["responses"]["plate_mass"] == pytest.approx(
         doc["bodies"][[b["name"] for b in doc["bodies"]].index("plate")]["material"]["rho"]
         * volume, rel=1e-10)
+
+
+def test_a_solid_design_is_drawn_as_its_exact_section(tmp_path):
+    """lsmbs.export.write_section_png: solid_arm.json's plate (0.4 x 0.01 x 0.08 m, holes of
+    r = 20 and 16 mm through its 10 mm thickness at x = 100 and 200 mm, a super-ellipse pocket
+    of 100 x 50 mm and 4 mm deep in its +y face) cut by three planes; the returned area is the
+    exact volume's section, against closed forms: the mid-plane y = 0 misses the pocket (plate
+    less two discs); x = 200 mm crosses hole 2 along its diameter; z = 0 crosses both holes'
+    diameters and the pocket's length."""
+    from conftest import run_cli
+    run_cli("geometry", os.path.join(ROOT, "data/spatial/solid_arm.json"), "-o",
+            str(tmp_path / "g"), "--quiet")
+    shape = tmp_path / "g" / "plate_shape.json"
+    t, w, r1, r2, depth, a = 0.01, 0.08, 0.02, 0.016, 0.004, 0.05
+    # exact circles to 1e-6; the pocket's profile is a spline through 128 points of the
+    # super-ellipse, whose length along its axis it gives to 2e-5 m here (7e-5 of the section)
+    cases = {(None, None): (0.4 * w - math.pi * (r1 ** 2 + r2 ** 2), 1e-6),  # thinnest: y
+             (0, 0.2): (t * w - 2 * r2 * t, 1e-6),
+             (2, 0.0): (0.4 * t - 2 * (r1 + r2) * t - 2 * a * depth, 1e-4)}
+    for (axis, at), (exact, rel) in cases.items():
+        png = tmp_path / ("section_%s.png" % axis)
+        area = export.write_section_png(shape, png, axis=axis, at=at)
+        assert area == pytest.approx(exact, rel=rel), (axis, at)
+        assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(ValueError, match="outside the part's box"):
+        export.write_section_png(shape, tmp_path / "no.png", axis=0, at=0.5)
