@@ -14,9 +14,7 @@
 #include <HYPRE_krylov.h>
 #include <HYPRE_parcsr_ls.h>
 #include <mpi.h>
-#include <sys/resource.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -24,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "lsmbs/core/clock.hpp"
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
@@ -31,16 +30,6 @@
 using namespace lsmbs;
 
 namespace {
-
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-long peak_rss_kb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss;
-}
 
 // The free block in compressed columns (its own pattern and values).
 struct Block {
@@ -84,7 +73,7 @@ nlohmann::json amg_solve(const Block& b, const std::vector<double>& rhs, double 
   for (int j = 0; j < n; ++j)
     for (int p = b.pattern.col_ptr[j]; p < b.pattern.col_ptr[j + 1]; ++p)
       rows[b.pattern.row_ind[p]].emplace_back(j, b.values[p]);
-  const double t0 = now();
+  const double t0 = now_seconds();
   HYPRE_IJMatrix A;
   HYPRE_IJMatrixCreate(MPI_COMM_WORLD, 0, n - 1, 0, n - 1, &A);
   HYPRE_IJMatrixSetObjectType(A, HYPRE_PARCSR);
@@ -115,7 +104,7 @@ nlohmann::json amg_solve(const Block& b, const std::vector<double>& rhs, double 
   };
   HYPRE_IJVector B, X;
   HYPRE_ParVector pb = vector(rhs, B), px = vector(std::vector<double>(n, 0.0), X);
-  const double t_matrix = now() - t0;
+  const double t_matrix = now_seconds() - t0;
 
   HYPRE_Solver pcg, amg;
   HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &pcg);
@@ -136,12 +125,12 @@ nlohmann::json amg_solve(const Block& b, const std::vector<double>& rhs, double 
   HYPRE_BoomerAMGSetPrintLevel(amg, 0);
   HYPRE_PCGSetPrecond(pcg, reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSolve),
                       reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSetup), amg);
-  double t = now();
+  double t = now_seconds();
   HYPRE_ParCSRPCGSetup(pcg, pA, pb, px);
-  const double t_setup = now() - t;
-  t = now();
+  const double t_setup = now_seconds() - t;
+  t = now_seconds();
   HYPRE_ParCSRPCGSolve(pcg, pA, pb, px);
-  const double t_solve = now() - t;
+  const double t_solve = now_seconds() - t;
   HYPRE_Int its = 0;
   double res = 0;
   HYPRE_PCGGetNumIterations(pcg, &its);
@@ -207,12 +196,12 @@ int main(int argc, char** argv) {
   SparseLU lu;
   lu.set_solver(solver == "klu" ? SparseLU::Solver::kKlu : SparseLU::Solver::kUmfpack);
   lu.set_ordering(SparseLU::Ordering::kNestedDissection);
-  double t = now();
+  double t = now_seconds();
   lu.analyze(b.pattern);
-  const double t_analyze = now() - t;
-  t = now();
+  const double t_analyze = now_seconds() - t;
+  t = now_seconds();
   const Status st = lu.factor(b.values);
-  const double t_factor = now() - t;
+  const double t_factor = now_seconds() - t;
   if (!st.ok() && solver == "amg") {  // no reference: the AMG figures alone
     J["amg"]["difference_from_lu"] = "no LU reference: " + st.message;
     std::printf("%s\n", J.dump().c_str());
@@ -225,9 +214,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::vector<double> xd = rhs;
-  t = now();
+  t = now_seconds();
   lu.solve(std::span<double>(xd.data(), xd.size()));
-  const double t_solve = now() - t;
+  const double t_solve = now_seconds() - t;
   if (solver == "amg") {
     double num = 0, den = 0;
     for (int i = 0; i < n; ++i) num += (x[i] - xd[i]) * (x[i] - xd[i]), den += xd[i] * xd[i];

@@ -7,152 +7,15 @@
 #include <numbers>
 #include <optional>
 
+#include "lsmbs/geometry/length_scale_parts.hpp"
 #include "lsmbs/geometry/sampling.hpp"
 
 namespace lsmbs {
 namespace {
 
+using namespace length_scale_parts;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// The super-ellipse quadrant (a cos^(2/ξ) t, b sin^(2/η) t), t ∈ [0, π/2], and 128 points of it.
-struct QuarterArc {
-  static constexpr int kPoints = 128;
-  double a, b, xi, eta;
-  std::array<Vec2, kPoints + 1> table;
-  QuarterArc(double a_, double b_, double xi_, double eta_) : a(a_), b(b_), xi(xi_), eta(eta_) {
-    for (int k = 0; k <= kPoints; ++k) table[static_cast<size_t>(k)] = at(k * step());
-  }
-  static double step() { return 0.5 * std::numbers::pi / kPoints; }
-  Vec2 at(double t) const {
-    return Vec2(a * std::pow(std::cos(t), 2 / xi), b * std::pow(std::sin(t), 2 / eta));
-  }
-  // Closest point to y ≥ 0 (componentwise): the nearest tabulated point, then a golden-section
-  // search for the least squared distance between its neighbours (the distance exact to
-  // round-off, the foot to ~1e-10 of the semi-axes).
-  Vec2 foot(const Vec2& y) const {
-    int best = 0;
-    double bd = std::numeric_limits<double>::infinity();
-    for (int k = 0; k <= kPoints; ++k) {
-      const double d = (table[static_cast<size_t>(k)] - y).squaredNorm();
-      if (d < bd) bd = d, best = k;
-    }
-    double lo = std::max(0, best - 1) * step(), hi = std::min(kPoints, best + 1) * step();
-    const double r = 0.5 * (std::sqrt(5.0) - 1);
-    double t1 = hi - r * (hi - lo), t2 = lo + r * (hi - lo);
-    double f1 = (at(t1) - y).squaredNorm(), f2 = (at(t2) - y).squaredNorm();
-    for (int it = 0; it < 48; ++it) {
-      if (f1 < f2) {
-        hi = t2, t2 = t1, f2 = f1;
-        t1 = hi - r * (hi - lo), f1 = (at(t1) - y).squaredNorm();
-      } else {
-        lo = t1, t1 = t2, f1 = f2;
-        t2 = lo + r * (hi - lo), f2 = (at(t2) - y).squaredNorm();
-      }
-    }
-    return at(0.5 * (lo + hi));
-  }
-};
-
-// The exact signed distance from x to the shape of feature f (> 0 outside the closed curve,
-// whether the feature is a hole or a solid) at parameter values th. With T = Dual its
-// derivatives by the envelope theorem: ∂s/∂θ = (∂φ/∂θ)(y*) / |∇φ(y*)| at the closest point y*.
-template <class T>
-T shape_distance(const Feature& f, const Vec2& x, const T* th, const QuarterArc* arc) {
-  if (f.type() != Feature::Type::kSuperEllipse) {  // exact already (eq. 41; a circle)
-    const T D = f.distance<T>(x, th);
-    return f.hole() ? D : -D;
-  }
-  const double a = value(th[2]), b = value(th[3]), xi = value(th[4]), eta = value(th[5]);
-  const double ang = value(th[6]), c = std::cos(ang), sn = std::sin(ang);
-  const double dx = x.x() - value(th[0]), dy = x.y() - value(th[1]);
-  const double u = c * dx + sn * dy, v = c * dy - sn * dx;
-  std::optional<QuarterArc> own;  // tabulated only when the caller has no table of this design
-  if (!arc) own.emplace(a, b, xi, eta);
-  Vec2 foot = (arc ? *arc : *own).foot(Vec2(std::abs(u), std::abs(v)));
-  foot = Vec2(std::copysign(foot.x(), u), std::copysign(foot.y(), v));
-  const bool inside = std::pow(std::abs(u / a), xi) + std::pow(std::abs(v / b), eta) < 1;
-  const double dist = (Vec2(u, v) - foot).norm();
-  const T yx(value(th[0]) + c * foot.x() - sn * foot.y());
-  const T yy(value(th[1]) + sn * foot.x() + c * foot.y());
-  T phi, gx, gy;
-  f.phi_grad(yx, yy, th, phi, gx, gy);
-  const double g = std::hypot(value(gx), value(gy));
-  return T(inside ? -dist : dist) + (phi - T(value(phi))) / g;
-}
-
-QuarterArc arc_of(const Feature& f, const std::vector<double>& th) {
-  return f.type() == Feature::Type::kSuperEllipse ? QuarterArc(th[2], th[3], th[4], th[5])
-                                                  : QuarterArc(0, 0, 1, 1);
-}
-
-// Centre of a disc that holds the feature's shape: (cx, cy), or a B-spline's control points'
-// mean (the curve lies in their convex hull).
-Vec2 centre(const Feature& f, const std::vector<double>& th) {
-  if (f.type() != Feature::Type::kBSpline) return {th[0], th[1]};
-  Vec2 c = Vec2::Zero();
-  for (size_t i = 0; i + 1 < th.size(); i += 2) c += Vec2(th[i], th[i + 1]);
-  return c / static_cast<double>(th.size() / 2);
-}
-
-// Radius of that disc.
-double reach(const Feature& f, const std::vector<double>& th) {
-  switch (f.type()) {
-    case Feature::Type::kCircle:
-      return th[2];
-    case Feature::Type::kEllipse:
-      return th[4] * std::max(th[2], th[3]);
-    case Feature::Type::kSuperEllipse:
-      return std::hypot(th[2], th[3]);
-    case Feature::Type::kBSpline: {
-      const Vec2 c = centre(f, th);
-      double r = 0;
-      for (size_t i = 0; i + 1 < th.size(); i += 2)
-        r = std::max(r, (Vec2(th[i], th[i + 1]) - c).norm());
-      return r;
-    }
-  }
-  return kInf;
-}
-
-// KS lower envelope of the values v_k: m − (1/ρ) ln Σ exp(−ρ (v_k − m)) and each sample's weight.
-double ks_min(const std::vector<double>& v, double rho, std::vector<double>& w) {
-  const double m = *std::min_element(v.begin(), v.end());
-  w.resize(v.size());
-  double sum = 0;
-  for (size_t k = 0; k < v.size(); ++k) sum += w[k] = std::exp(-rho * (v[k] - m));
-  for (double& x : w) x /= sum;
-  return m - std::log(sum) / rho;
-}
-
-// A feature's width, twice its inscribed radius (−s at its centre): 2r (circle), the KS minimum
-// of 2ad and 2bd (ellipse, eq. 41) or of 2a and 2b (super-ellipse with ξ, η ≥ 2, eq. 43), with
-// ρ = ln 2/(tolerance · δ).
-LengthScaleConstraint member_size(const Feature& f, const std::vector<double>& th, double delta,
-                                  double tolerance, int nv) {
-  LengthScaleConstraint c;
-  c.kind = "member", c.first = f.name(), c.bound = delta;
-  c.gradient = Vec::Zero(nv);
-  c.at = Vec2(th[0], th[1]);
-  auto add = [&](int m, double dv) {  // ∂c/∂θ_m = dv
-    const ParamBinding& b = f.params()[static_cast<size_t>(m)];
-    if (b.variable >= 0) c.gradient[b.variable] += dv * b.scale;
-  };
-  if (f.type() == Feature::Type::kCircle) {
-    c.value = 2 * th[2];
-    add(2, 2);
-    return c;
-  }
-  const double d = f.type() == Feature::Type::kEllipse ? th[4] : 1.0;
-  const std::vector<double> v = {2 * th[2] * d, 2 * th[3] * d};
-  std::vector<double> w;
-  const double rho = std::log(2.0) / (tolerance * delta);
-  c.value = ks_min(v, rho, w);
-  c.error_bound = tolerance * delta;
-  add(2, 2 * d * w[0]);
-  add(3, 2 * d * w[1]);
-  if (f.type() == Feature::Type::kEllipse) add(4, 2 * th[2] * w[0] + 2 * th[3] * w[1]);
-  return c;
-}
 
 }  // namespace
 
@@ -218,7 +81,7 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
   const double cap = 3 * std::max({o_.min_ligament, o_.min_edge, o_.no_cut});
   std::vector<QuarterArc> arcs;  // each feature's tabulated curve at p, once per evaluation
   for (int i = 0; i < nf; ++i)
-    arcs.push_back(arc_of(F[static_cast<size_t>(i)], V.theta[static_cast<size_t>(i)]));
+    arcs.push_back(arc_of(F[static_cast<size_t>(i)].type(), V.theta[static_cast<size_t>(i)]));
   // a B-spline's exact distance from its shape (positive outside it) and its sparse ∂/∂p
   // (LevelSet::feature_distance: > 0 in material, the curve's own closest point)
   auto bspline_shape_distance = [&](int i, const Vec2& x, LevelSet::Gradient* g) {
@@ -282,27 +145,19 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
     const double rho =
         std::log(static_cast<double>(std::max<size_t>(2, S.size()))) / (o_.tolerance * delta);
     c.error_bound = o_.tolerance * delta;
-    std::vector<double> v;
-    std::vector<size_t> at;
-    for (size_t k = 0; k < S.size(); ++k) {
-      if (!use.empty() && !use[k]) continue;
-      const double x = d[static_cast<size_t>(i)][k] + (j >= 0 ? d[static_cast<size_t>(j)][k] : 0);
-      if (x < cap) v.push_back(x), at.push_back(k);
-    }
-    if (v.empty()) {  // nothing within reach: the bound holds with room, flat there
+    const auto m = sampled_minimum(d[static_cast<size_t>(i)],
+                                   j >= 0 ? &d[static_cast<size_t>(j)] : nullptr, use, cap, rho);
+    if (!m.any) {  // nothing within reach: the bound holds with room, flat there
       c.value = cap;
       c.at = centre(F[static_cast<size_t>(i)], V.theta[static_cast<size_t>(i)]);
       out.push_back(std::move(c));
       return;
     }
-    std::vector<double> w;
-    c.value = ks_min(v, rho, w);
-    const size_t kmin = static_cast<size_t>(std::min_element(v.begin(), v.end()) - v.begin());
-    c.at = S[at[kmin]].x;
-    for (size_t q = 0; q < v.size(); ++q) {
-      if (w[q] < 1e-16) continue;
-      gradient(i, S[at[q]].x, w[q], c.gradient);
-      if (j >= 0) gradient(j, S[at[q]].x, w[q], c.gradient);
+    c.value = m.value;
+    c.at = S[m.argmin].x;
+    for (const auto& [k, w] : m.weights) {
+      gradient(i, S[k].x, w, c.gradient);
+      if (j >= 0) gradient(j, S[k].x, w, c.gradient);
     }
     if (c.value > cap) c.value = cap, c.gradient.setZero();
     out.push_back(std::move(c));
@@ -337,7 +192,8 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
   }
   if (o_.min_member > 0)
     for (int i = 0; i < nd_; ++i)
-      out.push_back(member_size(F[static_cast<size_t>(i)], V.theta[static_cast<size_t>(i)],
+      out.push_back(member_size(F[static_cast<size_t>(i)].name(), F[static_cast<size_t>(i)].type(),
+                                F[static_cast<size_t>(i)].params(), V.theta[static_cast<size_t>(i)],
                                 o_.min_member, o_.tolerance, static_cast<int>(p.size())));
   return out;
 }

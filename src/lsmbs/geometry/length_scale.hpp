@@ -58,19 +58,30 @@ struct LengthScaleConstraint {
   double value = 0;           ///< the aggregated measure [m]
   double error_bound = 0;     ///< value ≥ (true minimum) − error_bound, value ≤ true minimum
   Vec gradient;               ///< ∂value/∂p
-  Vec2 at = Vec2::Zero();     ///< where the measure is smallest
+  Vec at;                     ///< where the measure is smallest (2 or 3 coordinates)
   std::string name() const;   ///< "ligament.LS1.LS2", "edge.LS1", "member.LS1", …
 };
 
-class LengthScale {
+/// The length-scale measures of one body's design: LengthScale (planar) or SolidLengthScale
+/// (solid_length_scale.hpp).
+class LengthScaleMeasures {
+ public:
+  virtual ~LengthScaleMeasures() = default;
+  /// The constraints at design p, in a fixed order (their names do not depend on p).
+  virtual std::vector<LengthScaleConstraint> evaluate(const Vec& p) const = 0;
+  /// Names of the constraints evaluate() returns.
+  virtual std::vector<std::string> names() const = 0;
+  /// The sampling's spacing [m].
+  virtual double spacing() const = 0;
+};
+
+class LengthScale final : public LengthScaleMeasures {
  public:
   /// Features [0, num_design) of `ls` are the design features, the others non-design regions.
   LengthScale(const Mesh2D& mesh, const LevelSet& ls, int num_design, LengthScaleOptions o);
-  /// The constraints at design p, in a fixed order (their names do not depend on p).
-  std::vector<LengthScaleConstraint> evaluate(const Vec& p) const;
-  /// Names of the constraints evaluate() returns.
-  std::vector<std::string> names() const;
-  double spacing() const { return spacing_; }
+  std::vector<LengthScaleConstraint> evaluate(const Vec& p) const override;
+  std::vector<std::string> names() const override;
+  double spacing() const override { return spacing_; }
 
  private:
   struct Sample {

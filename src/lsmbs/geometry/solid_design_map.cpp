@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/solid_cell.hpp"
 
 namespace lsmbs {
 
@@ -13,26 +14,6 @@ namespace {
 constexpr double kTailBands = 30;
 // Distances are refined to third order within this many bands (Feature::distance).
 constexpr double kRefineBands = 12;
-constexpr double kCorner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                                  {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-
-// A hexahedron's point and det J at parent coordinates s.
-Vec3 hex_point(const SolidMesh& m, int e, const Vec3& s, double& detJ) {
-  Vec3 x = Vec3::Zero();
-  Mat3 J = Mat3::Zero();  // ∂x/∂s
-  const auto& cell = m.cells[static_cast<size_t>(e)];
-  for (int I = 0; I < 8; ++I) {
-    const double a = 1 + s[0] * kCorner[I][0], b = 1 + s[1] * kCorner[I][1],
-                 c = 1 + s[2] * kCorner[I][2];
-    const Vec3& X = m.nodes[static_cast<size_t>(cell[static_cast<size_t>(I)])];
-    x += X * (a * b * c / 8);
-    J.col(0) += X * (kCorner[I][0] * b * c / 8);
-    J.col(1) += X * (a * kCorner[I][1] * c / 8);
-    J.col(2) += X * (a * b * kCorner[I][2] / 8);
-  }
-  detJ = J.determinant();
-  return x;
-}
 
 double tet_volume(const SolidMesh& m, int e) {
   const auto& c = m.cells[static_cast<size_t>(e)];
@@ -59,12 +40,12 @@ SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, Mappi
     Vec3 c = Vec3::Zero();
     for (int k : cell) c += mesh.nodes[static_cast<size_t>(k)];
     c /= static_cast<double>(cell.size());
-    double r = 0, edge = 0;
+    double r = 0;
     for (int k : cell) r = std::max(r, (mesh.nodes[static_cast<size_t>(k)] - c).norm());
     if (cell.size() == 8) {
       double V = 0, detJ = 0;
       const double g = 1 / std::sqrt(3.0);
-      for (const auto& k : kCorner) {
+      for (const auto& k : kHexCorner) {
         hex_point(mesh, e, Vec3(g * k[0], g * k[1], g * k[2]), detJ);
         V += detJ;
       }
@@ -72,20 +53,9 @@ SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, Mappi
     } else {
       volume_[e] = tet_volume(mesh, e);
     }
-    // the longest edge (of a hexahedron: node pairs at parent distance 2), so that the band ε
-    // spans `band` sub-cells in every direction of a flat element
-    for (size_t i = 0; i < cell.size(); ++i)
-      for (size_t j = i + 1; j < cell.size(); ++j) {
-        if (cell.size() == 8) {
-          int differ = 0;
-          for (int k = 0; k < 3; ++k) differ += kCorner[i][k] != kCorner[j][k];
-          if (differ != 1) continue;
-        }
-        edge = std::max(edge, (mesh.nodes[static_cast<size_t>(cell[i])] -
-                               mesh.nodes[static_cast<size_t>(cell[j])])
-                                  .norm());
-      }
-    h[e] = edge;
+    // the longest edge, so that the band ε spans `band` sub-cells in every direction of a flat
+    // element
+    h[e] = longest_edge(mesh, e);
     centre_[e] = c;
     radius_[e] = r;
   }

@@ -12,7 +12,9 @@
 #include <thread>
 
 #include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/solid_cell.hpp"
 #include "lsmbs/geometry/sampling.hpp"
+#include "lsmbs/geometry/solid_length_scale.hpp"
 #include "lsmbs/records/json.hpp"
 
 namespace lsmbs {
@@ -163,28 +165,48 @@ DesignProblem::DesignProblem(Conditions conditions, OptimizationSpec spec, Condi
   if (spec_.length_scale.enabled) add_length_scales();
 }
 
-void DesignProblem::add_length_scales() {
+namespace {
+
+// The member size of a super-ellipse is 2 min(a, b) only for exponents ≥ 2 (convex, its nearest
+// boundary point from the centre on an axis); its exponents xi, eta (parameters 4 and 5) are
+// affine in the variables: checked at the bounds.
+void check_member_exponents(const std::string& feature, const std::vector<ParamBinding>& params,
+                            const Design& d) {
+  for (int k : {4, 5}) {
+    const ParamBinding& pb = params[static_cast<size_t>(k)];
+    const double lo =
+        pb.variable < 0 ? pb.offset : std::min(pb.value(d.lower()), pb.value(d.upper()));
+    if (lo < 2)
+      throw SetupError("optimization.length_scale",
+                       "min_member: feature '" + feature + "' has an exponent below 2 (" +
+                           std::to_string(lo) +
+                           ") within the design bounds, where its width is not 2 min(a, b); "
+                           "set min_member to 0 or keep xi, eta >= 2");
+  }
+}
+
+}  // namespace
+
+LengthScaleOptions DesignProblem::length_scale_options(double element_size) const {
   const auto& L = spec_.length_scale;
+  const double size = L.min_size >= 0 ? L.min_size : spec_.judge.min_elements * element_size;
+  auto pick = [&](double v) { return v >= 0 ? v : size; };
+  LengthScaleOptions o;
+  o.min_ligament = pick(L.min_ligament), o.min_edge = pick(L.min_edge);
+  o.min_member = pick(L.min_member), o.no_cut = L.no_cut;
+  o.tolerance = L.tolerance;
+  if (auto msg = o.validate(); !msg.empty()) throw SetupError("optimization.length_scale", msg);
+  return o;
+}
+
+void DesignProblem::add_length_scales() {
   const Design& d = design();
-  if (d.bodies.empty())
+  if (d.bodies.empty() && d.solid_bodies.empty())
     throw SetupError("optimization.length_scale",
-                     d.solid_bodies.empty()
-                         ? "the design has no level-set geometry to constrain (design.geometry)"
-                         : "length-scale constraints are planar only: the design's geometry is on "
-                           "solid bodies (docs/case-format.md, \"Designs of solid bodies\")");
+                     "the design has no level-set geometry to constrain (design.geometry)");
   for (const BodyDesign& b : d.bodies) {
-    const double h = median_element_size(b.body->mesh);
-    const double size = L.min_size >= 0 ? L.min_size : spec_.judge.min_elements * h;
-    auto pick = [&](double v) { return v >= 0 ? v : size; };
-    LengthScaleOptions o;
-    o.min_ligament = pick(L.min_ligament), o.min_edge = pick(L.min_edge);
-    o.min_member = pick(L.min_member), o.no_cut = L.no_cut;
-    o.tolerance = L.tolerance;
-    if (auto msg = o.validate(); !msg.empty()) throw SetupError("optimization.length_scale", msg);
+    const LengthScaleOptions o = length_scale_options(median_element_size(b.body->mesh));
     const LevelSet& ls = b.map->level_set();
-    // the member size of a super-ellipse is 2 min(a, b) only for exponents ≥ 2 (convex, its
-    // nearest boundary point from the centre on an axis); its exponents are affine in the
-    // variables: checked at the bounds
     for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i)
       if (ls.features()[static_cast<size_t>(i)].type() == Feature::Type::kBSpline)
         throw SetupError("optimization.length_scale.min_member",
@@ -194,32 +216,44 @@ void DesignProblem::add_length_scales() {
                              "docs/designs.md)");
     for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i) {
       const Feature& f = ls.features()[static_cast<size_t>(i)];
-      if (f.type() != Feature::Type::kSuperEllipse) continue;
-      for (int k : {4, 5}) {
-        const ParamBinding& pb = f.params()[static_cast<size_t>(k)];
-        const double lo =
-            pb.variable < 0 ? pb.offset : std::min(pb.value(d.lower()), pb.value(d.upper()));
-        if (lo < 2)
-          throw SetupError("optimization.length_scale",
-                           "min_member: feature '" + f.name() + "' has an exponent below 2 (" +
-                               std::to_string(lo) +
-                               ") within the design bounds, where its width is not 2 min(a, b); "
-                               "set min_member to 0 or keep xi, eta >= 2");
-      }
+      if (f.type() == Feature::Type::kSuperEllipse) check_member_exponents(f.name(), f.params(), d);
     }
-    BodyLengthScale bl;
-    bl.body = b.body->name;
-    bl.measures = std::make_unique<lsmbs::LengthScale>(b.body->mesh, ls, b.num_design_features, o);
-    const auto names = bl.measures->names();
-    const auto values = bl.measures->evaluate(d.initial());  // the bounds, in the names' order
-    for (size_t k = 0; k < names.size(); ++k) {
-      constraint_names_.push_back("-length_scale." + bl.body + "." + names[k]);
-      constraint_upper_.push_back(-values[k].bound);
-      constraint_scale_.push_back(values[k].bound);
-    }
-    num_constraints_ += static_cast<int>(names.size());
-    length_scales_.push_back(std::move(bl));
+    add_length_scale(b.body->name, std::make_unique<lsmbs::LengthScale>(b.body->mesh, ls,
+                                                                        b.num_design_features, o));
   }
+  for (const SolidBodyDesign& b : d.solid_bodies) {
+    const LengthScaleOptions o = length_scale_options(median_longest_edge(b.body->mesh));
+    if (o.no_cut > 0)
+      throw SetupError("optimization.length_scale.no_cut",
+                       "no_cut is planar only, and '" + b.body->name +
+                           "' is a solid body: bound the distance from its features to its faces "
+                           "with min_edge (docs/designs.md, \"Length-scale control\")");
+    const LevelSet3& ls = b.map->level_set();
+    for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i) {
+      const Feature3& f = ls.features()[static_cast<size_t>(i)];
+      if ((f.type() == Feature3::Type::kPocket || f.type() == Feature3::Type::kThroughHole) &&
+          f.profile() == Feature::Type::kSuperEllipse)
+        check_member_exponents(f.name(), f.params(), d);
+    }
+    add_length_scale(b.body->name, std::make_unique<SolidLengthScale>(b.body->mesh, ls,
+                                                                      b.num_design_features, o));
+  }
+}
+
+void DesignProblem::add_length_scale(const std::string& body,
+                                     std::unique_ptr<LengthScaleMeasures> measures) {
+  BodyLengthScale bl;
+  bl.body = body;
+  bl.measures = std::move(measures);
+  const auto names = bl.measures->names();
+  const auto values = bl.measures->evaluate(design().initial());  // the bounds, in names' order
+  for (size_t k = 0; k < names.size(); ++k) {
+    constraint_names_.push_back("-length_scale." + bl.body + "." + names[k]);
+    constraint_upper_.push_back(-values[k].bound);
+    constraint_scale_.push_back(values[k].bound);
+  }
+  num_constraints_ += static_cast<int>(names.size());
+  length_scales_.push_back(std::move(bl));
 }
 
 double DesignProblem::geometric_violation(const Vec& p, Vec* g, Mat* J) const {
@@ -322,7 +356,7 @@ nlohmann::json DesignProblem::length_scale_json(const Vec& p) const {
                    {"bound", c.bound},
                    {"satisfied", c.value >= c.bound},
                    {"error_bound", c.error_bound},
-                   {"at", {c.at.x(), c.at.y()}}});
+                   {"at", std::vector<double>(c.at.data(), c.at.data() + c.at.size())}});
     J[bl.body] = {{"spacing", bl.measures->spacing()}, {"constraints", a}};
   }
   return J;

@@ -152,11 +152,15 @@ class DesignProblem {
   /// responses' constraints in the order of `names()`.
   struct BodyLengthScale {
     std::string body;
-    std::unique_ptr<lsmbs::LengthScale> measures;
+    std::unique_ptr<LengthScaleMeasures> measures;
   };
   std::vector<BodyLengthScale> length_scales_;
   int num_response_constraints_ = 0;
   void add_length_scales();
+  void add_length_scale(const std::string& body, std::unique_ptr<LengthScaleMeasures> measures);
+  /// The bounds of spec.length_scale on a body of median element size h (defaults: min_size, or
+  /// judge.min_elements · h).
+  LengthScaleOptions length_scale_options(double h) const;
   void evaluate_length_scales(Evaluation& e, int& row) const;
   /// The largest of the length-scale constraints' scaled violations (δ − value)/δ at p; g and J
   /// receive each one and its gradient.

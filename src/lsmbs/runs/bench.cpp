@@ -1,10 +1,8 @@
 #include "lsmbs/runs/bench.hpp"
 
-#include <sys/resource.h>
-
-#include <chrono>
 #include <filesystem>
 
+#include "lsmbs/core/clock.hpp"
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/output.hpp"
@@ -13,16 +11,6 @@
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
 namespace lsmbs {
-namespace {
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-long peak_rss_kb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss;
-}
-}  // namespace
 
 std::string BenchOptions::validate() const {
   if (repetitions < 1) return "repetitions: expected at least 1";
@@ -50,24 +38,24 @@ nlohmann::json floor_seconds(const Case& cs, const BenchOptions& o, SparseLU& lu
   m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
   lu.factor(vals);
   const int n = o.repetitions;
-  double t = now();
+  double t = now_seconds();
   for (int i = 0; i < n; ++i) m.residual(s, m.params(), k, k, R);
-  const double t_res = (now() - t) / n;
-  t = now();
+  const double t_res = (now_seconds() - t) / n;
+  t = now_seconds();
   for (int i = 0; i < n; ++i)
     m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
-  const double t_mat = (now() - t) / n;
-  t = now();
+  const double t_mat = (now_seconds() - t) / n;
+  t = now_seconds();
   for (int i = 0; i < n; ++i) lu.factor(vals);
-  const double t_factor = (now() - t) / n;
+  const double t_factor = (now_seconds() - t) / n;
   const Vec ones = Vec::Ones(m.n());
-  t = now();
+  t = now_seconds();
   for (int i = 0; i < n; ++i) {
     x = ones;  // a fresh right-hand side: repeated solves of one vector would underflow to
                // denormals
     lu.solve(x);
   }
-  const double t_solve = (now() - t) / n;
+  const double t_solve = (now_seconds() - t) / n;
   const double t_lu = t_factor + t_solve;
   floor = t_res + t_mat + t_lu;
   return {{"residual", t_res}, {"iteration_matrix", t_mat}, {"factor", t_factor},
@@ -113,9 +101,9 @@ nlohmann::json sensitivity_seconds(const Case& cs, const BenchOptions& o, double
       SensitivityOptions so = probe;
       SensitivityOptions::parse_matrix(mx, so.matrix);
       so.threads = o.threads;
-      const double t = now();
+      const double t = now_seconds();
       const auto r = compute_sensitivities(cs, cs.design->initial(), so);
-      const double w = now() - t;
+      const double w = now_seconds() - t;
       sens[mx == matrices[0] ? name : name + "/" + mx] = {
           {"wall_seconds", w},
           {"over_primal", w / t_primal},
@@ -151,9 +139,9 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
   SparseLU lu;
   double floor = 0;
   const nlohmann::json floor_json = floor_seconds(cs, o, lu, floor);
-  const double t = now();
+  const double t = now_seconds();
   const auto primal = GeneralizedAlpha(cs.simulation).run(m, m.params(), cs.initial, {});
-  const double t_primal = now() - t;
+  const double t_primal = now_seconds() - t;
   if (!primal.ok) throw NumericalFailure("primal run failed: " + primal.message);
   nlohmann::json J = provenance(o.command_line, file, cs.sha256);
   if (!cs.input_files.empty()) J["input_files_sha256"] = cs.input_files;

@@ -13,8 +13,10 @@
 
 #include "lsmbs/fem/mesh.hpp"
 #include "lsmbs/geometry/design_map.hpp"
+#include "support/frames.hpp"
 
 using namespace lsmbs;
+using lsmbs::test::frame;
 
 namespace {
 
@@ -68,15 +70,6 @@ Mapped removed(const SolidMesh& mesh, const std::vector<Feature3>& f, const Vec&
   for (double v : map.element_volumes()) total += v;
   const double V = map.material_volume(mu, &dmu, &g);
   return {total - V, -g, map.epsilon()};
-}
-
-Frame3 frame(const Vec3& origin, const Vec3& w, const Vec3& u) {
-  Frame3 f;
-  f.origin = origin;
-  f.axes.col(0) = u.normalized();
-  f.axes.col(2) = w.normalized();
-  f.axes.col(1) = f.axes.col(2).cross(f.axes.col(0));
-  return f;
 }
 
 const SolidMesh& unit_cube(int n) {

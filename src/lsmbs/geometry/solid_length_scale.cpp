@@ -1,0 +1,364 @@
+#include "lsmbs/geometry/solid_length_scale.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "lsmbs/core/error.hpp"
+#include "lsmbs/fem/solid_cell.hpp"
+#include "lsmbs/geometry/length_scale_parts.hpp"
+
+namespace lsmbs {
+namespace {
+
+using namespace length_scale_parts;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+size_t profile_size(Feature::Type t) { return Feature::parameter_names(t).size(); }
+
+template <class T>
+T larger(const T& a, const T& b) {
+  return value(a) > value(b) ? a : b;
+}
+
+// The exact distance to the product of two sets from the distances d1, d2 to each (> 0 outside):
+// √(d1² + d2²) where both are outside, else the larger.
+template <class T>
+T product_distance(const T& d1, const T& d2) {
+  if (value(d1) > 0 && value(d2) > 0) return sqrt(d1 * d1 + d2 * d2);
+  return larger(d1, d2);
+}
+
+// s(x): the signed distance from x to feature f's shape, > 0 outside it (hole or solid), with
+// T = Dual over its parameters θ. `profile`, `arc`: a pocket's or through-hole's planar shape.
+template <class T>
+T shape_distance3(const Feature3& f, const Feature* profile, const QuarterArc* arc, const Vec3& x,
+                  const T* th) {
+  switch (f.type()) {
+    case Feature3::Type::kSphere:
+    case Feature3::Type::kSuperEllipsoid:  // first order, a lower bound outside (header)
+      return f.distance<T>(x, th, 0);
+    case Feature3::Type::kCylinder: {
+      const Vec3 a = f.frame().axes.col(2);
+      const T dx = T(x.x()) - th[0], dy = T(x.y()) - th[1], dz = T(x.z()) - th[2];
+      const T s = dx * a.x() + dy * a.y() + dz * a.z();
+      const T rx = dx - s * a.x(), ry = dy - s * a.y(), rz = dz - s * a.z();
+      const T dr = sqrt(rx * rx + ry * ry + rz * rz) - th[3];
+      if (!(value(th[4]) > 0)) return dr;
+      return product_distance(dr, T(abs(s) - th[4] * 0.5));
+    }
+    case Feature3::Type::kPocket:
+    case Feature3::Type::kThroughHole: {
+      const Vec3 uvw = f.frame().axes.transpose() * (x - f.frame().origin);
+      const T d2 = shape_distance<T>(*profile, Vec2(uvw.x(), uvw.y()), th, arc);
+      if (f.type() == Feature3::Type::kThroughHole) return d2;
+      return product_distance(d2, T(uvw.z()) - th[profile_size(profile->type())]);
+    }
+  }
+  return T(0.0);
+}
+
+// A lower bound on s(x) that costs less than s (to skip samples beyond the reach of every bound).
+double distance_floor(const Feature3& f, const Feature* profile, const Vec3& x,
+                      const std::vector<double>& th) {
+  switch (f.type()) {
+    case Feature3::Type::kSuperEllipsoid:
+      return (x - Vec3(th[0], th[1], th[2])).norm() - std::max({th[3], th[4], th[5]});
+    case Feature3::Type::kPocket:
+    case Feature3::Type::kThroughHole: {
+      const Vec3 uvw = f.frame().axes.transpose() * (x - f.frame().origin);
+      return (Vec2(uvw.x(), uvw.y()) - centre(*profile, th)).norm() - reach(*profile, th);
+    }
+    default:
+      return -kInf;  // exact and cheap: evaluated
+  }
+}
+
+// KS minimum of a few widths w_k = v_k (θ) of one feature, with ∂w_k/∂θ_{m_k} = dv_k.
+struct Width {
+  double v;
+  int param;
+  double dv;
+};
+LengthScaleConstraint member_of(const Feature3& f, const std::vector<Width>& widths, double delta,
+                                double tolerance, int nv) {
+  LengthScaleConstraint c;
+  c.kind = "member", c.first = f.name(), c.bound = delta;
+  c.gradient = Vec::Zero(nv);
+  std::vector<double> v, w;
+  for (const Width& x : widths) v.push_back(x.v);
+  if (v.size() == 1) {
+    c.value = v[0], w = {1.0};
+  } else {
+    c.value = ks_min(v, std::log(static_cast<double>(v.size())) / (tolerance * delta), w);
+    c.error_bound = tolerance * delta;
+  }
+  for (size_t k = 0; k < widths.size(); ++k) {
+    const ParamBinding& b = f.params()[static_cast<size_t>(widths[k].param)];
+    if (b.variable >= 0) c.gradient[b.variable] += w[k] * widths[k].dv * b.scale;
+  }
+  return c;
+}
+
+}  // namespace
+
+SolidLengthScale::SolidLengthScale(const SolidMesh& mesh, const LevelSet3& ls, int num_design,
+                                   LengthScaleOptions o)
+    : ls_(&ls), nd_(num_design), o_(o) {
+  if (auto msg = o.validate(); !msg.empty()) throw Error("length scale: " + msg);
+  if (o.no_cut > 0)
+    throw Error(
+        "length scale: no_cut is planar only; on a solid body bound the distance to the faces "
+        "with min_edge");
+  if (mesh.num_elements() == 0) throw Error("length scale: the solid body's mesh has no cells");
+  spacing_ = o.spacing > 0 ? o.spacing : median_longest_edge(mesh) / 4;
+  // the faces that no other cell shares: the body's boundary
+  std::map<std::vector<int>, int> count;
+  auto key = [&](int e, const auto& corners) {
+    std::vector<int> k;
+    for (int c : corners) k.push_back(mesh.cells[static_cast<size_t>(e)][static_cast<size_t>(c)]);
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  auto for_faces = [&](int e, const auto& fn) {
+    if (mesh.cells[static_cast<size_t>(e)].size() == 8)
+      for (size_t f = 0; f < kHexFaces.size(); ++f) fn(f, key(e, kHexFaces[f].corners));
+    else
+      for (size_t f = 0; f < kTetFaces.size(); ++f) fn(f, key(e, kTetFaces[f]));
+  };
+  for (int e = 0; e < mesh.num_elements(); ++e)
+    for_faces(e, [&](size_t, const std::vector<int>& k) { ++count[k]; });
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    std::vector<char> open(mesh.cells[static_cast<size_t>(e)].size() == 8 ? 6 : 4, 0);
+    for_faces(e, [&](size_t f, const std::vector<int>& k) { open[f] = count[k] == 1; });
+    if (open.size() == 6)
+      sample_hexahedron(mesh, e, open);
+    else
+      sample_tetrahedron(mesh, e, open);
+  }
+  // each feature's planar profile, and the boundary samples its edge ligament keeps
+  for (const Feature3& f : ls.features()) {
+    const bool profiled =
+        f.type() == Feature3::Type::kPocket || f.type() == Feature3::Type::kThroughHole;
+    profile_.push_back(profiled ? std::optional<Feature>(Feature(f.name(), f.profile(), {}, true))
+                                : std::nullopt);
+    const Vec3 w = f.frame().axes.col(2);
+    // (a cylinder's mask applies when its length is 0 at the design evaluated)
+    const bool through =
+        f.type() == Feature3::Type::kThroughHole || f.type() == Feature3::Type::kCylinder;
+    std::vector<char> use(boundary_.size(), 1);
+    for (size_t k = 0; k < boundary_.size(); ++k) {
+      const double c = boundary_[k].n.dot(w);
+      if ((through && std::abs(c) >= 0.5) || (f.type() == Feature3::Type::kPocket && c <= -0.5))
+        use[k] = 0;
+    }
+    edge_use_.push_back(std::move(use));
+  }
+}
+
+void SolidLengthScale::sample_hexahedron(const SolidMesh& mesh, int e,
+                                         const std::vector<char>& open_face) {
+  const auto& cell = mesh.cells[static_cast<size_t>(e)];
+  std::array<int, 3> n{};  // sub-cells per parent axis: its longest edge over the spacing
+  for (int a = 0; a < 3; ++a) {
+    double len = 0;
+    for (int i = 0; i < 8; ++i)
+      for (int j = 0; j < 8; ++j) {
+        int differ = 0;
+        for (int k = 0; k < 3; ++k) differ += kHexCorner[i][k] != kHexCorner[j][k];
+        if (differ == 1 && kHexCorner[i][a] != kHexCorner[j][a])
+          len = std::max(len, (mesh.nodes[static_cast<size_t>(cell[static_cast<size_t>(i)])] -
+                               mesh.nodes[static_cast<size_t>(cell[static_cast<size_t>(j)])])
+                                  .norm());
+      }
+    n[static_cast<size_t>(a)] = std::max(1, static_cast<int>(std::ceil(len / spacing_ - 1e-9)));
+  }
+  auto mid = [&](int a, int i) { return -1 + (2.0 * i + 1) / n[static_cast<size_t>(a)]; };
+  double detJ = 0;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        volume_.push_back({hex_point(mesh, e, Vec3(mid(0, i), mid(1, j), mid(2, k)), detJ)});
+  const Vec3 centre = hex_point(mesh, e, Vec3::Zero(), detJ);
+  for (size_t f = 0; f < kHexFaces.size(); ++f) {
+    if (!open_face[f]) continue;
+    const int a = kHexFaces[f].axis, b = (a + 1) % 3, c = (a + 2) % 3;
+    for (int j = 0; j < n[static_cast<size_t>(c)]; ++j)
+      for (int i = 0; i < n[static_cast<size_t>(b)]; ++i) {
+        Vec3 s;
+        s[a] = kHexFaces[f].side, s[b] = mid(b, i), s[c] = mid(c, j);
+        const Vec3 x = hex_point(mesh, e, s, detJ);
+        Vec3 sb = s, sc = s;  // the face's tangents by differences of the map
+        sb[b] += 1e-3, sc[c] += 1e-3;
+        Vec3 nrm = (hex_point(mesh, e, sb, detJ) - x).cross(hex_point(mesh, e, sc, detJ) - x);
+        if (nrm.dot(x - centre) < 0) nrm = -nrm;
+        boundary_.push_back({x, nrm.normalized()});
+      }
+  }
+}
+
+void SolidLengthScale::sample_tetrahedron(const SolidMesh& mesh, int e,
+                                          const std::vector<char>& open_face) {
+  const auto& cell = mesh.cells[static_cast<size_t>(e)];
+  auto X = [&](int k) -> const Vec3& {
+    return mesh.nodes[static_cast<size_t>(cell[static_cast<size_t>(k)])];
+  };
+  const int n = std::max(1, static_cast<int>(std::ceil(longest_edge(mesh, e) / spacing_ - 1e-9)));
+  // the centroids of the lattice's upright sub-tetrahedra
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; i + j < n; ++j)
+      for (int k = 0; i + j + k < n; ++k)
+        volume_.push_back({X(0) + ((i + 0.25) * (X(1) - X(0)) + (j + 0.25) * (X(2) - X(0)) +
+                                   (k + 0.25) * (X(3) - X(0))) /
+                                      n});
+  for (size_t f = 0; f < kTetFaces.size(); ++f) {
+    if (!open_face[f]) continue;
+    const Vec3 &A = X(kTetFaces[f][0]), &B = X(kTetFaces[f][1]), &C = X(kTetFaces[f][2]);
+    Vec3 nrm = (B - A).cross(C - A);
+    if (nrm.dot(A - X(static_cast<int>(f))) < 0) nrm = -nrm;  // away from the opposite corner
+    nrm.normalize();
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j)
+        boundary_.push_back({A + ((i + 1.0 / 3) * (B - A) + (j + 1.0 / 3) * (C - A)) / n, nrm});
+  }
+}
+
+std::vector<std::string> SolidLengthScale::names() const {
+  std::vector<std::string> n;
+  const auto& F = ls_->features();
+  for (int i = 0; i < nd_; ++i) {
+    if (!F[static_cast<size_t>(i)].hole()) continue;
+    if (o_.min_ligament > 0)
+      for (int j = i + 1; j < static_cast<int>(F.size()); ++j)
+        if (j >= nd_ || F[static_cast<size_t>(j)].hole())
+          n.push_back("ligament." + F[static_cast<size_t>(i)].name() + "." +
+                      F[static_cast<size_t>(j)].name());
+    if (o_.min_edge > 0) n.push_back("edge." + F[static_cast<size_t>(i)].name());
+  }
+  if (o_.min_member > 0)
+    for (int i = 0; i < nd_; ++i) n.push_back("member." + F[static_cast<size_t>(i)].name());
+  return n;
+}
+
+std::vector<LengthScaleConstraint> SolidLengthScale::evaluate(const Vec& p) const {
+  const auto& F = ls_->features();
+  const int nf = static_cast<int>(F.size());
+  const auto theta = ls_->values(p);
+  const double cap = 3 * std::max(o_.min_ligament, o_.min_edge);
+  std::vector<QuarterArc> arcs;  // each profile's tabulated curve at p
+  for (int i = 0; i < nf; ++i)
+    arcs.push_back(
+        profile_[static_cast<size_t>(i)]
+            ? arc_of(profile_[static_cast<size_t>(i)]->type(), theta[static_cast<size_t>(i)])
+            : QuarterArc(0, 0, 1, 1));
+  auto feature = [&](int i) -> const Feature3& { return F[static_cast<size_t>(i)]; };
+  auto profile = [&](int i) {
+    return profile_[static_cast<size_t>(i)] ? &*profile_[static_cast<size_t>(i)] : nullptr;
+  };
+  // s_i at every sample within reach of a bound (+∞ beyond)
+  auto distances = [&](const std::vector<Sample>& S) {
+    std::vector<std::vector<double>> d(static_cast<size_t>(nf));
+    for (int i = 0; i < nf; ++i) {
+      const auto& th = theta[static_cast<size_t>(i)];
+      auto& di = d[static_cast<size_t>(i)];
+      di.assign(S.size(), kInf);
+      for (size_t k = 0; k < S.size() && cap > 0; ++k)
+        if (distance_floor(feature(i), profile(i), S[k].x, th) < cap)
+          di[k] = shape_distance3<double>(feature(i), profile(i), &arcs[static_cast<size_t>(i)],
+                                          S[k].x, th.data());
+    }
+    return d;
+  };
+  const std::vector<Sample> none;
+  const auto dv = distances(o_.min_ligament > 0 ? volume_ : none);
+  const auto db = distances(o_.min_edge > 0 ? boundary_ : none);
+  auto gradient = [&](int i, const Vec3& x, double weight, Vec& grad) {
+    const auto& th = theta[static_cast<size_t>(i)];
+    std::array<Dual, kMaxFeatureParams> t;
+    for (size_t m = 0; m < th.size(); ++m) t[m] = Dual::variable(th[m], static_cast<int>(m));
+    const Dual s =
+        shape_distance3<Dual>(feature(i), profile(i), &arcs[static_cast<size_t>(i)], x, t.data());
+    for (size_t m = 0; m < th.size(); ++m) {
+      const ParamBinding& b = feature(i).params()[m];
+      if (b.variable >= 0) grad[b.variable] += weight * s.d[m] * b.scale;
+    }
+  };
+  auto centre_of = [&](int i) -> Vec {
+    const auto& th = theta[static_cast<size_t>(i)];
+    if (!profile(i)) return Vec3(th[0], th[1], th[2]);
+    const Vec2 c = centre(*profile(i), th);
+    return Vec(feature(i).frame().origin + feature(i).frame().axes * Vec3(c.x(), c.y(), 0));
+  };
+  std::vector<LengthScaleConstraint> out;
+  auto aggregate = [&](const std::string& kind, int i, int j, double delta,
+                       const std::vector<Sample>& S, const std::vector<std::vector<double>>& d,
+                       const std::vector<char>& use) {
+    LengthScaleConstraint c;
+    c.kind = kind, c.bound = delta, c.first = feature(i).name();
+    if (j >= 0) c.second = feature(j).name();
+    c.gradient = Vec::Zero(p.size());
+    const double rho =
+        std::log(static_cast<double>(std::max<size_t>(2, S.size()))) / (o_.tolerance * delta);
+    c.error_bound = o_.tolerance * delta;
+    const auto m = sampled_minimum(d[static_cast<size_t>(i)],
+                                   j >= 0 ? &d[static_cast<size_t>(j)] : nullptr, use, cap, rho);
+    if (!m.any) {  // nothing within reach: the bound holds with room, flat there
+      c.value = cap, c.at = centre_of(i);
+      out.push_back(std::move(c));
+      return;
+    }
+    c.value = m.value, c.at = S[m.argmin].x;
+    for (const auto& [k, w] : m.weights) {
+      gradient(i, S[k].x, w, c.gradient);
+      if (j >= 0) gradient(j, S[k].x, w, c.gradient);
+    }
+    if (c.value > cap) c.value = cap, c.gradient.setZero();
+    out.push_back(std::move(c));
+  };
+  for (int i = 0; i < nd_; ++i) {
+    if (!feature(i).hole()) continue;
+    if (o_.min_ligament > 0)
+      for (int j = i + 1; j < nf; ++j)
+        if (j >= nd_ || feature(j).hole())
+          aggregate("ligament", i, j, o_.min_ligament, volume_, dv, {});
+    if (o_.min_edge > 0)
+      aggregate(
+          "edge", i, -1, o_.min_edge, boundary_, db,
+          feature(i).type() == Feature3::Type::kCylinder && theta[static_cast<size_t>(i)][4] > 0
+              ? std::vector<char>{}
+              : edge_use_[static_cast<size_t>(i)]);
+  }
+  if (o_.min_member > 0)
+    for (int i = 0; i < nd_; ++i) {
+      const Feature3& f = feature(i);
+      const auto& th = theta[static_cast<size_t>(i)];
+      const int nv = static_cast<int>(p.size());
+      LengthScaleConstraint c;
+      switch (f.type()) {
+        case Feature3::Type::kSphere:
+          c = member_of(f, {{2 * th[3], 3, 2}}, o_.min_member, o_.tolerance, nv);
+          break;
+        case Feature3::Type::kCylinder:
+          c = th[4] > 0 ? member_of(f, {{2 * th[3], 3, 2}, {th[4], 4, 1}}, o_.min_member,
+                                    o_.tolerance, nv)
+                        : member_of(f, {{2 * th[3], 3, 2}}, o_.min_member, o_.tolerance, nv);
+          break;
+        case Feature3::Type::kSuperEllipsoid:
+          c = member_of(f, {{2 * th[3], 3, 2}, {2 * th[4], 4, 2}, {2 * th[5], 5, 2}}, o_.min_member,
+                        o_.tolerance, nv);
+          break;
+        case Feature3::Type::kPocket:
+        case Feature3::Type::kThroughHole:
+          c = member_size(f.name(), f.profile(), f.params(), th, o_.min_member, o_.tolerance, nv);
+          break;
+      }
+      c.at = centre_of(i);
+      out.push_back(std::move(c));
+    }
+  return out;
+}
+
+}  // namespace lsmbs
