@@ -3,6 +3,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "lsmbs/geometry/solid_resolution.hpp"
 #include "lsmbs/runs/judge.hpp"
 #include "lsmbs/runs/shape.hpp"
 #include "lsmbs/runs/sweep.hpp"
@@ -146,7 +147,8 @@ static py::dict solid_geometry(const SolidBodyDesign& bd, const Vec& p, const Mo
                   py::arg("phi") = array(phi), py::arg("mass") = body.mass(params),
                   py::arg("mass_gradient") = array(grad),
                   py::arg("shape") = json_to_python(solid_shape_json(bd, p, params)),
-                  py::arg("resolution") = py::none());
+                  py::arg("resolution") = json_to_python(resolution_json(judge_solid_resolution(
+                      bd.body->mesh, bd.map->level_set(), bd.num_design_features, p))));
 }
 
 // lsmbs.geometry: the design mapped on the meshes.
@@ -213,7 +215,7 @@ void bind_geometry(py::module_& m) {
       "where φ > 0), the mass and its gradient, the shape (for lsmbs.export: outline, features at "
       "the design, region, node sets) and the resolution (ligaments, holes and pieces against "
       "what the mesh resolves). A solid body: nodes N × 3, cells of hex8 or tet4, the shape of "
-      "its 3D features ('kind': 'solid'), resolution None (not judged)");
+      "its 3D features ('kind': 'solid'), and its resolution (geometry/solid_resolution.hpp)");
 }
 
 // lsmbs.verify: the verification report of a case file.

@@ -251,11 +251,15 @@ def test_a_solid_design_through_lsmbs_geometry_and_the_export_script(tmp_path):
     written = export.load_shape(tmp_path / "g" / "plate_shape.json")
     case = lsmbs.load_case(case_file)
     g = lsmbs.geometry(case)["plate"]
-    assert g["shape"]["features"] == written["features"] and g["resolution"] is None
+    assert g["shape"]["features"] == written["features"]
     assert g["nodes"].shape == (21 * 3 * 5, 3) and set(g["cell_types"]) == {"hex8"}
     t, r1, r2, depth = 0.01, 0.02, 0.016, 0.004
     volume = 0.4 * t * 0.08 - math.pi * (r1 ** 2 + r2 ** 2) * t - super_ellipse_area(0.05, 0.025, 4) * depth
     assert g["mass"] == pytest.approx(2700 * volume, rel=2e-3)
+    # the resolution: one piece, its volume that of the samples in material (5 mm apart across
+    # the thickness: the 4 mm pocket counts as 5 mm deep, 1.7 % of the volume)
+    assert len(g["resolution"]["pieces"]) == 1
+    assert g["resolution"]["pieces"][0] == pytest.approx(volume, rel=0.025)
     # central differences: the floor's band is thin in depth (μ's third derivative there is
     # large), so its step is 1e-8 (measured: 3.6e-6 off at 1e-6, 4e-8 at 1e-7, 7e-9 at 1e-8)
     p0 = [r1, r2, depth]

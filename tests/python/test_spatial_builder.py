@@ -157,25 +157,45 @@ def test_a_designed_solid_built_in_python_equals_the_shipped_case():
         lsmbs.pocket("bad", "ymax", lsmbs.sphere("s", 0, 0, 0, 0.01), depth=0.001)
 
 
-def test_length_scale_constraints_on_a_solid_design_are_refused_by_name(tmp_path):
-    """Length-scale constraints are planar: on a design of solid bodies `lsmbs optimize` exits 2
-    and says so, naming the option (not "the design has no level-set geometry")."""
+def test_length_scale_constraints_on_a_solid_design(tmp_path):
+    """Length-scale constraints on data/spatial/solid_arm.json (`lsmbs geometry`, min_size 8 mm):
+    hole1 (r1 = 20 mm, through the 10 mm thickness of the 80 mm tall plate) has the edge ligament
+    40 − 20 = 20 mm (the faces it passes through are not edges), the pocket (4 mm deep) its floor,
+    6 mm, and each is reported with its 3D position; no_cut is refused naming its key (exit 2, no
+    file written), and so is a bound longer than the body (a length in mm given as m)."""
     import subprocess
     from conftest import CLI
     doc = json.loads(ARM.read_text())
-    doc["optimization"] = {"objective": "plate_mass", "length_scale": {"min_size": 0.005}}
+    doc["optimization"] = {"objective": "plate_mass", "length_scale": {"min_size": 0.008}}
     case = tmp_path / "arm_ls.json"
     case.write_text(json.dumps(doc))
-    p = subprocess.run([CLI, "optimize", str(case), "-o", str(tmp_path / "o"), "-q"],
+    p = subprocess.run([CLI, "geometry", str(case), "-o", str(tmp_path / "g"), "-q"],
                        capture_output=True, text=True)
-    assert p.returncode == 2, p.stderr
-    assert "/optimization/length_scale: length-scale constraints are planar only" in p.stderr, p.stderr
+    assert p.returncode == 0, p.stderr
+    s = json.loads((tmp_path / "g" / "summary.json").read_text())
+    c = {x["name"]: x for x in s["length_scale"]["plate"]["constraints"]}
+    err = 0.05 * 0.008
+    assert 0.020 - err <= c["edge.hole1"]["value"] <= 0.020 + 1e-4
+    assert 0.006 - err <= c["edge.pocket"]["value"] <= 0.006 + 1e-9
+    assert len(c["edge.pocket"]["at"]) == 3 and c["edge.pocket"]["at"][1] == pytest.approx(-0.005)
+    assert c["member.hole1"]["value"] == pytest.approx(0.04)
+    for bad, key in (({"no_cut": 0.004}, "/optimization/length_scale/no_cut"),
+                     ({"min_size": 0.5}, "/optimization/length_scale/min_ligament")):
+        doc["optimization"]["length_scale"] = bad
+        case.write_text(json.dumps(doc))
+        out = tmp_path / ("bad_" + key.rsplit("/", 1)[1])
+        p = subprocess.run([CLI, "geometry", str(case), "-o", str(out), "-q"],
+                           capture_output=True, text=True)
+        assert p.returncode == 2, p.stderr
+        assert key in p.stderr, p.stderr
+        assert not out.exists() or not any(out.iterdir()), "nothing written for a bad input"
 
 
-def test_optimizing_a_solid_design_says_it_is_not_judged(tmp_path):
+def test_optimizing_a_solid_design_judges_it(tmp_path):
     """`lsmbs optimize` on data/spatial/solid_arm.json (mass under a stress bound, two
-    evaluations): the judgement is planar only, so summary.json's judgement is null and a warning
-    says the solid design is not judged; the KKT line names every measure it judges by,
+    evaluations) judges the solid design: summary.json's judgement has the plate's resolution
+    (one piece; every part with its width, 3D position and the threshold across it) and the
+    load-path check of both responses; the KKT line names every measure it judges by,
     complementarity included."""
     import subprocess
     from conftest import CLI
@@ -189,6 +209,11 @@ def test_optimizing_a_solid_design_says_it_is_not_judged(tmp_path):
                        capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     s = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert s["judgement"] is None
-    assert any("solid body 'plate' is not judged" in w for w in s["warnings"]), s["warnings"]
+    j = s["judgement"]
+    assert j is not None and j["verdict"] in ("sound", "unresolved"), j
+    (r,) = j["resolution"]
+    assert r["body"] == "plate" and len(r["pieces"]) == 1
+    assert all(len(q["at"]) == 3 for q in r["parts"]), r["parts"]
+    assert {x["response"] for x in j["load_path"]["responses"]} == {"plate_mass", "peak_stress"}
+    assert not any("not judged" in w for w in s["warnings"]), s["warnings"]
     assert "complementarity" in p.stdout, p.stdout

@@ -32,6 +32,31 @@ std::string LengthScaleOptions::validate() const {
   return {};
 }
 
+std::vector<LengthScaleConstraint> LengthScaleMeasures::evaluate(const Vec& p) const {
+  auto all = evaluate_all(p);
+  if (left_out_.empty()) return all;
+  std::vector<LengthScaleConstraint> kept;
+  for (auto& c : all)
+    if (std::find(left_out_.begin(), left_out_.end(), c.name()) == left_out_.end())
+      kept.push_back(std::move(c));
+  return kept;
+}
+
+std::vector<std::string> LengthScaleMeasures::names() const {
+  std::vector<std::string> kept;
+  for (auto& n : all_names())
+    if (std::find(left_out_.begin(), left_out_.end(), n) == left_out_.end()) kept.push_back(n);
+  return kept;
+}
+
+std::vector<std::string> LengthScaleMeasures::leave_out_overlaps(const Vec& p) {
+  std::vector<std::string> out;
+  for (const auto& c : evaluate(p))
+    if (c.kind == "ligament" && c.value < 0) out.push_back(c.name());
+  left_out_.insert(left_out_.end(), out.begin(), out.end());
+  return out;
+}
+
 std::string LengthScaleConstraint::name() const {
   return kind + "." + first + (second.empty() ? "" : "." + second);
 }
@@ -39,6 +64,7 @@ std::string LengthScaleConstraint::name() const {
 LengthScale::LengthScale(const Mesh2D& mesh, const LevelSet& ls, int num_design,
                          LengthScaleOptions o)
     : ls_(&ls), nd_(num_design), o_(o) {
+  void_ = void_features(ls.root(), ls.features());
   spacing_ = o.spacing > 0 ? o.spacing : median_element_size(mesh) / 4;
   const SampleGrid g = make_sample_grid(mesh, spacing_);
   for (int j = 0; j < g.ny; ++j)
@@ -56,14 +82,14 @@ LengthScale::LengthScale(const Mesh2D& mesh, const LevelSet& ls, int num_design,
   }
 }
 
-std::vector<std::string> LengthScale::names() const {
+std::vector<std::string> LengthScale::all_names() const {
   std::vector<std::string> n;
   const auto& F = ls_->features();
   for (int i = 0; i < nd_; ++i) {
-    if (!F[static_cast<size_t>(i)].hole()) continue;
+    if (!void_[static_cast<size_t>(i)]) continue;
     if (o_.min_ligament > 0)
       for (int j = i + 1; j < static_cast<int>(F.size()); ++j)
-        if (j >= nd_ || F[static_cast<size_t>(j)].hole())
+        if (j >= nd_ || void_[static_cast<size_t>(j)])
           n.push_back("ligament." + F[static_cast<size_t>(i)].name() + "." +
                       F[static_cast<size_t>(j)].name());
     if (o_.min_edge > 0) n.push_back("edge." + F[static_cast<size_t>(i)].name());
@@ -74,7 +100,7 @@ std::vector<std::string> LengthScale::names() const {
   return n;
 }
 
-std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
+std::vector<LengthScaleConstraint> LengthScale::evaluate_all(const Vec& p) const {
   const auto& F = ls_->features();
   const int nf = static_cast<int>(F.size());
   const LevelSet::Values V = ls_->values(p);
@@ -163,10 +189,10 @@ std::vector<LengthScaleConstraint> LengthScale::evaluate(const Vec& p) const {
     out.push_back(std::move(c));
   };
   for (int i = 0; i < nd_; ++i) {
-    if (!F[static_cast<size_t>(i)].hole()) continue;
+    if (!void_[static_cast<size_t>(i)]) continue;
     if (o_.min_ligament > 0)
       for (int j = i + 1; j < nf; ++j)
-        if (j >= nd_ || F[static_cast<size_t>(j)].hole())
+        if (j >= nd_ || void_[static_cast<size_t>(j)])
           aggregate("ligament", i, j, o_.min_ligament, grid_, dg, {});
     if (o_.min_edge > 0) aggregate("edge", i, -1, o_.min_edge, boundary_, db, {});
     if (o_.no_cut > 0) {

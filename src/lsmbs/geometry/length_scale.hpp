@@ -68,20 +68,34 @@ class LengthScaleMeasures {
  public:
   virtual ~LengthScaleMeasures() = default;
   /// The constraints at design p, in a fixed order (their names do not depend on p).
-  virtual std::vector<LengthScaleConstraint> evaluate(const Vec& p) const = 0;
+  std::vector<LengthScaleConstraint> evaluate(const Vec& p) const;
   /// Names of the constraints evaluate() returns.
-  virtual std::vector<std::string> names() const = 0;
+  std::vector<std::string> names() const;
   /// The sampling's spacing [m].
   virtual double spacing() const = 0;
+  /// Leaves out the ligaments between features that overlap at design p (a negative ligament):
+  /// they form one void by design (a counterbore, a lens of two holes, an OR of two voids), which
+  /// no bound could part without changing the design's topology. Returns their names.
+  std::vector<std::string> leave_out_overlaps(const Vec& p);
+  const std::vector<std::string>& left_out() const { return left_out_; }
+
+ protected:
+  virtual std::vector<LengthScaleConstraint> evaluate_all(const Vec& p) const = 0;
+  virtual std::vector<std::string> all_names() const = 0;
+
+ private:
+  std::vector<std::string> left_out_;
 };
 
 class LengthScale final : public LengthScaleMeasures {
  public:
   /// Features [0, num_design) of `ls` are the design features, the others non-design regions.
   LengthScale(const Mesh2D& mesh, const LevelSet& ls, int num_design, LengthScaleOptions o);
-  std::vector<LengthScaleConstraint> evaluate(const Vec& p) const override;
-  std::vector<std::string> names() const override;
   double spacing() const override { return spacing_; }
+
+ protected:
+  std::vector<LengthScaleConstraint> evaluate_all(const Vec& p) const override;
+  std::vector<std::string> all_names() const override;
 
  private:
   struct Sample {
@@ -90,6 +104,7 @@ class LengthScale final : public LengthScaleMeasures {
   };
   const LevelSet* ls_;
   int nd_ = 0;
+  std::vector<char> void_;  ///< per feature: bounds void (a hole not under an odd number of NOTs)
   LengthScaleOptions o_;
   double spacing_ = 0;
   std::vector<Sample> grid_, boundary_;

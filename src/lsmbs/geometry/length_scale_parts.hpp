@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "lsmbs/geometry/csg.hpp"
 #include "lsmbs/geometry/feature.hpp"
 #include "lsmbs/geometry/length_scale.hpp"
 
@@ -64,5 +65,22 @@ LengthScaleConstraint member_size(const std::string& name, Feature::Type type,
                                   const std::vector<ParamBinding>& params,
                                   const std::vector<double>& th, double delta, double tolerance,
                                   int nv);
+
+/// Per feature: whether it bounds void in the region `root` — a hole (hole()) under an even
+/// number of NOTs, or a solid under an odd number (NOT turns a hole's void into material).
+template <class Feat>
+std::vector<char> void_features(const LevelSetNode& root, const std::vector<Feat>& features) {
+  std::vector<char> negated(features.size(), 0);
+  auto walk = [&](const LevelSetNode& n, bool neg, const auto& self) -> void {
+    if (n.op == LevelSetNode::Op::kFeature && n.feature >= 0 &&
+        n.feature < static_cast<int>(negated.size()))
+      negated[static_cast<size_t>(n.feature)] = neg;
+    for (const auto& c : n.children) self(c, neg != (n.op == LevelSetNode::Op::kNot), self);
+  };
+  walk(root, false, walk);
+  std::vector<char> v(features.size());
+  for (size_t i = 0; i < features.size(); ++i) v[i] = features[i].hole() != (negated[i] != 0);
+  return v;
+}
 
 }  // namespace lsmbs::length_scale_parts

@@ -90,28 +90,40 @@ std::string width_text(double w) {
   return b;
 }
 
-std::string at_text(const Vec2& x) {
-  char b[64];
-  std::snprintf(b, sizeof b, "(%.4g, %.4g) m", x.x(), x.y());
+std::string at_text(const Vec& x) {
+  char b[96];
+  if (x.size() == 3)
+    std::snprintf(b, sizeof b, "(%.4g, %.4g, %.4g) m", x[0], x[1], x[2]);
+  else
+    std::snprintf(b, sizeof b, "(%.4g, %.4g) m", x[0], x[1]);
   return b;
+}
+
+std::string side_text(const std::string& s) {
+  return s == "outer edge" ? "the outer edge"
+         : s == "surface"  ? "the surface"
+                           : "feature '" + s + "'";
 }
 
 }  // namespace
 
 std::vector<std::string> ResolutionReport::flags() const {
   std::vector<std::string> f;
-  const std::string limit = width_text(threshold) + " (" + width_text(element_size) + " elements)";
   for (const NarrowPart& p : parts) {
     if (!p.unresolved) continue;
+    char cells[96];
+    std::snprintf(cells, sizeof cells, " (%.3g cells of %s across it)", threshold / element_size,
+                  width_text(p.threshold * element_size / threshold).c_str());
+    const std::string limit =
+        width_text(p.threshold) + (solid ? cells : " (" + width_text(element_size) + " elements)");
     if (p.kind == NarrowPart::Kind::kHole)
       f.push_back("feature '" + p.first + "' is " + width_text(p.width) + " wide at " +
                   at_text(p.at) + ", below the " + limit + " the mesh resolves");
     else
       f.push_back("the material between " +
                   (p.first == "outer edge" ? p.first : "feature '" + p.first + "'") + " and " +
-                  (p.second == "outer edge" ? "the outer edge" : "feature '" + p.second + "'") +
-                  " is " + width_text(p.width) + " wide at " + at_text(p.at) + ", below the " +
-                  limit + " the mesh resolves");
+                  side_text(p.second) + " is " + width_text(p.width) + " wide at " + at_text(p.at) +
+                  ", below the " + limit + " the mesh resolves");
   }
   return f;
 }
@@ -121,13 +133,14 @@ std::string ResolutionReport::pieces_flag() const {
   std::string a;
   for (size_t k = 0; k < pieces.size(); ++k) {
     char b[32];
-    std::snprintf(b, sizeof b, "%s%.4g", k ? ", " : "", pieces[k] * 1e6);
+    std::snprintf(b, sizeof b, "%s%.4g", k ? ", " : "", pieces[k] * (solid ? 1e9 : 1e6));
     a += b;
   }
   char w[32];
   std::snprintf(w, sizeof w, "%.2g mm", piece_spacing * 1e3);
-  return "the material falls apart into " + std::to_string(pieces.size()) + " pieces (areas " + a +
-         " mm²; joined, if at all, by less than " + w + "): all but one hang on ersatz material";
+  return "the material falls apart into " + std::to_string(pieces.size()) + " pieces (" +
+         (solid ? "volumes " : "areas ") + a + (solid ? " mm³" : " mm²") +
+         "; joined, if at all, by less than " + w + "): all but one hang on ersatz material";
 }
 
 ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const LevelSet::Values& v,
@@ -241,7 +254,7 @@ ResolutionReport judge_resolution(const Mesh2D& mesh, const LevelSet& ls, const 
     p.width = 2 * depth;
     R.parts.push_back(p);
   }
-  for (NarrowPart& p : R.parts) p.unresolved = p.width < R.threshold;
+  for (NarrowPart& p : R.parts) p.threshold = R.threshold, p.unresolved = p.width < R.threshold;
   std::stable_sort(R.parts.begin(), R.parts.end(),
                    [](const NarrowPart& a, const NarrowPart& b) { return a.width < b.width; });
 

@@ -35,22 +35,28 @@ struct ResolutionOptions {
 struct NarrowPart {
   enum class Kind { kLigament, kHole };
   Kind kind = Kind::kLigament;
-  /// The boundaries on either side: feature names, or "outer edge"; a hole: its feature only.
+  /// The boundaries on either side: feature names, or "outer edge" (a planar body's boundary),
+  /// "surface" (a solid body's faces); a hole: its feature only.
   std::string first, second;
-  double width = 0;         ///< [m]
-  Vec2 at = Vec2::Zero();   ///< where it is narrowest (a grid point on the bisector or in the hole)
-  bool unresolved = false;  ///< narrower than min_elements element sizes
+  double width = 0;  ///< [m]
+  /// Where it is narrowest (a grid point on the bisector or in the hole; 2 or 3 coordinates).
+  Vec at;
+  /// The width the mesh resolves there [m]: min_elements element sizes (of a solid body: of the
+  /// cell there, measured across the part).
+  double threshold = 0;
+  bool unresolved = false;  ///< narrower than threshold
 };
 
 struct ResolutionReport {
-  double element_size = 0;        ///< median √(element area) [m]
-  double spacing = 0;             ///< of the sampling grid [m]; the widths' accuracy
-  double threshold = 0;           ///< min_elements · element_size [m]
+  double element_size = 0;  ///< median √(element area) [m]; of a solid: median longest edge
+  double spacing = 0;       ///< of the sampling grid [m]; the widths' accuracy
+  double threshold = 0;     ///< min_elements · element_size [m] (a part's own may differ: solids)
   std::vector<NarrowPart> parts;  ///< every ligament and hole found, narrowest first
-  /// Areas of the connected pieces of material [m²], largest first (one piece: a whole body);
-  /// pieces smaller than one element are left out.
+  /// Areas (of a solid: volumes) of the connected pieces of material [m², m³], largest first
+  /// (one piece: a whole body); pieces smaller than one element are left out.
   std::vector<double> pieces;
   double piece_spacing = 0;  ///< of the grid the pieces are found on [m]
+  bool solid = false;        ///< a solid body's report (volumes, 3D positions)
   /// The parts narrower than the threshold, in words; empty when the mesh resolves the design.
   std::vector<std::string> flags() const;
   /// A body in more than one piece, in words; empty for one piece.

@@ -32,6 +32,89 @@ T product_distance(const T& d1, const T& d2) {
   return larger(d1, d2);
 }
 
+// g = (Σ |u_i/a_i|^ξ)^(1/ξ), u = Aᵀ(y − c): the super-ellipsoid's gauge (1 on its surface).
+template <class T>
+T gauge(const Feature3& f, const Vec3& y, const T* th) {
+  const Mat3& A = f.frame().axes;
+  const T dx = T(y.x()) - th[0], dy = T(y.y()) - th[1], dz = T(y.z()) - th[2];
+  T S(0.0);
+  for (int i = 0; i < 3; ++i)
+    S = S + pow(abs(dx * A(0, i) + dy * A(1, i) + dz * A(2, i)) / th[3 + i], th[6]);
+  return pow(S, T(1.0) / th[6]);
+}
+
+// The closest point of the surface Σ (y_i/a_i)^ξ = 1 (first octant) to q ≥ 0 outside it. Its
+// conditions q_i = y_i + λ ξ y_i^(ξ−1)/a_i^ξ (λ ≥ 0) give each y_i(λ) as the root of a convex,
+// increasing function of y_i (ξ ≥ 2), found by Newton's method; F(λ) = Σ (y_i(λ)/a_i)^ξ − 1
+// falls monotonically with λ, and its root is found by Newton's method on λ (dF/dλ by implicit
+// differentiation) kept within a bracket that bisection shrinks when a step leaves it.
+Vec3 closest_on_super_ellipsoid(const Vec3& q, const Vec3& a, double xi) {
+  Vec3 ax;
+  for (int i = 0; i < 3; ++i) ax[i] = std::pow(a[i], xi);
+  Vec3 y = q;  // warm start across λ (Newton on a convex increasing function converges from
+               // either side after one step)
+  double dF = 0;
+  auto F = [&](double lambda) {
+    double S = 0;
+    dF = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double k = lambda * xi / ax[i];
+      double v = std::min(y[i], q[i]);
+      for (int it = 0; it < 60 && q[i] > 0; ++it) {
+        const double p = std::pow(v, xi - 2);
+        const double step = (v + k * p * v - q[i]) / (1 + k * (xi - 1) * p);
+        v = std::max(0.0, v - step);
+        if (std::abs(step) <= 1e-14 * q[i]) break;
+      }
+      y[i] = q[i] > 0 ? v : 0;
+      const double p = std::pow(y[i], xi - 2), g = xi * p * y[i] / ax[i];  // ∂F/∂y_i · (1/1)
+      S += p * y[i] * y[i] / ax[i];
+      dF -= g * (xi * p * y[i] / ax[i]) / (1 + k * (xi - 1) * p);  // ∂F/∂y_i · ∂y_i/∂λ
+    }
+    return S - 1;
+  };
+  double lo = 0, hi = INFINITY, lambda = 0;
+  double f = F(lambda);
+  for (int it = 0; it < 200 && std::abs(f) > 1e-14; ++it) {
+    (f > 0 ? lo : hi) = lambda;
+    double next = dF < 0 ? lambda - f / dF : INFINITY;
+    if (!(next > lo && next < hi)) next = std::isfinite(hi) ? 0.5 * (lo + hi) : 4 * lo + 1e-300;
+    if (next == lambda) break;
+    lambda = next;
+    f = F(lambda);
+  }
+  return y;
+}
+
+// A super-ellipsoid's signed distance: outside, exact (the closest point above; its derivatives
+// by the envelope theorem, ∂s/∂θ = (∂g/∂θ)(y*)/|∇_y g(y*)|); inside, the lower bound on the depth
+// (g − 1)·min(a, b, c) (g is 1/min(a, b, c)-Lipschitz), which the ligaments never take as their
+// minimum (the sum of two distances is least outside both shapes).
+template <class T>
+T super_ellipsoid_distance(const Feature3& f, const Vec3& x, const T* th) {
+  const T g = gauge(f, x, th);
+  if (!(value(g) > 1)) {
+    int k = 3;
+    for (int i = 4; i < 6; ++i)
+      if (value(th[i]) < value(th[k])) k = i;
+    return (g - 1.0) * th[k];
+  }
+  const Mat3& A = f.frame().axes;
+  const Vec3 c(value(th[0]), value(th[1]), value(th[2]));
+  const Vec3 u = A.transpose() * (x - c);
+  const Vec3 a(value(th[3]), value(th[4]), value(th[5]));
+  const double xi = value(th[6]);
+  Vec3 y = closest_on_super_ellipsoid(u.cwiseAbs(), a, xi);
+  for (int i = 0; i < 3; ++i) y[i] = std::copysign(y[i], u[i]);
+  const double dist = (u - y).norm();
+  const Vec3 yw = c + A * y;  // the closest point in the body's coordinates
+  // |∇_y g| at y*: ∂g/∂u_i = sign(u_i) (|u_i|/a_i)^(ξ−1) / (a_i g^(ξ−1)), g = 1 there
+  double n2 = 0;
+  for (int i = 0; i < 3; ++i) n2 += std::pow(std::pow(std::abs(y[i]) / a[i], xi - 1) / a[i], 2);
+  const T gy = gauge(f, yw, th);
+  return T(dist) + (gy - T(value(gy))) / std::sqrt(n2);
+}
+
 // s(x): the signed distance from x to feature f's shape, > 0 outside it (hole or solid), with
 // T = Dual over its parameters θ. `profile`, `arc`: a pocket's or through-hole's planar shape.
 template <class T>
@@ -39,8 +122,9 @@ T shape_distance3(const Feature3& f, const Feature* profile, const QuarterArc* a
                   const T* th) {
   switch (f.type()) {
     case Feature3::Type::kSphere:
-    case Feature3::Type::kSuperEllipsoid:  // first order, a lower bound outside (header)
       return f.distance<T>(x, th, 0);
+    case Feature3::Type::kSuperEllipsoid:
+      return super_ellipsoid_distance(f, x, th);
     case Feature3::Type::kCylinder: {
       const Vec3 a = f.frame().axes.col(2);
       const T dx = T(x.x()) - th[0], dy = T(x.y()) - th[1], dz = T(x.z()) - th[2];
@@ -65,8 +149,9 @@ T shape_distance3(const Feature3& f, const Feature* profile, const QuarterArc* a
 double distance_floor(const Feature3& f, const Feature* profile, const Vec3& x,
                       const std::vector<double>& th) {
   switch (f.type()) {
-    case Feature3::Type::kSuperEllipsoid:
-      return (x - Vec3(th[0], th[1], th[2])).norm() - std::max({th[3], th[4], th[5]});
+    case Feature3::Type::kSuperEllipsoid:  // and its first-order estimate, a bound outside
+      return std::max((x - Vec3(th[0], th[1], th[2])).norm() - std::max({th[3], th[4], th[5]}),
+                      f.distance<double>(x, th.data(), 0));
     case Feature3::Type::kPocket:
     case Feature3::Type::kThroughHole: {
       const Vec3 uvw = f.frame().axes.transpose() * (x - f.frame().origin);
@@ -108,6 +193,7 @@ LengthScaleConstraint member_of(const Feature3& f, const std::vector<Width>& wid
 SolidLengthScale::SolidLengthScale(const SolidMesh& mesh, const LevelSet3& ls, int num_design,
                                    LengthScaleOptions o)
     : ls_(&ls), nd_(num_design), o_(o) {
+  void_ = void_features(ls.root(), ls.features());
   if (auto msg = o.validate(); !msg.empty()) throw Error("length scale: " + msg);
   if (o.no_cut > 0)
     throw Error(
@@ -139,23 +225,12 @@ SolidLengthScale::SolidLengthScale(const SolidMesh& mesh, const LevelSet3& ls, i
     else
       sample_tetrahedron(mesh, e, open);
   }
-  // each feature's planar profile, and the boundary samples its edge ligament keeps
+  // each feature's planar profile
   for (const Feature3& f : ls.features()) {
     const bool profiled =
         f.type() == Feature3::Type::kPocket || f.type() == Feature3::Type::kThroughHole;
     profile_.push_back(profiled ? std::optional<Feature>(Feature(f.name(), f.profile(), {}, true))
                                 : std::nullopt);
-    const Vec3 w = f.frame().axes.col(2);
-    // (a cylinder's mask applies when its length is 0 at the design evaluated)
-    const bool through =
-        f.type() == Feature3::Type::kThroughHole || f.type() == Feature3::Type::kCylinder;
-    std::vector<char> use(boundary_.size(), 1);
-    for (size_t k = 0; k < boundary_.size(); ++k) {
-      const double c = boundary_[k].n.dot(w);
-      if ((through && std::abs(c) >= 0.5) || (f.type() == Feature3::Type::kPocket && c <= -0.5))
-        use[k] = 0;
-    }
-    edge_use_.push_back(std::move(use));
   }
 }
 
@@ -178,18 +253,24 @@ void SolidLengthScale::sample_hexahedron(const SolidMesh& mesh, int e,
   }
   auto mid = [&](int a, int i) { return -1 + (2.0 * i + 1) / n[static_cast<size_t>(a)]; };
   double detJ = 0;
+  const double w0 = 8.0 / (n[0] * n[1] * n[2]);  // the sub-cell's parent volume
   for (int k = 0; k < n[2]; ++k)
     for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i)
-        volume_.push_back({hex_point(mesh, e, Vec3(mid(0, i), mid(1, j), mid(2, k)), detJ)});
+      for (int i = 0; i < n[0]; ++i) {
+        const Vec3 x = hex_point(mesh, e, Vec3(mid(0, i), mid(1, j), mid(2, k)), detJ);
+        volume_.push_back({x, Vec3::Zero(), detJ * w0});
+      }
   const Vec3 centre = hex_point(mesh, e, Vec3::Zero(), detJ);
   for (size_t f = 0; f < kHexFaces.size(); ++f) {
     if (!open_face[f]) continue;
     const int a = kHexFaces[f].axis, b = (a + 1) % 3, c = (a + 2) % 3;
-    for (int j = 0; j < n[static_cast<size_t>(c)]; ++j)
-      for (int i = 0; i < n[static_cast<size_t>(b)]; ++i) {
+    // the lattice of the face's sub-cells, its edges and corners included (a minimum on an edge
+    // of the body is sampled where it lies)
+    auto node = [&](int ax, int i) { return -1 + 2.0 * i / n[static_cast<size_t>(ax)]; };
+    for (int j = 0; j <= n[static_cast<size_t>(c)]; ++j)
+      for (int i = 0; i <= n[static_cast<size_t>(b)]; ++i) {
         Vec3 s;
-        s[a] = kHexFaces[f].side, s[b] = mid(b, i), s[c] = mid(c, j);
+        s[a] = kHexFaces[f].side, s[b] = node(b, i), s[c] = node(c, j);
         const Vec3 x = hex_point(mesh, e, s, detJ);
         Vec3 sb = s, sc = s;  // the face's tangents by differences of the map
         sb[b] += 1e-3, sc[c] += 1e-3;
@@ -207,33 +288,81 @@ void SolidLengthScale::sample_tetrahedron(const SolidMesh& mesh, int e,
     return mesh.nodes[static_cast<size_t>(cell[static_cast<size_t>(k)])];
   };
   const int n = std::max(1, static_cast<int>(std::ceil(longest_edge(mesh, e) / spacing_ - 1e-9)));
-  // the centroids of the lattice's upright sub-tetrahedra
+  // the centroids of the lattice's upright sub-tetrahedra, sharing the cell's volume
+  const size_t first = volume_.size();
   for (int i = 0; i < n; ++i)
     for (int j = 0; i + j < n; ++j)
       for (int k = 0; i + j + k < n; ++k)
         volume_.push_back({X(0) + ((i + 0.25) * (X(1) - X(0)) + (j + 0.25) * (X(2) - X(0)) +
                                    (k + 0.25) * (X(3) - X(0))) /
                                       n});
+  Mat3 J;
+  for (int k = 0; k < 3; ++k) J.col(k) = X(k + 1) - X(0);
+  const double share = std::abs(J.determinant()) / 6 / static_cast<double>(volume_.size() - first);
+  for (size_t k = first; k < volume_.size(); ++k) volume_[k].w = share;
   for (size_t f = 0; f < kTetFaces.size(); ++f) {
     if (!open_face[f]) continue;
     const Vec3 &A = X(kTetFaces[f][0]), &B = X(kTetFaces[f][1]), &C = X(kTetFaces[f][2]);
     Vec3 nrm = (B - A).cross(C - A);
     if (nrm.dot(A - X(static_cast<int>(f))) < 0) nrm = -nrm;  // away from the opposite corner
     nrm.normalize();
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; i + j < n; ++j)
-        boundary_.push_back({A + ((i + 1.0 / 3) * (B - A) + (j + 1.0 / 3) * (C - A)) / n, nrm});
+    for (int i = 0; i <= n; ++i)  // the face's lattice, its edges and corners included
+      for (int j = 0; i + j <= n; ++j)
+        boundary_.push_back({A + (i * (B - A) + j * (C - A)) / n, nrm});
   }
 }
 
-std::vector<std::string> SolidLengthScale::names() const {
+std::vector<char> SolidLengthScale::edge_samples(int i, const std::vector<double>& th) const {
+  const Feature3& f = ls_->features()[static_cast<size_t>(i)];
+  const bool cylinder = f.type() == Feature3::Type::kCylinder;
+  const bool through = f.type() == Feature3::Type::kThroughHole || (cylinder && !(th[4] > 0));
+  const bool pocket = f.type() == Feature3::Type::kPocket;
+  if (!through && !pocket) return {};
+  const Mat3& A = f.frame().axes;
+  const Vec3 a = A.col(2);
+  const Vec3 c =
+      cylinder ? Vec3(th[0], th[1], th[2]) : Vec3(f.frame().origin + A * Vec3(th[0], th[1], 0));
+  // where the axis line leaves the body: the samples nearest it among those facing +a and among
+  // those facing −a (a pocket: facing −a, its entry, short of half its depth)
+  const double half_depth = pocket ? 0.5 * th[profile_size(f.profile())] : 0;
+  double best[2] = {INFINITY, INFINITY};
+  int anchor[2] = {-1, -1};
+  for (size_t k = 0; k < boundary_.size(); ++k) {
+    const double na = boundary_[k].n.dot(a);
+    if (std::abs(na) < 1e-6 || (pocket && na > 0)) continue;
+    const Vec3 d = boundary_[k].x - c;
+    const double t = d.dot(a), r = (d - t * a).norm();
+    if (pocket && t >= half_depth) continue;
+    const int side = na < 0 ? 0 : 1;
+    if (r < best[side]) best[side] = r, anchor[side] = static_cast<int>(k);
+  }
+  std::vector<char> use(boundary_.size(), 1);
+  for (const int k0 : anchor) {
+    if (k0 < 0) continue;
+    const Vec3& n0 = boundary_[static_cast<size_t>(k0)].n;
+    for (size_t k = 0; k < boundary_.size(); ++k)
+      if (boundary_[k].n.dot(n0) >= std::sqrt(0.5)) use[k] = 0;  // within 45° of the face's
+  }
+  return use;
+}
+
+double SolidLengthScale::shape_distance(int i, const Vec3& x,
+                                        const std::vector<std::vector<double>>& theta) const {
+  const auto& th = theta[static_cast<size_t>(i)];
+  const auto& p = profile_[static_cast<size_t>(i)];
+  const QuarterArc arc = p ? arc_of(p->type(), th) : QuarterArc(0, 0, 1, 1);
+  return shape_distance3<double>(ls_->features()[static_cast<size_t>(i)], p ? &*p : nullptr, &arc,
+                                 x, th.data());
+}
+
+std::vector<std::string> SolidLengthScale::all_names() const {
   std::vector<std::string> n;
   const auto& F = ls_->features();
   for (int i = 0; i < nd_; ++i) {
-    if (!F[static_cast<size_t>(i)].hole()) continue;
+    if (!void_[static_cast<size_t>(i)]) continue;
     if (o_.min_ligament > 0)
       for (int j = i + 1; j < static_cast<int>(F.size()); ++j)
-        if (j >= nd_ || F[static_cast<size_t>(j)].hole())
+        if (j >= nd_ || void_[static_cast<size_t>(j)])
           n.push_back("ligament." + F[static_cast<size_t>(i)].name() + "." +
                       F[static_cast<size_t>(j)].name());
     if (o_.min_edge > 0) n.push_back("edge." + F[static_cast<size_t>(i)].name());
@@ -243,7 +372,7 @@ std::vector<std::string> SolidLengthScale::names() const {
   return n;
 }
 
-std::vector<LengthScaleConstraint> SolidLengthScale::evaluate(const Vec& p) const {
+std::vector<LengthScaleConstraint> SolidLengthScale::evaluate_all(const Vec& p) const {
   const auto& F = ls_->features();
   const int nf = static_cast<int>(F.size());
   const auto theta = ls_->values(p);
@@ -319,17 +448,14 @@ std::vector<LengthScaleConstraint> SolidLengthScale::evaluate(const Vec& p) cons
     out.push_back(std::move(c));
   };
   for (int i = 0; i < nd_; ++i) {
-    if (!feature(i).hole()) continue;
+    if (!void_[static_cast<size_t>(i)]) continue;
     if (o_.min_ligament > 0)
       for (int j = i + 1; j < nf; ++j)
-        if (j >= nd_ || feature(j).hole())
+        if (j >= nd_ || void_[static_cast<size_t>(j)])
           aggregate("ligament", i, j, o_.min_ligament, volume_, dv, {});
     if (o_.min_edge > 0)
-      aggregate(
-          "edge", i, -1, o_.min_edge, boundary_, db,
-          feature(i).type() == Feature3::Type::kCylinder && theta[static_cast<size_t>(i)][4] > 0
-              ? std::vector<char>{}
-              : edge_use_[static_cast<size_t>(i)]);
+      aggregate("edge", i, -1, o_.min_edge, boundary_, db,
+                edge_samples(i, theta[static_cast<size_t>(i)]));
   }
   if (o_.min_member > 0)
     for (int i = 0; i < nd_; ++i) {

@@ -177,12 +177,25 @@ void check_member_exponents(const std::string& feature, const std::vector<ParamB
     const double lo =
         pb.variable < 0 ? pb.offset : std::min(pb.value(d.lower()), pb.value(d.upper()));
     if (lo < 2)
-      throw SetupError("optimization.length_scale",
-                       "min_member: feature '" + feature + "' has an exponent below 2 (" +
-                           std::to_string(lo) +
+      throw SetupError("optimization.length_scale.min_member",
+                       "feature '" + feature + "' has an exponent below 2 (" + std::to_string(lo) +
                            ") within the design bounds, where its width is not 2 min(a, b); "
                            "set min_member to 0 or keep xi, eta >= 2");
   }
+}
+
+// A bound longer than the body itself is no length scale of it (a length in mm given as m?).
+void check_bounds_fit(const LengthScaleOptions& o, const std::string& body, double size) {
+  for (const auto& [key, v] : {std::pair{"min_ligament", o.min_ligament},
+                               {"min_edge", o.min_edge},
+                               {"min_member", o.min_member},
+                               {"no_cut", o.no_cut}})
+    if (v > size)
+      throw SetupError("optimization.length_scale." + std::string(key),
+                       std::to_string(v) + " m exceeds the size of body '" + body + "' (" +
+                           std::to_string(size) +
+                           " m, its bounding box's largest extent): lengths are in metres "
+                           "(min_size sets the three bounds together)");
 }
 
 }  // namespace
@@ -206,6 +219,10 @@ void DesignProblem::add_length_scales() {
                      "the design has no level-set geometry to constrain (design.geometry)");
   for (const BodyDesign& b : d.bodies) {
     const LengthScaleOptions o = length_scale_options(median_element_size(b.body->mesh));
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (const Vec2& x : b.body->mesh.nodes)
+      for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], x[k]), hi[k] = std::max(hi[k], x[k]);
+    check_bounds_fit(o, b.body->name, std::max(hi[0] - lo[0], hi[1] - lo[1]));
     const LevelSet& ls = b.map->level_set();
     for (int i = 0; i < b.num_design_features && o.min_member > 0; ++i)
       if (ls.features()[static_cast<size_t>(i)].type() == Feature::Type::kBSpline)
@@ -223,6 +240,7 @@ void DesignProblem::add_length_scales() {
   }
   for (const SolidBodyDesign& b : d.solid_bodies) {
     const LengthScaleOptions o = length_scale_options(median_longest_edge(b.body->mesh));
+    check_bounds_fit(o, b.body->name, b.body->mesh.size());
     if (o.no_cut > 0)
       throw SetupError("optimization.length_scale.no_cut",
                        "no_cut is planar only, and '" + b.body->name +
@@ -245,6 +263,7 @@ void DesignProblem::add_length_scale(const std::string& body,
   BodyLengthScale bl;
   bl.body = body;
   bl.measures = std::move(measures);
+  bl.measures->leave_out_overlaps(design().initial());  // one void by design: no ligament
   const auto names = bl.measures->names();
   const auto values = bl.measures->evaluate(design().initial());  // the bounds, in names' order
   for (size_t k = 0; k < names.size(); ++k) {
@@ -357,7 +376,9 @@ nlohmann::json DesignProblem::length_scale_json(const Vec& p) const {
                    {"satisfied", c.value >= c.bound},
                    {"error_bound", c.error_bound},
                    {"at", std::vector<double>(c.at.data(), c.at.data() + c.at.size())}});
-    J[bl.body] = {{"spacing", bl.measures->spacing()}, {"constraints", a}};
+    J[bl.body] = {{"spacing", bl.measures->spacing()},
+                  {"constraints", a},
+                  {"left_out", bl.measures->left_out()}};
   }
   return J;
 }

@@ -6,6 +6,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/json_file.hpp"
+#include "lsmbs/geometry/solid_resolution.hpp"
 #include "lsmbs/io/design_picture.hpp"
 #include "lsmbs/io/optimization_spec.hpp"
 #include "lsmbs/io/output.hpp"
@@ -111,6 +112,8 @@ nlohmann::json solid_body_json(const Case& cs, const Vec& p, const ModelParams& 
                        {"mu_min", mu_min},
                        {"subgrid", map.options().subgrid},
                        {"band", map.options().band}};
+  jb["resolution"] = resolution_json(
+      judge_solid_resolution(bd.body->mesh, map.level_set(), bd.num_design_features, p));
   if (o.out_dir.empty()) return jb;
   const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
   const SolidMesh& mesh = bd.body->mesh;
@@ -177,6 +180,10 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
     Vec mu;
     d.bodies[b].map->map(p, mu, nullptr, &counts[b]);
   }
+  // the length-scale section is checked before anything is written (a bad bound is an input
+  // error that leaves no files)
+  nlohmann::json length_warnings = nlohmann::json::array();
+  const nlohmann::json length_scale = length_scale_report(cs, p, length_warnings);
   if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
   nlohmann::json bodies = nlohmann::json::array();
   std::vector<std::string> files = {"summary.json"};
@@ -196,13 +203,13 @@ nlohmann::json run_geometry(const Case& cs, const Vec& p, const GeometryRunOptio
   for (const auto& b : bodies) {
     const std::string who =
         bodies.size() > 1 ? "body '" + b["body"].get<std::string>() + "': " : std::string();
-    if (!b.contains("resolution")) continue;  // a solid body: not judged yet
     const auto& r = b["resolution"];
     if (const auto f = r["pieces_flag"].get<std::string>(); !f.empty())
       S["warnings"].push_back(who + f);
     for (const auto& f : r["flags"]) S["warnings"].push_back(who + f.get<std::string>());
   }
-  S["length_scale"] = length_scale_report(cs, p, S["warnings"]);
+  S["length_scale"] = length_scale;
+  for (const auto& w : length_warnings) S["warnings"].push_back(w);
   S["responses"] = nlohmann::json::object();
   for (const auto& b : bodies) S["responses"]["mass." + b["body"].get<std::string>()] = b["mass"];
   S["units"] = {{"responses", nlohmann::json::object()}};

@@ -8,6 +8,7 @@
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
 #include "lsmbs/design/design.hpp"
+#include "lsmbs/geometry/solid_resolution.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 #include "lsmbs/sensitivity/wire.hpp"
 
@@ -18,11 +19,14 @@ namespace {
 // designed body (the mapping's eq. 5 rescaled: the same H, a smaller floor).
 ModelParams weaker_void(const Study& s, const Vec& p, double factor) {
   ModelParams params = parameters_at(s, p);
-  for (const BodyDesign& b : s.design->bodies) {
-    const double m = b.map->options().mu_min, w = m * factor;
-    Vec& mu = params.fields[static_cast<size_t>(b.body->field)];
+  auto rescale = [&](double m, int field) {
+    const double w = m * factor;
+    Vec& mu = params.fields[static_cast<size_t>(field)];
     for (Eigen::Index e = 0; e < mu.size(); ++e) mu[e] = w + (1 - w) * (mu[e] - m) / (1 - m);
-  }
+  };
+  for (const BodyDesign& b : s.design->bodies) rescale(b.map->options().mu_min, b.body->field);
+  for (const SolidBodyDesign& b : s.design->solid_bodies)
+    rescale(b.map->options().mu_min, b.body->field);
   return params;
 }
 
@@ -127,7 +131,7 @@ void ersatz_check(const Conditions& c, const OptimizationSpec& spec, const Vec& 
   compare(gather(c, as_mapped), gather(c, weak), spec, J);
 }
 
-nlohmann::json point(const Vec2& x) { return nlohmann::json::array({x.x(), x.y()}); }
+nlohmann::json point(const Vec& x) { return std::vector<double>(x.data(), x.data() + x.size()); }
 
 }  // namespace
 
@@ -139,6 +143,7 @@ nlohmann::json resolution_json(const ResolutionReport& R) {
                                      ? nlohmann::json::array({p.first})
                                      : nlohmann::json::array({p.first, p.second})},
                      {"width", p.width},
+                     {"threshold", p.threshold},
                      {"at", point(p.at)},
                      {"unresolved", p.unresolved}});
   return {{"element_size", R.element_size},
@@ -205,12 +210,23 @@ DesignJudgement judge_design(const Conditions& c, const OptimizationSpec& spec, 
   for (const BodyDesign& b : d.bodies) {
     DesignJudgement::Body jb{b.body->name, judge_resolution(b.body->mesh, b.map->level_set(),
                                                             b.map->level_set().values(p), ro)};
-    const std::string who = d.bodies.size() > 1 ? "body '" + b.body->name + "': " : "";
+    const size_t bodies = d.bodies.size() + d.solid_bodies.size();
+    const std::string who = bodies > 1 ? "body '" + b.body->name + "': " : "";
     for (const std::string& f : jb.resolution.flags()) J.resolution_flags.push_back(who + f);
     if (auto f = jb.resolution.pieces_flag(); !f.empty()) J.structure_flags.push_back(who + f);
     J.bodies.push_back(std::move(jb));
   }
-  if (spec.judge.ersatz && !d.bodies.empty()) ersatz_check(c, spec, p, run, J);
+  for (const SolidBodyDesign& b : d.solid_bodies) {
+    DesignJudgement::Body jb{b.body->name, judge_solid_resolution(b.body->mesh, b.map->level_set(),
+                                                                  b.num_design_features, p, ro)};
+    const size_t bodies = d.bodies.size() + d.solid_bodies.size();
+    const std::string who = bodies > 1 ? "body '" + b.body->name + "': " : "";
+    for (const std::string& f : jb.resolution.flags()) J.resolution_flags.push_back(who + f);
+    if (auto f = jb.resolution.pieces_flag(); !f.empty()) J.structure_flags.push_back(who + f);
+    J.bodies.push_back(std::move(jb));
+  }
+  if (spec.judge.ersatz && !(d.bodies.empty() && d.solid_bodies.empty()))
+    ersatz_check(c, spec, p, run, J);
   return J;
 }
 

@@ -111,10 +111,6 @@ std::vector<std::string> warnings_of(const Case& cs, const OptimizeRun& run) {
   if (auto x = d.coincident_features(res.p); !x.empty()) w.push_back("final design: " + x);
   if (run.judgement)
     for (const auto& f : run.judgement->flags()) w.push_back("final design: " + f);
-  for (const auto& b : d.solid_bodies)
-    w.push_back("final design: the design of solid body '" + b.body->name +
-                "' is not judged (the judgement of resolution and load paths is planar only; "
-                "docs/designs.md): check its ligaments against the mesh in the VTU's mu and phi");
   return w;
 }
 
@@ -235,8 +231,8 @@ OptimizeRun run_optimize(const Case& cs, const OptimizationSpec& spec,
   run.result = optimize(prob, oo);
   const OptimizeResult& res = run.result;
   // the final design judged: a structure the mesh resolves, no load path through void
-  if (spec.judge.enabled && !d.bodies.empty() && res.final.ok && !res.interrupted &&
-      res.failure.empty()) {
+  if (spec.judge.enabled && !(d.bodies.empty() && d.solid_bodies.empty()) && res.final.ok &&
+      !res.interrupted && res.failure.empty()) {
     try {
       run.judgement = judge_design(prob.conditions(), spec, res.p, executor);
     } catch (const Interrupted&) {  // the optimization's result stands; unjudged

@@ -96,7 +96,7 @@ TEST(SolidLengthScale, SpheresLigamentEdgeAndMember) {
   const SolidLengthScale L(box(), ls, 2, o);
   EXPECT_DOUBLE_EQ(L.spacing(), 0.00125);
   EXPECT_EQ(L.num_volume_samples(), 12 * 8 * 6 * 64);
-  EXPECT_EQ(L.num_boundary_samples(), 2 * (12 * 8 + 12 * 6 + 8 * 6) * 16);
+  EXPECT_EQ(L.num_boundary_samples(), 2 * (12 * 8 + 12 * 6 + 8 * 6) * 25);
   const Vec p = (Vec(4) << 0.02, 0.008, 0.042, 0.006).finished();
   const auto c = L.evaluate(p);
   ASSERT_EQ(c.size(), 5u);  // ligament, edge A, edge B, member A, member B
@@ -237,4 +237,125 @@ TEST(SolidLengthScale, NoCutIsRefused) {
   LengthScaleOptions o;
   o.no_cut = 0.005;
   EXPECT_THROW(SolidLengthScale(box(), ls, 2, o), lsmbs::Error);
+}
+
+namespace {
+
+// the least distance from an infinite cylinder (axis through c along unit a, radius r) to the
+// rectangle {o + s·e1 + t·e2 : s, t ∈ [0, 1]}, by a 600 × 600 grid of it
+double cylinder_to_rectangle(const Vec3& c, const Vec3& a, double r, const Vec3& o, const Vec3& e1,
+                             const Vec3& e2) {
+  double best = INFINITY;
+  for (int i = 0; i <= 600; ++i)
+    for (int j = 0; j <= 600; ++j) {
+      const Vec3 d = o + (i / 600.0) * e1 + (j / 600.0) * e2 - c;
+      best = std::min(best, (d - d.dot(a) * a).norm() - r);
+    }
+  return best;
+}
+
+}  // namespace
+
+TEST(SolidLengthScale, ATiltedThroughHoleOpensTheFacesItsAxisLeavesThrough) {
+  // a 100 × 60 × 60 mm box of 5 mm bricks; a cylinder of r = 5 mm through it (length 0), its
+  // axis 40° from z in the x-z plane, centred at (cx, 30, 30) mm: the axis leaves through the
+  // z faces for cx ≥ 25.2 mm, and they are not edges
+  const SolidMesh m = SolidMesh::box(Vec3::Zero(), Vec3(0.1, 0.06, 0.06), {20, 12, 12});
+  const double t = 40 * std::acos(-1.0) / 180;
+  const Vec3 a(std::sin(t), 0, std::cos(t));
+  const LevelSet3 ls(
+      {Feature3("C", Feature3::Type::kCylinder,
+                {var(0), constant(0.03), constant(0.03), constant(0.005), constant(0)}, true,
+                frame(Vec3::Zero(), a, Vec3::UnitY()))},
+      LevelSetNode::all_of(1), 1);
+  LengthScaleOptions o;
+  o.min_edge = 0.006;
+  const SolidLengthScale L(m, ls, 1, o);
+  // centred: the nearest lateral face (x = 100 mm, near the top) by brute force, 14 mm
+  const double cx = 0.05;
+  double ref = INFINITY;
+  const Vec3 c(cx, 0.03, 0.03);
+  const Vec3 X(0.1, 0, 0), Y(0, 0.06, 0), Z(0, 0, 0.06);
+  const Vec3 O = Vec3::Zero();
+  const std::vector<std::pair<Vec3, Vec3>> lateral = {{O, Y}, {X, Y}, {O, X}, {Y, X}};
+  for (const auto& [origin, e1] : lateral)
+    ref = std::min(ref, cylinder_to_rectangle(c, a, 0.005, origin, e1, Z));
+  EXPECT_NEAR(ref, 0.014, 1e-3);
+  const auto e = L.evaluate(Vec::Constant(1, cx))[0];
+  expect_bracket(e, ref, 1e-4);
+  check_gradients(L, Vec::Constant(1, cx));
+  // at cx = 28 mm the axis still leaves through the bottom face (at x = 2.8 mm), but the
+  // cylinder's wall breaks through the face x = 0 beside it: a negative edge ligament
+  EXPECT_LT(L.evaluate(Vec::Constant(1, 0.028))[0].value, -0.0025);  // −2.9 mm at (0, 30, 0)
+}
+
+TEST(SolidLengthScale, SuperEllipsoidDistanceIsExactOutside) {
+  // a ξ = 4 super-ellipsoid (a, b, c = 30, 10, 8 mm) at the centre of a 100 mm cube of 10 mm
+  // bricks and a sphere of r = 5 mm at z = 30 mm above it: ligament 30 − 8 − 5 = 17 mm; edge
+  // 50 − 30 = 20 mm (the first-order estimate gives 5.6 and 12.4 mm)
+  const SolidMesh cube = SolidMesh::box(Vec3::Constant(-0.05), Vec3::Constant(0.1), {10, 10, 10});
+  const LevelSet3 ls({Feature3("E", Feature3::Type::kSuperEllipsoid,
+                               {constant(0), constant(0), constant(0), var(0), constant(0.01),
+                                constant(0.008), constant(4)},
+                               true),
+                      Feature3("S", Feature3::Type::kSphere,
+                               {constant(0), constant(0), constant(0.03), var(1)}, true)},
+                     LevelSetNode::all_of(2), 2);
+  LengthScaleOptions o;
+  o.min_ligament = o.min_edge = 0.01;
+  const SolidLengthScale L(cube, ls, 2, o);
+  const Vec p = (Vec(2) << 0.03, 0.005).finished();
+  const auto c = L.evaluate(p);
+  expect_bracket(find(c, "ligament.E.S"), 0.017, 1e-4);
+  expect_bracket(find(c, "edge.E"), 0.02, 1e-4);
+  check_gradients(L, p);
+  // off the axes: against the least distance to 2000 × 1000 points of its surface
+  // (x, y, z) = (a cη^(1/2) cω^(1/2), b cη^(1/2) sω^(1/2), c sη^(1/2)) with signed powers
+  const auto theta = ls.values(p);
+  auto spow = [](double v) { return std::copysign(std::sqrt(std::abs(v)), v); };
+  for (const Vec3& x : {Vec3(0.04, 0.02, 0.01), Vec3(0.01, 0.03, -0.02), Vec3(0.032, 0.0, 0.009)}) {
+    double best = INFINITY;
+    for (int i = 0; i <= 1000; ++i) {
+      const double eta = std::acos(-1.0) * (i / 1000.0 - 0.5);
+      for (int j = 0; j < 2000; ++j) {
+        const double om = 2 * std::acos(-1.0) * j / 2000.0;
+        const Vec3 y(0.03 * spow(std::cos(eta)) * spow(std::cos(om)),
+                     0.01 * spow(std::cos(eta)) * spow(std::sin(om)), 0.008 * spow(std::sin(eta)));
+        best = std::min(best, (x - y).norm());
+      }
+    }
+    EXPECT_NEAR(L.shape_distance(0, x, theta), best, 2e-6) << x.transpose();
+  }
+}
+
+TEST(SolidLengthScale, OverlappingFeaturesAndNegatedOnesBoundNoLigament) {
+  // a counterbore: a through-hole (r = 10 mm) and a concentric pocket (r = 20 mm, 4 mm deep)
+  // in a 100 × 100 × 10 mm plate overlap by design: their ligament (−10 mm, never positive) is
+  // left out; a sphere under a NOT is material, not void: no ligament or edge of its own
+  const SolidMesh m = SolidMesh::box(Vec3::Zero(), Vec3(0.1, 0.1, 0.01), {10, 10, 2});
+  const Frame3 bottom = frame(Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX());
+  LevelSetNode root = LevelSetNode::all_of(2);
+  LevelSetNode core;  // AND(hole, bore, NOT(core))
+  core.op = LevelSetNode::Op::kNot;
+  core.children.push_back(LevelSetNode{LevelSetNode::Op::kFeature, 2, 0, {}});
+  root.children.push_back(core);
+  const LevelSet3 ls(
+      {Feature3("hole", Feature3::Type::kThroughHole, {constant(0.05), constant(0.05), var(0)},
+                true, bottom, Feature::Type::kCircle),
+       Feature3("bore", Feature3::Type::kPocket,
+                {constant(0.05), constant(0.05), constant(0.02), constant(0.004)}, true, bottom,
+                Feature::Type::kCircle),
+       Feature3("core", Feature3::Type::kSphere,
+                {constant(0.02), constant(0.02), constant(0.005), constant(0.003)}, true)},
+      root, 1);
+  LengthScaleOptions o;
+  o.min_ligament = o.min_edge = 0.003;
+  SolidLengthScale L(m, ls, 3, o);
+  EXPECT_EQ(L.names(), (std::vector<std::string>{"ligament.hole.bore", "edge.hole", "edge.bore"}));
+  const Vec p = Vec::Constant(1, 0.01);
+  EXPECT_LT(find(L.evaluate(p), "ligament.hole.bore").value, -0.009);
+  EXPECT_EQ(L.leave_out_overlaps(p), std::vector<std::string>{"ligament.hole.bore"});
+  EXPECT_EQ(L.names(), (std::vector<std::string>{"edge.hole", "edge.bore"}));
+  ASSERT_EQ(L.evaluate(p).size(), 2u);
+  expect_bracket(L.evaluate(p)[1], 0.006, 1e-9);  // the bore's floor: 10 − 4 mm
 }

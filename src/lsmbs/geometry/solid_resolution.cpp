@@ -1,0 +1,202 @@
+#include "lsmbs/geometry/solid_resolution.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <unordered_map>
+
+#include "lsmbs/fem/solid_cell.hpp"
+#include "lsmbs/geometry/length_scale_parts.hpp"
+#include "lsmbs/geometry/solid_length_scale.hpp"
+
+namespace lsmbs {
+namespace {
+
+double cell_volume(const SolidMesh& m, int e) {
+  const auto& c = m.cells[static_cast<size_t>(e)];
+  if (c.size() == 8) {
+    double V = 0, detJ = 0;
+    const double g = 1 / std::sqrt(3.0);
+    for (const auto& k : kHexCorner) {
+      hex_point(m, e, Vec3(g * k[0], g * k[1], g * k[2]), detJ);
+      V += detJ;
+    }
+    return std::abs(V);
+  }
+  Mat3 J;
+  for (int k = 0; k < 3; ++k)
+    J.col(k) = m.nodes[static_cast<size_t>(c[static_cast<size_t>(k + 1)])] -
+               m.nodes[static_cast<size_t>(c[0])];
+  return std::abs(J.determinant()) / 6;
+}
+
+// Cell e's extent along the unit direction d.
+double extent(const SolidMesh& m, int e, const Vec3& d) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (int k : m.cells[static_cast<size_t>(e)]) {
+    const double t = d.dot(m.nodes[static_cast<size_t>(k)]);
+    lo = std::min(lo, t), hi = std::max(hi, t);
+  }
+  return hi - lo;
+}
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(static_cast<size_t>(n)) {
+    std::iota(parent.begin(), parent.end(), 0);
+  }
+  int find(int a) {
+    while (parent[static_cast<size_t>(a)] != a)
+      a = parent[static_cast<size_t>(a)] =
+          parent[static_cast<size_t>(parent[static_cast<size_t>(a)])];
+    return a;
+  }
+  void join(int a, int b) { parent[static_cast<size_t>(find(a))] = find(b); }
+};
+
+// The volumes of the connected pieces of material, largest first (pieces below `smallest` out).
+std::vector<double> pieces(const SolidLengthScale& L, const LevelSet3& ls,
+                           const std::vector<std::vector<double>>& theta, double spacing,
+                           double smallest) {
+  const int n = L.num_volume_samples();
+  std::vector<double> D(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k)
+    D[static_cast<size_t>(k)] = ls.evaluate(L.volume_sample(k), theta, nullptr);
+  const double r = 1.01 * std::sqrt(3.0) * spacing;
+  // a hash of the material samples by cube of side r
+  auto key = [&](const Vec3& x) {
+    const auto c = (x / r).array().floor().cast<long>();
+    return (c[0] * 73856093L) ^ (c[1] * 19349663L) ^ (c[2] * 83492791L);
+  };
+  std::unordered_map<long, std::vector<int>> cubes;
+  for (int k = 0; k < n; ++k)
+    if (D[static_cast<size_t>(k)] > 0) cubes[key(L.volume_sample(k))].push_back(k);
+  UnionFind uf(n);
+  for (int k = 0; k < n; ++k) {
+    if (!(D[static_cast<size_t>(k)] > 0)) continue;
+    const Vec3& x = L.volume_sample(k);
+    for (int a = -1; a <= 1; ++a)
+      for (int b = -1; b <= 1; ++b)
+        for (int c = -1; c <= 1; ++c) {
+          const auto it = cubes.find(key(x + r * Vec3(a, b, c)));
+          if (it == cubes.end()) continue;
+          for (int j : it->second) {
+            if (j <= k) continue;
+            const Vec3& y = L.volume_sample(j);
+            const double d = (x - y).norm();
+            if (d > r) continue;
+            // a boundary may pass between two samples nearer to it than their distance
+            if (std::min(D[static_cast<size_t>(k)], D[static_cast<size_t>(j)]) < d &&
+                !(ls.evaluate(0.5 * (x + y), theta, nullptr) > 0))
+              continue;
+            uf.join(k, j);
+          }
+        }
+  }
+  std::unordered_map<int, double> volume;
+  for (int k = 0; k < n; ++k)
+    if (D[static_cast<size_t>(k)] > 0) volume[uf.find(k)] += L.volume_weight(k);
+  std::vector<double> v;
+  for (const auto& [root, V] : volume)
+    if (V >= smallest) v.push_back(V);
+  std::sort(v.rbegin(), v.rend());
+  return v;
+}
+
+}  // namespace
+
+ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& ls, int num_design,
+                                        const Vec& p, const ResolutionOptions& o) {
+  ResolutionReport R;
+  R.solid = true;
+  R.element_size = median_longest_edge(mesh);
+  R.threshold = o.min_elements * R.element_size;
+  R.spacing = R.element_size / o.samples_per_element;
+  LengthScaleOptions lo;
+  lo.min_ligament = lo.min_edge = lo.min_member = R.threshold;
+  lo.tolerance = 1e-3;
+  lo.spacing = R.spacing;
+  const SolidLengthScale L(mesh, ls, num_design, lo);
+  const auto theta = ls.values(p);
+  const auto& F = ls.features();
+  const std::vector<char> voids = length_scale_parts::void_features(ls.root(), F);
+  std::vector<Vec3> centroid;
+  for (const auto& cell : mesh.cells) {
+    Vec3 c = Vec3::Zero();
+    for (int k : cell) c += mesh.nodes[static_cast<size_t>(k)];
+    centroid.push_back(c / static_cast<double>(cell.size()));
+  }
+  auto cell_near = [&](const Vec3& x) {
+    int best = 0;
+    for (int e = 1; e < mesh.num_elements(); ++e)
+      if ((centroid[static_cast<size_t>(e)] - x).squaredNorm() <
+          (centroid[static_cast<size_t>(best)] - x).squaredNorm())
+        best = e;
+    return best;
+  };
+  auto index = [&](const std::string& name) {
+    for (size_t i = 0; i < F.size(); ++i)
+      if (F[i].name() == name) return static_cast<int>(i);
+    return -1;
+  };
+  // ∇s_i(x) by central differences (s is a distance: |∇s| = 1 off its medial set)
+  const double eta = 1e-6 * R.element_size;
+  auto across = [&](int i, const Vec3& x) {
+    Vec3 g;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 a = x, b = x;
+      a[k] += eta, b[k] -= eta;
+      g[k] = (L.shape_distance(i, a, theta) - L.shape_distance(i, b, theta)) / (2 * eta);
+    }
+    return g;
+  };
+  // the direction from feature i's centre c in which its boundary is nearest (of width w)
+  auto narrowest = [&](int i, const Vec3& c, double w) {
+    const Feature3& f = F[static_cast<size_t>(i)];
+    const Mat3& A = f.frame().axes;
+    std::vector<Vec3> dirs;
+    for (int k = 0; k < 16; ++k) {
+      const double t = std::numbers::pi * k / 16;
+      dirs.push_back(std::cos(t) * A.col(0) + std::sin(t) * A.col(1));
+    }
+    if (f.type() != Feature3::Type::kPocket && f.type() != Feature3::Type::kThroughHole)
+      dirs.push_back(A.col(2));
+    Vec3 best = dirs.front();
+    double sb = -INFINITY;
+    for (const Vec3& d : dirs)
+      if (const double s = L.shape_distance(i, c + 0.45 * w * d, theta); s > sb) sb = s, best = d;
+    return best;
+  };
+  for (const LengthScaleConstraint& c : L.evaluate(p)) {
+    const bool hole = c.kind == "member";
+    if (!hole && (c.value < 0 || c.value >= 3 * R.threshold)) continue;
+    // a solid design feature has no void to measure; a non-design region is material itself
+    if (hole && !voids[static_cast<size_t>(index(c.first))]) continue;
+    if (!c.second.empty() && index(c.second) >= num_design) continue;
+    NarrowPart q;
+    q.kind = hole ? NarrowPart::Kind::kHole : NarrowPart::Kind::kLigament;
+    q.first = c.first;
+    q.second = c.kind == "edge" ? "surface" : c.second;
+    q.width = c.value;
+    q.at = c.at;
+    const Vec3 x(c.at[0], c.at[1], c.at[2]);
+    const int i = index(c.first);
+    Vec3 d = hole ? narrowest(i, x, c.value) : across(i, x);
+    if (!hole && d.norm() < 0.5 && !c.second.empty()) d = across(index(c.second), x);
+    d = d.norm() > 0 ? Vec3(d.normalized()) : Vec3::UnitX();
+    q.threshold = o.min_elements * extent(mesh, cell_near(x), d);
+    q.unresolved = q.width < q.threshold;
+    R.parts.push_back(q);
+  }
+  std::stable_sort(R.parts.begin(), R.parts.end(),
+                   [](const NarrowPart& a, const NarrowPart& b) { return a.width < b.width; });
+  std::vector<double> V;
+  for (int e = 0; e < mesh.num_elements(); ++e) V.push_back(cell_volume(mesh, e));
+  std::nth_element(V.begin(), V.begin() + static_cast<long>(V.size() / 2), V.end());
+  R.pieces = pieces(L, ls, theta, R.spacing, 0.5 * V[V.size() / 2]);
+  R.piece_spacing = R.spacing;
+  return R;
+}
+
+}  // namespace lsmbs
