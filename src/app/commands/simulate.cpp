@@ -63,6 +63,8 @@ int simulate_command(const CommonArgs& c, const SimulateArgs& a) {
     if (s.halvings)
       std::printf("  step halvings: %ld (first at t = %g s)\n", s.halvings,
                   s.halving_times.front());
+    if (c.verbose && !ro.idas)  // the factorization "auto" chose (summary.json: counts)
+      std::printf("  linear solver: %s\n", s.linear_solver.c_str());
     if (res.summary.contains("warnings"))
       for (const auto& w : res.summary["warnings"])
         std::printf("  warning: %s\n", w.get<std::string>().c_str());
