@@ -631,21 +631,7 @@ def write_section_png(shape, path, axis=None, at=None, width=1200):
     with _Gmsh() as gmsh:
         occ = gmsh.model.occ
         vols = _solid_component(gmsh, shape, [])
-        corner = list(lo)
-        corner[k] = c
-        size = [0.0, 0.0, 0.0]
-        size[u], size[v] = 2 * extent[u], 2 * extent[v]
-        corner[u] -= extent[u] / 2
-        corner[v] -= extent[v] / 2
-        plane = occ.addRectangle(0, 0, 0, size[u], size[v])
-        # the rectangle lies in z = 0 with sides along x and y: turn it into the (u, v) plane
-        if k == 0:
-            occ.rotate([(2, plane)], 0, 0, 0, 0, 1, 0, -math.pi / 2)  # z -> x, x -> -z
-            occ.rotate([(2, plane)], 0, 0, 0, 1, 0, 0, math.pi / 2)
-        elif k == 1:
-            occ.rotate([(2, plane)], 0, 0, 0, 1, 0, 0, math.pi / 2)
-        box = occ.getBoundingBox(2, plane)
-        occ.translate([(2, plane)], *[corner[i] - box[i] for i in range(3)])
+        plane = _plane(occ, lo, hi, k, c)
         cut, _ = occ.intersect([(3, w) for w in vols], [(2, plane)], removeObject=True,
                                removeTool=True)
         occ.synchronize()
@@ -693,18 +679,23 @@ def write_section_png(shape, path, axis=None, at=None, width=1200):
 
 def write_msh_solid(shape, path, size, layers=None):
     """A body-fitted hexahedral mesh (Gmsh 4.1 ASCII, metres) of a solid design whose features
-    are all through-holes along one edge direction of its box: the part is then a prism, so its
-    section (the exact OpenCASCADE volume's face on the lower side) is meshed by quadrilaterals
-    of edge about `size` (Gmsh's blossom full-quad recombination) and extruded along the holes'
-    axis in `layers` layers of hexahedra (default: the prism's length over `size`, at least one).
-    Node sets: the box's faces on which the part has surface (xmin ... zmax, the names a box mesh
-    gives them), and the volume "component". Returns (path, {node set: surfaces}).
+    are through-holes and pockets along one edge direction k of its box (pockets machined from
+    the box's faces across k): the part is then a stack of prisms, slabs between the box's faces
+    and the pockets' floors. Each slab's section is the exact OpenCASCADE volume's section at the
+    slab's middle; the sections, brought to one plane and fragmented together, are meshed once by
+    quadrilaterals of edge about `size` (Gmsh's blossom full-quad recombination) and extruded
+    slab by slab along k, so the slabs' hexahedra share their faces; the columns that are void in
+    a slab (a pocket) are left out of it. `layers`: the number of layers of hexahedra along k,
+    shared among the slabs by their thicknesses, at least one each (default: each slab's
+    thickness over `size`). Node sets: the box's faces on which the part has surface (xmin ...
+    zmax, the names a box mesh gives them), and the volume "component". Returns (path,
+    {node set: surfaces}).
 
-    The mesh is checked before it is written: hexahedra only, every section quadrilateral convex
-    and of one orientation, and the section's area within 5 % of the holes' area of the exact
-    one (the polygons inscribed in a circle of 12 segments lose 4.5 %); a size too coarse for a
-    feature fails one of these, with the advice to lower it. Gmsh runs in a child process: an
-    abort inside it (it has some on meshes it cannot recombine) becomes a RuntimeError."""
+    The mesh is checked before it is written: hexahedra only, every quadrilateral across k convex
+    and of one orientation, and the mesh's volume within 5 % of the void's of the exact one (the
+    polygons inscribed in a circle of 12 segments lose 4.5 %); a size too coarse for a feature
+    fails one of these, with the advice to lower it. Gmsh runs in a child process: an abort
+    inside it (it has some on meshes it cannot recombine) becomes a RuntimeError."""
     shape = load_shape(shape)
     if shape.get("kind") != "solid":
         raise ValueError("write_msh_solid takes a solid design (a planar one: write_msh)")
@@ -716,24 +707,26 @@ def write_msh_solid(shape, path, size, layers=None):
     lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
     axes = set()
     for f in shape["features"]:
-        if f["type"] != "through_hole":
+        if f["type"] not in ("through_hole", "pocket"):
             raise ValueError("feature %r (%s): a body-fitted hexahedral mesh is made of parts that "
-                             "are prisms, whose features are all through-holes" %
-                             (f["name"], f["type"]))
+                             "are prisms in slabs, whose features are all through-holes and "
+                             "pockets" % (f["name"], f["type"]))
         w = f["frame"]["w"]
         k = max(range(3), key=lambda i: abs(w[i]))
         if abs(abs(w[k]) - 1) > 1e-12:
             raise ValueError("feature %r: its axis is not along an edge of the box" % f["name"])
+        if f["type"] == "pocket" and min(abs(f["frame"]["origin"][k] - lo[k]),
+                                         abs(f["frame"]["origin"][k] - hi[k])) > 1e-12:
+            raise ValueError("feature %r: a pocket machined from inside the box, not from one of "
+                             "its faces" % f["name"])
         axes.add(k)
     if len(axes) > 1:
-        raise ValueError("the through-holes run along different axes: the part is not a prism")
+        raise ValueError("the features run along different axes: the part is not a prism in slabs")
     k = axes.pop() if axes else 2
     extent = [h - l for l, h in zip(lo, hi)]
     if size > min(extent[i] for i in range(3) if i != k):
         raise ValueError("size %g m: above the section's smaller side (%g m)" %
                          (size, min(extent[i] for i in range(3) if i != k)))
-    if layers is None:
-        layers = max(1, round(extent[k] / size))
     import multiprocessing
     ctx = multiprocessing.get_context("fork")
     queue = ctx.Queue()
@@ -760,34 +753,98 @@ def _msh_solid_child(queue, shape, path, size, layers, k):
         queue.put((False, str(e)))
 
 
+def _plane(occ, lo, hi, k, at):
+    """A rectangle across axis k at coordinate `at`, twice the box's section on each side."""
+    extent = [h - l for l, h in zip(lo, hi)]
+    u, v = [i for i in range(3) if i != k]
+    size = [0.0, 0.0, 0.0]
+    size[u], size[v] = 2 * extent[u], 2 * extent[v]
+    plane = occ.addRectangle(0, 0, 0, size[u], size[v])
+    # the rectangle lies in z = 0 with sides along x and y: turn it into the (u, v) plane
+    if k == 0:
+        occ.rotate([(2, plane)], 0, 0, 0, 0, 1, 0, -math.pi / 2)  # z -> x, x -> -z
+        occ.rotate([(2, plane)], 0, 0, 0, 1, 0, 0, math.pi / 2)
+    elif k == 1:
+        occ.rotate([(2, plane)], 0, 0, 0, 1, 0, 0, math.pi / 2)
+    # placed by its centre (exact; OpenCASCADE pads bounding boxes by 1e-7 m)
+    centre = [0.5 * (l + h) for l, h in zip(lo, hi)]
+    centre[k] = at
+    c = occ.getCenterOfMass(2, plane)
+    occ.translate([(2, plane)], *[centre[i] - c[i] for i in range(3)])
+    return plane
+
+
+def _slab_levels(shape, k):
+    """The box's faces across k and the pockets' floors between them, in order."""
+    lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
+    levels = {lo[k], hi[k]}
+    for f in shape["features"]:
+        if f["type"] == "pocket":
+            floor = f["frame"]["origin"][k] + f["frame"]["w"][k] * f["params"]["depth"]
+            if lo[k] + 1e-9 < floor < hi[k] - 1e-9:
+                levels.add(floor)
+    return sorted(levels)
+
+
 def _msh_solid(shape, path, size, layers, k):
     lo, hi = shape["domain"]["lo"], shape["domain"]["hi"]
     u, v = [i for i in range(3) if i != k]
+    levels = _slab_levels(shape, k)
+    thick = [b - a for a, b in zip(levels, levels[1:])]
+    if layers is None:
+        counts = [max(1, round(t / size)) for t in thick]
+    else:
+        counts = [max(1, round(layers * t / (hi[k] - lo[k]))) for t in thick]
     with _Gmsh() as gmsh:
         occ = gmsh.model.occ
         vols = _solid_component(gmsh, shape, [])
-        # OpenCASCADE pads bounding boxes (by 1e-7 m, 5e-6 m on planar faces): a face lies in a
-        # plane of the box when its box is within a twentieth of the box's thinnest extent
-        tol = 0.05 * min(h - l for l, h in zip(lo, hi))
-        bottom = []
-        for _, t in gmsh.model.getBoundary([(3, w) for w in vols], combined=True, oriented=False):
-            box = gmsh.model.getBoundingBox(2, abs(t))
-            if abs(box[k] - lo[k]) < tol and abs(box[k + 3] - lo[k]) < tol:
-                bottom.append(abs(t))
-        if not bottom:
+        exact = sum(occ.getMass(3, w) for w in vols)
+        if exact <= 0:
             raise RuntimeError("body %r: the design leaves no material" % shape.get("body"))
-        exact = sum(occ.getMass(2, t) for t in bottom)
-        section = occ.copy([(2, t) for t in bottom])
+        # each slab's section at its middle, brought to the plane k = lo[k]
+        sections = []
+        for a, b in zip(levels, levels[1:]):
+            mid = 0.5 * (a + b)
+            cut, _ = occ.intersect(occ.copy([(3, w) for w in vols]), [(2, _plane(occ, lo, hi, k,
+                                                                                 mid))],
+                                   removeObject=True, removeTool=True)
+            faces = [(d, t) for d, t in cut if d == 2]
+            shift = [0.0, 0.0, 0.0]
+            shift[k] = lo[k] - mid
+            occ.translate(faces, *shift)
+            sections.append(faces)
         occ.remove([(3, w) for w in vols], recursive=True)
-        if len(section) > 1:  # faces of an OR region share their edges: one mesh on them
-            occ.removeAllDuplicates()
+        inputs = [f for faces in sections for f in faces]
+        if not inputs:
+            raise RuntimeError("body %r: the design leaves no material" % shape.get("body"))
+        # one partition of the plane for every slab (faces of an OR region, and the slabs'
+        # sections, share their edges)
+        if len(inputs) > 1:
+            _, children = occ.fragment(inputs[:1], inputs[1:])
+        else:
+            children = [inputs]
         occ.synchronize()
-        section = gmsh.model.getEntities(2)
-        d = [0.0, 0.0, 0.0]
-        d[k] = hi[k] - lo[k]
-        out = occ.extrude(section, *d, numElements=[layers], recombine=True)
+        material, at = [], 0
+        for faces in sections:
+            material.append({t for i in range(at, at + len(faces)) for _, t in children[i]})
+            at += len(faces)
+        columns = sorted(set().union(*material))
+        current = [(2, c) for c in columns]
+        keep, drop = [], []
+        for j, (t, n) in enumerate(zip(thick, counts)):
+            d = [0.0, 0.0, 0.0]
+            d[k] = t
+            out = occ.extrude(current, *d, numElements=[n], recombine=True)
+            tops = [out[i - 1] for i in range(len(out)) if out[i][0] == 3]
+            made = [out[i][1] for i in range(len(out)) if out[i][0] == 3]
+            for c, w in zip(columns, made):
+                (keep if c in material[j] else drop).append(w)
+            current = tops
+        if drop:
+            occ.remove([(3, w) for w in drop])
         occ.synchronize()
-        volumes = [t for dim, t in out if dim == 3]
+        volumes = keep
+        tol = 0.05 * min(h - l for l, h in zip(lo, hi))
         opt = gmsh.option.setNumber
         opt("Mesh.MeshSizeMax", size)
         opt("Mesh.MeshSizeMin", size / 4)
@@ -822,27 +879,25 @@ def _msh_solid(shape, path, size, layers, k):
                                (shape.get("body"), size, sorted(int(t) for t in types)))
         tags, xyz, _ = gmsh.model.mesh.getNodes()
         at = {int(n): (xyz[3 * i + u], xyz[3 * i + v], xyz[3 * i + k]) for i, n in enumerate(tags)}
-        area, signs = 0.0, set()
+        volume, signs = 0.0, set()
         for h in nodes[0].reshape(-1, 8):
             q = [at[int(n)] for n in h[:4]]  # the source quadrilateral of an extruded hexahedron
-            if max(abs(p[2] - lo[k]) for p in q) > tol:
-                continue  # not in the first layer
             for i in range(4):
                 a, b, c = q[i - 1], q[i], q[(i + 1) % 4]
                 signs.add((b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]) > 0)
-            area += 0.5 * sum(q[i][0] * q[(i + 1) % 4][1] - q[(i + 1) % 4][0] * q[i][1]
-                              for i in range(4))
-        area = abs(area)
-        holes = (hi[u] - lo[u]) * (hi[v] - lo[v]) - exact
+            area = 0.5 * sum(q[i][0] * q[(i + 1) % 4][1] - q[(i + 1) % 4][0] * q[i][1]
+                             for i in range(4))
+            volume += abs(area) * abs(at[int(h[4])][2] - q[0][2])
+        void = (hi[u] - lo[u]) * (hi[v] - lo[v]) * (hi[k] - lo[k]) - exact
         if len(signs) != 1:
             raise RuntimeError("body %r: the section's mesh has quadrilaterals that are not convex "
                                "or are folded at size %g m: try a smaller size" %
                                (shape.get("body"), size))
-        if abs(area - exact) > 0.05 * holes + 1e-9 * exact:
-            raise RuntimeError("body %r: the section's mesh covers %.6g m² where the part's "
-                               "section is %.6g m² (%.1f %% of the holes' area off) at size %g m: "
-                               "a feature is too small for that size; try a smaller size" %
-                               (shape.get("body"), area, exact, 100 * abs(area - exact) / holes,
+        if abs(volume - exact) > 0.05 * void + 1e-9 * exact:
+            raise RuntimeError("body %r: the mesh fills %.6g m³ where the part's volume is %.6g m³ "
+                               "(%.1f %% of the void's volume off) at size %g m: a feature is too "
+                               "small for that size; try a smaller size" %
+                               (shape.get("body"), volume, exact, 100 * abs(volume - exact) / void,
                                 size))
         gmsh.write(path)
     return found

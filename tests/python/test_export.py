@@ -286,9 +286,10 @@ def test_a_solid_design_through_lsmbs_geometry_and_the_export_script(tmp_path):
 
 
 def test_a_through_hole_design_meshes_body_fitted_in_hexahedra(tmp_path):
-    """lsmbs.export.write_msh_solid: solid_arm.json's plate with its two drilled holes (the
-    pocket left out: a part with a pocket is no prism and is refused) meshed by quadrilaterals on
-    its section and extruded in two layers of hexahedra. References: the closed-form volume
+    """lsmbs.export.write_msh_solid: solid_arm.json's plate with its two drilled holes meshed by
+    quadrilaterals on its section and extruded in two layers of hexahedra (and, with its pocket,
+    in two slabs: under the pocket's floor and beside the pocket; test below); a sphere, which
+    makes no prism, is refused. References: the closed-form volume
     (plate less π r² t per hole; the mesh's polygons inscribed in the circles remove less, by at
     most 1 - sin(2π/n)/(2π/n) of the holes for n ≥ 12 segments, 4.5 %) and the mass lsmbs
     integrates over the mesh (ρ times the mesh's own volume, the extruded quads' areas times the
@@ -300,8 +301,11 @@ def test_a_through_hole_design_meshes_body_fitted_in_hexahedra(tmp_path):
     shape = export.load_shape(tmp_path / "g" / "plate_shape.json")
     drilled = dict(shape, features=shape["features"][:2], region={
         "op": "and", "ks": 0, "children": [{"op": "feature", "feature": k} for k in (0, 1)]})
-    with pytest.raises(ValueError, match="'.*' \\(pocket\\): .* all through-holes"):
-        export.write_msh_solid(shape, tmp_path / "no.msh", 0.004)
+    ball = dict(shape, features=shape["features"] + [dict(
+        shape["features"][0], name="ball", type="sphere",
+        params={"cx": 0.3, "cy": 0, "cz": 0, "r": 0.003})])
+    with pytest.raises(ValueError, match="'ball' \\(sphere\\): .* through-holes and pockets"):
+        export.write_msh_solid(ball, tmp_path / "no.msh", 0.004)
     for size, layers in ((0, 1), (float("nan"), 1), (0.004, 0), (0.004, 2.5)):
         with pytest.raises(ValueError, match="expected a (positive element size|whole number)"):
             export.write_msh_solid(drilled, tmp_path / "no.msh", size, layers)
@@ -346,6 +350,43 @@ def test_a_through_hole_design_meshes_body_fitted_in_hexahedra(tmp_path):
     assert summary["responses"]["plate_mass"] == pytest.approx(
         doc["bodies"][[b["name"] for b in doc["bodies"]].index("plate")]["material"]["rho"]
         * volume, rel=1e-10)
+
+
+def test_a_pocketed_design_meshes_body_fitted_in_slabs_of_hexahedra(tmp_path):
+    """write_msh_solid on solid_arm.json's whole design: two holes through the 10 mm plate and a
+    super-ellipse pocket (a = 50, b = 25 mm, ξ = 4) machined 4 mm deep from its +y face. The part
+    is two slabs, 6 mm under the pocket's floor and 4 mm beside the pocket, meshed by one
+    partition of the section extruded through both: hexahedra only, nodes on the floor's plane
+    (y = 1 mm), and the volume removed that of the holes and the pocket in closed form
+    (4ab Γ(1 + 1/ξ)²/Γ(1 + 2/ξ) · depth), less the polygons' 4.5 % at most."""
+    from conftest import run_cli
+    case = os.path.join(ROOT, "data/spatial/solid_arm.json")
+    run_cli("geometry", case, "-o", str(tmp_path / "g"), "--quiet")
+    shape = export.load_shape(tmp_path / "g" / "plate_shape.json")
+    msh, sets = export.write_msh_solid(shape, tmp_path / "plate.msh", 0.004)
+    assert {"xmin", "xmax", "ymin", "ymax"} <= set(sets)
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(msh))
+        types, _, nodes = gmsh.model.mesh.getElements(3)
+        assert list(types) == [5]
+        tags, xyz, _ = gmsh.model.mesh.getNodes()
+        at = {int(k): xyz[3 * i:3 * i + 3] for i, k in enumerate(tags)}
+        used = {int(n) for n in nodes[0]}
+        assert any(abs(at[n][1] - 0.001) < 1e-9 for n in used), "a layer at the pocket's floor"
+        volume = 0.0
+        for h in nodes[0].reshape(-1, 8):
+            q = [at[int(n)] for n in h[:4]]
+            area = 0.5 * abs(sum(q[i][0] * q[i - 3][2] - q[i - 3][0] * q[i][2] for i in range(4)))
+            volume += area * abs(at[int(h[4])][1] - q[0][1])
+    finally:
+        gmsh.finalize()
+    t, r1, r2, depth = 0.01, 0.02, 0.016, 0.004
+    voids = math.pi * (r1 ** 2 + r2 ** 2) * t + super_ellipse_area(0.05, 0.025, 4) * depth
+    removed = 0.4 * t * 0.08 - volume
+    print("slabs of hexahedra: removed %.5f of the voids' closed-form volume" % (removed / voids))
+    assert voids * (1 - 0.045) <= removed <= voids * (1 + 1e-9)
 
 
 def test_a_solid_design_is_drawn_as_its_exact_section(tmp_path):

@@ -151,8 +151,9 @@ ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& 
     }
     return g;
   };
-  // the direction from feature i's centre c in which its boundary is nearest (of width w)
-  auto narrowest = [&](int i, const Vec3& c, double w) {
+  // the direction from feature i's centre c in which its boundary is nearest (of width w); of
+  // directions as near (a circle's, a sphere's), the one across which cell e is thinnest
+  auto narrowest = [&](int i, const Vec3& c, double w, int e) {
     const Feature3& f = F[static_cast<size_t>(i)];
     const Mat3& A = f.frame().axes;
     std::vector<Vec3> dirs;
@@ -162,10 +163,14 @@ ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& 
     }
     if (f.type() != Feature3::Type::kPocket && f.type() != Feature3::Type::kThroughHole)
       dirs.push_back(A.col(2));
+    std::vector<double> probe;
+    for (const Vec3& d : dirs) probe.push_back(L.shape_distance(i, c + 0.45 * w * d, theta));
+    const double top = *std::max_element(probe.begin(), probe.end());
     Vec3 best = dirs.front();
-    double sb = -INFINITY;
-    for (const Vec3& d : dirs)
-      if (const double s = L.shape_distance(i, c + 0.45 * w * d, theta); s > sb) sb = s, best = d;
+    double thinnest = INFINITY;
+    for (size_t k = 0; k < dirs.size(); ++k)
+      if (probe[k] >= top - 1e-6 * w)
+        if (const double x = extent(mesh, e, dirs[k]); x < thinnest) thinnest = x, best = dirs[k];
     return best;
   };
   for (const LengthScaleConstraint& c : L.evaluate(p)) {
@@ -182,10 +187,11 @@ ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& 
     q.at = c.at;
     const Vec3 x(c.at[0], c.at[1], c.at[2]);
     const int i = index(c.first);
-    Vec3 d = hole ? narrowest(i, x, c.value) : across(i, x);
+    const int e = cell_near(x);
+    Vec3 d = hole ? narrowest(i, x, c.value, e) : across(i, x);
     if (!hole && d.norm() < 0.5 && !c.second.empty()) d = across(index(c.second), x);
     d = d.norm() > 0 ? Vec3(d.normalized()) : Vec3::UnitX();
-    q.threshold = o.min_elements * extent(mesh, cell_near(x), d);
+    q.threshold = o.min_elements * extent(mesh, e, d);
     q.unresolved = q.width < q.threshold;
     R.parts.push_back(q);
   }
