@@ -20,6 +20,8 @@ Cases (design from the run's summary.json):
         on 60 × 5 × 1 bricks): fixed meshes of 60 × 5 × 1 and 120 × 10 × 1 bricks against one
         layer of body-fitted hexahedra of h = 2.5 mm; also writes the optimum's STEP file into
         the run's final_design/
+  arm3d_ls  robot_arm_3d_length_scale (the same with length-scale constraints of 10 mm), as
+        arm3d
 """
 import argparse
 import importlib.util
@@ -59,6 +61,10 @@ CASES = {
                          ["/bodies/2/mesh/elements=[60,5,1]"], "60 × 5 × 1 bricks, h = 10 mm"),
                         ("data/spatial/robot_arm_holes_3d.json", [],
                          "120 × 10 × 1 bricks, h = 5 mm")]},
+    # the same with length-scale control (min_size 10 mm, one brick): robot_arm_3d_length_scale
+    "arm3d_ls": {"run": "robot_arm_3d_length_scale", "body": "plate", "mass": "plate_mass",
+                 "response": "average_tip_deviation", "h": 0.0025, "layers": 1,
+                 "fixed": "arm3d"},
     "rod1": {"run": "slider_crank_1hole", "body": "rod", "mass": "rod_mass",
              "response": "max_elongation",
              "fixed": [("data/slider_crank/slider_crank_1hole_coarse.json", [], "rod_coarse.msh"),

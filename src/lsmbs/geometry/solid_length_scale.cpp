@@ -225,6 +225,14 @@ SolidLengthScale::SolidLengthScale(const SolidMesh& mesh, const LevelSet3& ls, i
     else
       sample_tetrahedron(mesh, e, open);
   }
+  // the boundary samples' groups of normals (faces, for face_distances)
+  std::vector<Vec3> group_normal;
+  for (const Sample& b : boundary_) {
+    size_t g = 0;
+    while (g < group_normal.size() && b.n.dot(group_normal[g]) < std::sqrt(0.5)) ++g;
+    if (g == group_normal.size()) group_normal.push_back(b.n);
+    face_group_.push_back(static_cast<int>(g));
+  }
   // each feature's planar profile
   for (const Feature3& f : ls.features()) {
     const bool profiled =
@@ -344,6 +352,30 @@ std::vector<char> SolidLengthScale::edge_samples(int i, const std::vector<double
       if (boundary_[k].n.dot(n0) >= std::sqrt(0.5)) use[k] = 0;  // within 45° of the face's
   }
   return use;
+}
+
+std::vector<SolidLengthScale::FaceDistance> SolidLengthScale::face_distances(
+    int i, const std::vector<std::vector<double>>& theta, double cap) const {
+  const auto& th = theta[static_cast<size_t>(i)];
+  const Feature3& f = ls_->features()[static_cast<size_t>(i)];
+  const auto& p = profile_[static_cast<size_t>(i)];
+  const QuarterArc arc = p ? arc_of(p->type(), th) : QuarterArc(0, 0, 1, 1);
+  const std::vector<char> use = edge_samples(i, th);
+  std::vector<FaceDistance> best;
+  std::vector<char> found;
+  for (size_t k = 0; k < boundary_.size(); ++k) {
+    if (!use.empty() && !use[k]) continue;
+    const size_t g = static_cast<size_t>(face_group_[k]);
+    if (g >= best.size()) best.resize(g + 1), found.resize(g + 1, 0);
+    const double bound = found[g] ? best[g].value : cap;
+    if (distance_floor(f, p ? &*p : nullptr, boundary_[k].x, th) >= bound) continue;
+    const double s = shape_distance3<double>(f, p ? &*p : nullptr, &arc, boundary_[k].x, th.data());
+    if (s < bound) best[g] = {s, boundary_[k].x, boundary_[k].n}, found[g] = 1;
+  }
+  std::vector<FaceDistance> out;
+  for (size_t g = 0; g < best.size(); ++g)
+    if (found[g]) out.push_back(best[g]);
+  return out;
 }
 
 double SolidLengthScale::shape_distance(int i, const Vec3& x,

@@ -57,6 +57,16 @@ class SolidLengthScale final : public LengthScaleMeasures {
   /// s_i(x): the distance from x to feature i's shape (> 0 outside it) at parameter values
   /// theta (LevelSet3::values).
   double shape_distance(int i, const Vec3& x, const std::vector<std::vector<double>>& theta) const;
+  /// Feature i's least distance to each face of the body it does not open (the edge ligament's
+  /// boundary samples grouped by their normals, each group within 45° of its first sample's),
+  /// where it lies and the face's normal there; groups whose samples are all farther than `cap`
+  /// (by a cheap lower bound) are left out.
+  struct FaceDistance {
+    double value = 0;
+    Vec3 at = Vec3::Zero(), normal = Vec3::Zero();
+  };
+  std::vector<FaceDistance> face_distances(int i, const std::vector<std::vector<double>>& theta,
+                                           double cap) const;
 
  protected:
   std::vector<LengthScaleConstraint> evaluate_all(const Vec& p) const override;
@@ -79,6 +89,7 @@ class SolidLengthScale final : public LengthScaleMeasures {
   double spacing_ = 0;
   std::vector<Sample> volume_, boundary_;
   std::vector<std::optional<Feature>> profile_;  ///< a pocket's or a through-hole's planar shape
+  std::vector<int> face_group_;  ///< per boundary sample: its group of normals (face_distances)
 };
 
 }  // namespace lsmbs

@@ -57,12 +57,9 @@ struct UnionFind {
 
 // The volumes of the connected pieces of material, largest first (pieces below `smallest` out).
 std::vector<double> pieces(const SolidLengthScale& L, const LevelSet3& ls,
-                           const std::vector<std::vector<double>>& theta, double spacing,
-                           double smallest) {
+                           const std::vector<std::vector<double>>& theta,
+                           const std::vector<double>& D, double spacing, double smallest) {
   const int n = L.num_volume_samples();
-  std::vector<double> D(static_cast<size_t>(n));
-  for (int k = 0; k < n; ++k)
-    D[static_cast<size_t>(k)] = ls.evaluate(L.volume_sample(k), theta, nullptr);
   const double r = 1.01 * std::sqrt(3.0) * spacing;
   // a hash of the material samples by cube of side r
   auto key = [&](const Vec3& x) {
@@ -114,13 +111,33 @@ ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& 
   R.threshold = o.min_elements * R.element_size;
   R.spacing = R.element_size / o.samples_per_element;
   LengthScaleOptions lo;
-  lo.min_ligament = lo.min_edge = lo.min_member = R.threshold;
+  lo.min_ligament = lo.min_member = R.threshold;  // edges: face by face, below
   lo.tolerance = 1e-3;
   lo.spacing = R.spacing;
   const SolidLengthScale L(mesh, ls, num_design, lo);
   const auto theta = ls.values(p);
   const auto& F = ls.features();
+  const int nf = static_cast<int>(F.size());
   const std::vector<char> voids = length_scale_parts::void_features(ls.root(), F);
+  // the level set at the volume samples; a feature bounds void where it is the level set's
+  // active leaf at its zero: a sample within a spacing of the zero where the level set equals
+  // ± the feature's own distance (a hole inside another, or in an OR of holes, or wholly outside
+  // the body, bounds none, and has no part to judge)
+  const int n = L.num_volume_samples();
+  std::vector<double> D(static_cast<size_t>(n));
+  std::vector<char> bounds(static_cast<size_t>(nf), 0);
+  for (int k = 0; k < n; ++k) {
+    const Vec3& x = L.volume_sample(k);
+    const double d = D[static_cast<size_t>(k)] = ls.evaluate(x, theta, nullptr);
+    if (!(std::abs(d) < R.spacing)) continue;
+    for (int i = 0; i < nf; ++i) {
+      if (bounds[static_cast<size_t>(i)]) continue;
+      const double di =
+          F[static_cast<size_t>(i)].distance<double>(x, theta[static_cast<size_t>(i)].data(), 0);
+      if (std::min(std::abs(d - di), std::abs(d + di)) < 0.25 * R.spacing)
+        bounds[static_cast<size_t>(i)] = 1;
+    }
+  }
   std::vector<Vec3> centroid;
   for (const auto& cell : mesh.cells) {
     Vec3 c = Vec3::Zero();
@@ -136,13 +153,17 @@ ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& 
     return best;
   };
   auto index = [&](const std::string& name) {
-    for (size_t i = 0; i < F.size(); ++i)
-      if (F[i].name() == name) return static_cast<int>(i);
+    for (int i = 0; i < nf; ++i)
+      if (F[static_cast<size_t>(i)].name() == name) return i;
     return -1;
+  };
+  auto judged = [&](int i) {
+    return i >= 0 && i < num_design && voids[static_cast<size_t>(i)] &&
+           bounds[static_cast<size_t>(i)];
   };
   // ∇s_i(x) by central differences (s is a distance: |∇s| = 1 off its medial set)
   const double eta = 1e-6 * R.element_size;
-  auto across = [&](int i, const Vec3& x) {
+  auto gradient = [&](int i, const Vec3& x) {
     Vec3 g;
     for (int k = 0; k < 3; ++k) {
       Vec3 a = x, b = x;
@@ -173,34 +194,49 @@ ResolutionReport judge_solid_resolution(const SolidMesh& mesh, const LevelSet3& 
         if (const double x = extent(mesh, e, dirs[k]); x < thinnest) thinnest = x, best = dirs[k];
     return best;
   };
-  for (const LengthScaleConstraint& c : L.evaluate(p)) {
-    const bool hole = c.kind == "member";
-    if (!hole && (c.value < 0 || c.value >= 3 * R.threshold)) continue;
-    // a solid design feature has no void to measure; a non-design region is material itself
-    if (hole && !voids[static_cast<size_t>(index(c.first))]) continue;
-    if (!c.second.empty() && index(c.second) >= num_design) continue;
-    NarrowPart q;
-    q.kind = hole ? NarrowPart::Kind::kHole : NarrowPart::Kind::kLigament;
-    q.first = c.first;
-    q.second = c.kind == "edge" ? "surface" : c.second;
-    q.width = c.value;
-    q.at = c.at;
-    const Vec3 x(c.at[0], c.at[1], c.at[2]);
-    const int i = index(c.first);
-    const int e = cell_near(x);
-    Vec3 d = hole ? narrowest(i, x, c.value, e) : across(i, x);
-    if (!hole && d.norm() < 0.5 && !c.second.empty()) d = across(index(c.second), x);
+  auto add = [&](NarrowPart q, const Vec3& x, Vec3 d) {
     d = d.norm() > 0 ? Vec3(d.normalized()) : Vec3::UnitX();
-    q.threshold = o.min_elements * extent(mesh, e, d);
+    q.at = x;
+    q.threshold = o.min_elements * extent(mesh, cell_near(x), d);
     q.unresolved = q.width < q.threshold;
-    R.parts.push_back(q);
+    R.parts.push_back(std::move(q));
+  };
+  for (const LengthScaleConstraint& c : L.evaluate(p)) {
+    const int i = index(c.first), j = c.second.empty() ? -1 : index(c.second);
+    const Vec3 x(c.at[0], c.at[1], c.at[2]);
+    NarrowPart q;
+    q.first = c.first, q.second = c.second, q.width = c.value;
+    if (c.kind == "member") {
+      if (!judged(i)) continue;
+      q.kind = NarrowPart::Kind::kHole;
+      add(q, x, narrowest(i, x, c.value, cell_near(x)));
+    } else if (c.kind == "ligament") {
+      // overlapping features have merged into one void; a non-design region is material itself
+      if (c.value < 0 || c.value >= 3 * R.threshold || !judged(i) || !judged(j)) continue;
+      // across the ligament: off the segment between the nearest points the two gradients tilt
+      // in opposite directions, and their difference keeps to the segment's
+      q.kind = NarrowPart::Kind::kLigament;
+      add(q, x, gradient(i, x) - gradient(j, x));
+    }
+  }
+  // the material between each feature and each face it does not open, across the face; a
+  // feature that breaks through one face (a notch) still has its flanges to the others judged
+  for (int i = 0; i < num_design; ++i) {
+    if (!judged(i)) continue;
+    for (const auto& f : L.face_distances(i, theta, 3 * R.threshold)) {
+      if (!(f.value > 0)) continue;
+      NarrowPart q;
+      q.kind = NarrowPart::Kind::kLigament;
+      q.first = F[static_cast<size_t>(i)].name(), q.second = "surface", q.width = f.value;
+      add(q, f.at, f.normal);
+    }
   }
   std::stable_sort(R.parts.begin(), R.parts.end(),
                    [](const NarrowPart& a, const NarrowPart& b) { return a.width < b.width; });
   std::vector<double> V;
   for (int e = 0; e < mesh.num_elements(); ++e) V.push_back(cell_volume(mesh, e));
   std::nth_element(V.begin(), V.begin() + static_cast<long>(V.size() / 2), V.end());
-  R.pieces = pieces(L, ls, theta, R.spacing, 0.5 * V[V.size() / 2]);
+  R.pieces = pieces(L, ls, theta, D, R.spacing, 0.5 * V[V.size() / 2]);
   R.piece_spacing = R.spacing;
   return R;
 }

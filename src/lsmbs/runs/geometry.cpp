@@ -24,6 +24,15 @@ std::string GeometryRunOptions::validate() const {
 
 namespace {
 
+// The judgement's resolution options: the case's optimization.judge.min_elements, as after an
+// optimization (the default 2 without an optimization section).
+ResolutionOptions resolution_options(const Case& cs) {
+  ResolutionOptions ro;
+  if (cs.raw.contains("optimization") && cs.raw["optimization"].contains("judge"))
+    ro.min_elements = parse_optimization(cs).judge.min_elements;
+  return ro;
+}
+
 // One designed body at p: its mass and gradient, areas and the mapping's counts; with an output
 // folder its μ_e and φ as VTU and the picture (their names added to `files`).
 nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params,
@@ -55,8 +64,8 @@ nlohmann::json body_json(const Case& cs, const Vec& p, const ModelParams& params
                        {"subgrid", bd.map->options().subgrid},
                        {"band", bd.map->options().band}};
   // what the mesh resolves of the design (runs/judge.hpp)
-  jb["resolution"] = resolution_json(
-      judge_resolution(bd.body->mesh, bd.map->level_set(), bd.map->level_set().values(p)));
+  jb["resolution"] = resolution_json(judge_resolution(
+      bd.body->mesh, bd.map->level_set(), bd.map->level_set().values(p), resolution_options(cs)));
   if (o.out_dir.empty()) return jb;
   const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
   const std::string base = o.out_dir + "/" + stem;
@@ -112,8 +121,8 @@ nlohmann::json solid_body_json(const Case& cs, const Vec& p, const ModelParams& 
                        {"mu_min", mu_min},
                        {"subgrid", map.options().subgrid},
                        {"band", map.options().band}};
-  jb["resolution"] = resolution_json(
-      judge_solid_resolution(bd.body->mesh, map.level_set(), bd.num_design_features, p));
+  jb["resolution"] = resolution_json(judge_solid_resolution(
+      bd.body->mesh, map.level_set(), bd.num_design_features, p, resolution_options(cs)));
   if (o.out_dir.empty()) return jb;
   const std::string stem = body_file_stems(*cs.model).at(bd.body->name);
   const SolidMesh& mesh = bd.body->mesh;

@@ -6,6 +6,9 @@
 //   - a pocket's floor in a 10 mm block of 2.5 mm layers is judged across the layers: 1.5 mm
 //     is unresolved (threshold 2 × 2.5 mm), 6 mm resolved although under two 5 mm cell lengths;
 //   - a slot through the plate's whole height cuts it into two pieces of 97 × 50 × 2.5 mm each.
+//   - a hole inside another bounds no void and is not judged; equal round holes have equal
+//     thresholds (the cell's thinnest extent across them); a hole that breaks through one face
+//     (a notch) keeps its 7 mm flange to another face judged.
 #include "lsmbs/geometry/solid_resolution.hpp"
 
 #include <gtest/gtest.h>
@@ -105,4 +108,32 @@ TEST(SolidResolution, ASlotThroughThePlateLeavesTwoPieces) {
   ASSERT_EQ(R.pieces.size(), 2u);
   for (double v : R.pieces) EXPECT_NEAR(v / (0.097 * 0.05 * 0.0025), 1, 0.01);
   EXPECT_NE(R.pieces_flag().find("2 pieces (volumes"), std::string::npos) << R.pieces_flag();
+}
+
+TEST(SolidResolution, OnlyFeaturesThatBoundVoidAreJudgedAndANotchKeepsItsFlanges) {
+  // in the plate of 5 mm bricks: A (r = 10 mm) at (60, 25) mm with B (r = 3 mm) inside it, which
+  // bounds no void; D (r = 10 mm) at (110, 25) mm, as wide as A; C (r = 8 mm) at (185, 46) mm,
+  // which breaks through the top face (a notch) and leaves 7 mm to the end face x = 200 mm
+  const Frame3 f = frame(Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX());
+  auto circle = [&](const char* name, double cx, double cy, double r) {
+    return Feature3(name, Feature3::Type::kThroughHole, {constant(cx), constant(cy), constant(r)},
+                    true, f, Feature::Type::kCircle);
+  };
+  const LevelSet3 ls({circle("A", 0.06, 0.025, 0.01), circle("B", 0.06, 0.025, 0.003),
+                      circle("C", 0.185, 0.046, 0.008), circle("D", 0.11, 0.025, 0.01)},
+                     LevelSetNode::all_of(4), 0);
+  const ResolutionReport R = judge_solid_resolution(plate(), ls, 4, Vec());
+  for (const auto& q : R.parts) EXPECT_TRUE(q.first != "B" && q.second != "B") << "B is in A";
+  const NarrowPart* a = part(R, "A", "");
+  const NarrowPart* d = part(R, "D", "");
+  ASSERT_TRUE(a && d);
+  EXPECT_NEAR(a->threshold, 0.01, 1e-12);  // round holes: the cell's thinnest extent across
+  EXPECT_NEAR(d->threshold, 0.01, 1e-12);
+  const NarrowPart* flange = nullptr;
+  for (const auto& q : R.parts)
+    if (q.first == "C" && q.second == "surface" && q.at[0] > 0.199) flange = &q;
+  ASSERT_NE(flange, nullptr) << "the notch hides no flange";
+  EXPECT_NEAR(flange->width, 0.007, 2e-5);      // samples off the foot: (0.625 mm)²/(2 · 15 mm)
+  EXPECT_NEAR(flange->threshold, 0.01, 1e-12);  // across the end face: two 5 mm cells
+  EXPECT_TRUE(flange->unresolved);
 }
