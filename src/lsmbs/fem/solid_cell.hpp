@@ -3,6 +3,7 @@
 // [−1, 1]³ (corners in the order of fem/hex_element.hpp) and the faces of both cell kinds.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "lsmbs/fem/solid_mesh.hpp"
@@ -45,6 +46,26 @@ inline Vec3 hex_point(const SolidMesh& m, int e, const Vec3& s, double& detJ) {
   }
   detJ = J.determinant();
   return x;
+}
+
+/// Cell e's volume: a hexahedron's by 2 × 2 × 2 Gauss points (exact for trilinear ones), a
+/// tetrahedron's exactly.
+inline double cell_volume(const SolidMesh& m, int e) {
+  const auto& c = m.cells[static_cast<size_t>(e)];
+  double detJ = 0, V = 0;
+  if (c.size() == 8) {
+    const double g = 1 / std::sqrt(3.0);
+    for (const auto& k : kHexCorner) {
+      hex_point(m, e, Vec3(g * k[0], g * k[1], g * k[2]), detJ);
+      V += detJ;
+    }
+    return std::abs(V);
+  }
+  Mat3 J;
+  for (int k = 0; k < 3; ++k)
+    J.col(k) = m.nodes[static_cast<size_t>(c[static_cast<size_t>(k + 1)])] -
+               m.nodes[static_cast<size_t>(c[0])];
+  return std::abs(J.determinant()) / 6;
 }
 
 /// Cell e's longest edge (of a hexahedron: corner pairs one parent axis apart).

@@ -83,21 +83,7 @@ LengthScale::LengthScale(const Mesh2D& mesh, const LevelSet& ls, int num_design,
 }
 
 std::vector<std::string> LengthScale::all_names() const {
-  std::vector<std::string> n;
-  const auto& F = ls_->features();
-  for (int i = 0; i < nd_; ++i) {
-    if (!void_[static_cast<size_t>(i)]) continue;
-    if (o_.min_ligament > 0)
-      for (int j = i + 1; j < static_cast<int>(F.size()); ++j)
-        if (j >= nd_ || void_[static_cast<size_t>(j)])
-          n.push_back("ligament." + F[static_cast<size_t>(i)].name() + "." +
-                      F[static_cast<size_t>(j)].name());
-    if (o_.min_edge > 0) n.push_back("edge." + F[static_cast<size_t>(i)].name());
-    if (o_.no_cut > 0) n.push_back("no_cut." + F[static_cast<size_t>(i)].name());
-  }
-  if (o_.min_member > 0)
-    for (int i = 0; i < nd_; ++i) n.push_back("member." + F[static_cast<size_t>(i)].name());
-  return n;
+  return constraint_names(ls_->features(), void_, nd_, o_);
 }
 
 std::vector<LengthScaleConstraint> LengthScale::evaluate_all(const Vec& p) const {

@@ -83,4 +83,27 @@ std::vector<char> void_features(const LevelSetNode& root, const std::vector<Feat
   return v;
 }
 
+/// The constraints' names in evaluate()'s order: per void design feature its ligaments (to the
+/// later void features and the non-design regions), its edge and, planar only, its no_cut; then
+/// every design feature's member size.
+template <class Feat>
+std::vector<std::string> constraint_names(const std::vector<Feat>& F,
+                                          const std::vector<char>& voids, int num_design,
+                                          const LengthScaleOptions& o) {
+  std::vector<std::string> n;
+  for (int i = 0; i < num_design; ++i) {
+    if (!voids[static_cast<size_t>(i)]) continue;
+    if (o.min_ligament > 0)
+      for (int j = i + 1; j < static_cast<int>(F.size()); ++j)
+        if (j >= num_design || voids[static_cast<size_t>(j)])
+          n.push_back("ligament." + F[static_cast<size_t>(i)].name() + "." +
+                      F[static_cast<size_t>(j)].name());
+    if (o.min_edge > 0) n.push_back("edge." + F[static_cast<size_t>(i)].name());
+    if (o.no_cut > 0) n.push_back("no_cut." + F[static_cast<size_t>(i)].name());
+  }
+  if (o.min_member > 0)
+    for (int i = 0; i < num_design; ++i) n.push_back("member." + F[static_cast<size_t>(i)].name());
+  return n;
+}
+
 }  // namespace lsmbs::length_scale_parts

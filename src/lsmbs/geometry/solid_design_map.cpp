@@ -15,14 +15,6 @@ constexpr double kTailBands = 30;
 // Distances are refined to third order within this many bands (Feature::distance).
 constexpr double kRefineBands = 12;
 
-double tet_volume(const SolidMesh& m, int e) {
-  const auto& c = m.cells[static_cast<size_t>(e)];
-  const Vec3& X0 = m.nodes[static_cast<size_t>(c[0])];
-  Mat3 J;
-  for (int k = 0; k < 3; ++k) J.col(k) = m.nodes[static_cast<size_t>(c[k + 1])] - X0;
-  return J.determinant() / 6;
-}
-
 }  // namespace
 
 SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, MappingOptions opt)
@@ -42,17 +34,7 @@ SolidDesignMap::SolidDesignMap(const SolidMesh& mesh, LevelSet3 level_set, Mappi
     c /= static_cast<double>(cell.size());
     double r = 0;
     for (int k : cell) r = std::max(r, (mesh.nodes[static_cast<size_t>(k)] - c).norm());
-    if (cell.size() == 8) {
-      double V = 0, detJ = 0;
-      const double g = 1 / std::sqrt(3.0);
-      for (const auto& k : kHexCorner) {
-        hex_point(mesh, e, Vec3(g * k[0], g * k[1], g * k[2]), detJ);
-        V += detJ;
-      }
-      volume_[e] = V;
-    } else {
-      volume_[e] = tet_volume(mesh, e);
-    }
+    volume_[e] = cell_volume(mesh, e);
     // the longest edge, so that the band ε spans `band` sub-cells in every direction of a flat
     // element
     h[e] = longest_edge(mesh, e);

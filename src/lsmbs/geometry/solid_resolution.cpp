@@ -13,24 +13,6 @@
 namespace lsmbs {
 namespace {
 
-double cell_volume(const SolidMesh& m, int e) {
-  const auto& c = m.cells[static_cast<size_t>(e)];
-  if (c.size() == 8) {
-    double V = 0, detJ = 0;
-    const double g = 1 / std::sqrt(3.0);
-    for (const auto& k : kHexCorner) {
-      hex_point(m, e, Vec3(g * k[0], g * k[1], g * k[2]), detJ);
-      V += detJ;
-    }
-    return std::abs(V);
-  }
-  Mat3 J;
-  for (int k = 0; k < 3; ++k)
-    J.col(k) = m.nodes[static_cast<size_t>(c[static_cast<size_t>(k + 1)])] -
-               m.nodes[static_cast<size_t>(c[0])];
-  return std::abs(J.determinant()) / 6;
-}
-
 // Cell e's extent along the unit direction d.
 double extent(const SolidMesh& m, int e, const Vec3& d) {
   double lo = INFINITY, hi = -INFINITY;
