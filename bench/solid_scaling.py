@@ -75,7 +75,7 @@ def main():
     ap.add_argument("--timeout", type=float, default=1800)
     ap.add_argument("--ordering", default="amd", choices=["amd", "nested_dissection"],
                     help="fill-reducing ordering (\"simulation\": {\"ordering\"})")
-    ap.add_argument("--solver", default="auto", choices=["auto", "klu", "umfpack"],
+    ap.add_argument("--solver", default="auto", choices=["auto", "klu", "umfpack", "amg"],
                     help="sparse LU (\"simulation\": {\"linear_solver\"})")
     ap.add_argument("--amg", help="lsmbs_amg_block: also time the elastic block's solve by "
                     "UMFPACK and by AMG-preconditioned CG")
@@ -100,7 +100,11 @@ def main():
                              lu_nonzeros=b["model"]["lu_nonzeros"],
                              solver=b["model"]["linear_solver"],
                              factor_and_solve=fl["factor_and_solve"],
-                             step_none=b["primal"]["seconds_per_step"])
+                             step_none=b["primal"]["seconds_per_step"],
+                             newton_per_step=b["primal"]["newton_per_step"],
+                             factorizations_per_step=b["primal"]["factorizations_per_step"],
+                             gmres_per_step=b["primal"].get("linear_iterations_per_step", 0),
+                             gmres_max=b["primal"].get("max_linear_iterations", 0))
                 else:
                     s = b["sensitivities"][m]
                     r["step_" + m] = s["wall_seconds"] / s["steps"]
@@ -122,6 +126,9 @@ def main():
             k, r["elements"], r.get("dofs", 0), r.get("nonzeros", 0), r.get("lu_nonzeros", 0),
             r.get("lu_nonzeros", 0) / max(1, r.get("nonzeros", 1)), r.get("solver", "?"),
             r.get("factor_and_solve", 0))
+        if r.get("gmres_max"):
+            line += "  GMRES %.0f iterations a step (at most %d a solve)" % (
+                r["gmres_per_step"], r["gmres_max"])
         for m in methods:
             line += "  %s: step %.3g s, peak %.0f MB" % (
                 "primal" if m == "none" else m, r["step_" + m], r["peak_mb_" + m])

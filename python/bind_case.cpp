@@ -90,10 +90,17 @@ void bind_options(py::module_& m) {
           },
           [](GeneralizedAlphaOptions& o, const std::string& n) {
             using S = SparseLU::Solver;
-            if (n == "auto" || n == "klu" || n == "umfpack")
-              o.linear_solver = n == "auto" ? S::kAuto : n == "klu" ? S::kKlu : S::kUmfpack;
+            if (n == "amg" && !SparseLU::amg_available())
+              throw py::value_error(
+                  "linear_solver 'amg': this build of lsmbs has no hypre (libhypre-dev)");
+            if (n == "auto" || n == "klu" || n == "umfpack" || n == "amg")
+              o.linear_solver = n == "auto"      ? S::kAuto
+                                : n == "klu"     ? S::kKlu
+                                : n == "umfpack" ? S::kUmfpack
+                                                 : S::kAmg;
             else
-              throw py::value_error("linear_solver '" + n + "': expected auto, klu or umfpack");
+              throw py::value_error("linear_solver '" + n +
+                                    "': expected auto, klu, umfpack or amg");
           })
       .def_readwrite("force_floor", &GeneralizedAlphaOptions::force_floor)
       .def("validate", &GeneralizedAlphaOptions::validate,

@@ -20,19 +20,21 @@ packages=(
   python3-ezdxf python3-gmsh
   # MPI (optional at build time: without it lsmbs builds, and the campaigns use local cores)
   libopenmpi-dev openmpi-bin
+  # hypre (with MPI): the AMG linear solver for large 3D solid meshes ("linear_solver": "amg",
+  # docs/performance.md "Linear solvers on 3D meshes"); optional at build time like MPI
+  libhypre-dev
 )
 
 # --with-gmsh: also the Gmsh command line, to re-mesh data/slider_crank/rod.geo (the shipped
 # .msh files are committed; lsmbs itself reads .msh and needs no Gmsh)
 # --with-vtk: also VTK's Python module, with which tests/python/test_vtk_reader.py reads the
 # VTU/VTM/PVD output as ParaView does (skipped where `import vtk` fails; lsmbs needs no VTK)
-# --with-hypre: also hypre (with MPI), for the AMG benchmark bench/amg_block.cpp (built with
-# -DLSMBS_BUILD_BENCH=ON; docs/performance.md, "Linear solvers on 3D meshes"; lsmbs needs no hypre)
+# --with-hypre: accepted for older instructions; hypre is among the packages above
 for arg in "$@"; do
   case $arg in
     --with-gmsh) packages+=(gmsh) ;;
     --with-vtk) packages+=(python3-vtk9) ;;
-    --with-hypre) packages+=(libhypre-dev) ;;
+    --with-hypre) ;;
     *) echo "setup-deps: unknown option $arg (expected --with-gmsh, --with-vtk or --with-hypre)" >&2; exit 2 ;;
   esac
 done

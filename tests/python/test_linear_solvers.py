@@ -49,6 +49,28 @@ def test_umfpack_and_klu_give_the_same_responses_and_gradients_on_a_solid(method
     assert d < 1e-8
 
 
+def amg_built():
+    try:
+        lsmbs.load_case(str(SOLID_ARM)).simulation.linear_solver = "amg"
+        return True
+    except ValueError:
+        return False
+
+
+@pytest.mark.parametrize("method", ["direct-analytic", "adjoint"])
+def test_amg_and_klu_give_the_same_responses_and_gradients_on_a_solid(method):
+    # GMRES on the whole iteration matrix, preconditioned by BoomerAMG on the plate's free nodes
+    # and KLU on the rest, to a relative residual of 1e-12: the LU's results to the tolerance the
+    # two direct solvers agree to
+    if not amg_built():
+        pytest.skip("this build of lsmbs has no hypre")
+    klu = run(SOLID_ARM, "klu", method, t_end=0.02)
+    amg = run(SOLID_ARM, "amg", method, t_end=0.02)
+    d = relative_difference(amg, klu)
+    print("solid arm, %s: AMG-GMRES against KLU %.2e" % (method, d))
+    assert d < 1e-8
+
+
 def test_umfpack_and_klu_agree_on_a_planar_case():
     klu = run(PLANAR, "klu", "direct-analytic", t_end=0.02)
     umf = run(PLANAR, "umfpack", "direct-analytic", t_end=0.02)
@@ -95,6 +117,9 @@ def test_the_automatic_choice_and_the_override_are_recorded(tmp_path):
     b, s = bench(tmp_path, block_case, "block_klu", "/simulation/linear_solver=klu")
     assert b["model"]["linear_solver"] == "klu"
     assert "/simulation/linear_solver=klu" in json.dumps(s)
+    if amg_built():
+        b, s = bench(tmp_path, block_case, "block_amg", "/simulation/linear_solver=amg")
+        assert b["model"]["linear_solver"] == "amg"
 
 
 def test_an_unknown_solver_is_refused_with_its_path(tmp_path):
@@ -105,7 +130,7 @@ def test_an_unknown_solver_is_refused_with_its_path(tmp_path):
     assert "/simulation/linear_solver" in p.stderr
     assert '"auto", "klu", "umfpack"' in p.stderr, p.stderr
     case = lsmbs.load_case(str(PLANAR))
-    with pytest.raises(ValueError, match="expected auto, klu or umfpack"):
+    with pytest.raises(ValueError, match="expected auto, klu, umfpack or amg"):
         case.simulation.linear_solver = "pardiso"
 
 
@@ -113,7 +138,8 @@ def test_static_equilibrium_takes_the_solver_and_records_it(tmp_path):
     """lsmbs static factorizes with the case's linear_solver too (it ignored the key before):
     the solid arm's equilibrium by UMFPACK against KLU's, and summary.json says which ran."""
     out = {}
-    for solver in ("klu", "umfpack"):
+    solvers = ("klu", "umfpack", "amg") if amg_built() else ("klu", "umfpack")
+    for solver in solvers:
         o = tmp_path / solver
         p = subprocess.run([CLI, "static", str(SOLID_ARM), "-o", str(o), "-q",
                             "--set", "/simulation/linear_solver=" + solver],
@@ -122,4 +148,5 @@ def test_static_equilibrium_takes_the_solver_and_records_it(tmp_path):
         out[solver] = json.loads((o / "summary.json").read_text())
         assert out[solver]["counts"]["linear_solver"] == solver
     for k, v in out["klu"]["responses"].items():
-        assert out["umfpack"]["responses"][k] == pytest.approx(v, rel=1e-9, abs=1e-15), k
+        for solver in solvers[1:]:
+            assert out[solver]["responses"][k] == pytest.approx(v, rel=1e-9, abs=1e-15), k

@@ -36,7 +36,9 @@ int bench_command(const CommonArgs& c, BenchArgs a) {
       1e3 * J["floor_seconds"]["total"].get<double>(),
       1e3 * J["floor_seconds"]["residual"].get<double>(),
       1e3 * J["floor_seconds"]["iteration_matrix"].get<double>(),
-      J["model"]["linear_solver"].get<std::string>() == "umfpack" ? "UMFPACK" : "KLU",
+      J["model"]["linear_solver"].get<std::string>() == "umfpack" ? "UMFPACK"
+      : J["model"]["linear_solver"].get<std::string>() == "amg"   ? "AMG-GMRES"
+                                                                  : "KLU",
       1e3 * J["floor_seconds"]["factor_and_solve"].get<double>(),
       J["primal"]["step_over_floor"].get<double>());
   for (auto it = J["sensitivities"].begin(); it != J["sensitivities"].end(); ++it)

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "lsmbs/integrators/initial_state.hpp"
+#include "lsmbs/mbs/linear_solver_setup.hpp"
 #include "lsmbs/mbs/spatial.hpp"
 
 namespace lsmbs {
@@ -220,6 +221,7 @@ enum class NewtonStatus {
   kStopped,  ///< an observer asked to stop (stop_requested): the step is abandoned
   kNonFiniteResidual,
   kNonFiniteCorrection,
+  kLinearSolve,  ///< the iterative linear solver missed its tolerance (linear_failure_ says how)
   kNonFiniteMatrix,        ///< NaN or Inf in S_t: an overflow, not a singular motion
   kSingular,               ///< S_t singular: the motion of an unknown is not determined
   kNotConverged,           ///< max_iter iterations, residual test not met
@@ -266,7 +268,7 @@ class AlphaRun {
   void evaluate_residual();
   double residual_measure() const;
   bool factor_iteration_matrix(const Coefficients& coeffs, NewtonStatus& failure);
-  void solve_correction();
+  bool solve_correction();  // false: the iterative solver failed (linear_failure_)
   void apply_correction(const AlphaCoefficients& c);
 
   const GeneralizedAlphaOptions& opt_;
@@ -302,6 +304,7 @@ class AlphaRun {
   int iterations_ = 0;
   double rn_ = 0, pn_ = 0;      // ‖r‖∞ [N], ‖Φ‖∞ [length]
   int bad_column_ = -1;         // kNonFiniteMatrix: the first column with NaN or Inf
+  std::string linear_failure_;  // kLinearSolve: the solver's message
   Model::Inversion inversion_;  // kInverted: the element with the smallest det F
   bool prev_folded_ = false;    // the last accepted state has a folded element
 
@@ -355,9 +358,7 @@ bool AlphaRun::start(State s0) {
   if (s0.a.size() != nq_) s0.a.setZero(nq_);
   if (s0.lambda.size() != nc_) s0.lambda.setZero(nc_);
 
-  lu_.set_ordering(opt_.ordering);
-  lu_.set_solver(opt_.linear_solver);
-  lu_.analyze(model_.pattern());
+  analyze_model_matrix(lu_, model_, opt_.linear_solver, opt_.ordering);
   sum_.linear_solver = SparseLU::solver_name(lu_.solver_used());
   const AlphaCoefficients c0 = AlphaCoefficients::make(opt_.rho_inf, opt_.h);
   if (opt_.project_initial)
@@ -406,9 +407,7 @@ bool AlphaRun::start_from(const GridCheckpoint& from, long grid_end) {
   if (from.state.q.size() != nq_ || from.state.v.size() != nq_ || from.state.a.size() != nq_ ||
       from.state.lambda.size() != nc_ || from.acc_like.size() != nq_ || !(from.k > 0))
     return fail("resume: the checkpoint does not belong to this model");
-  lu_.set_ordering(opt_.ordering);
-  lu_.set_solver(opt_.linear_solver);
-  lu_.analyze(model_.pattern());
+  analyze_model_matrix(lu_, model_, opt_.linear_solver, opt_.ordering);
   sum_.linear_solver = SparseLU::solver_name(lu_.solver_used());
   sum_.k = k_ = from.k;
   sum_.zeta = zeta_ = from.zeta;
@@ -492,9 +491,15 @@ bool AlphaRun::factor_iteration_matrix(const Coefficients& coeffs, NewtonStatus&
 }
 
 // [Δq; Δλ] = −S_t⁻¹ [r; kΦ] (19) with the factorization at hand.
-void AlphaRun::solve_correction() {
+bool AlphaRun::solve_correction() {
   dx_ = -R_;
-  timed(sum_.seconds.solve, [&] { step_lu_->solve(dx_); });
+  try {
+    timed(sum_.seconds.solve, [&] { step_lu_->solve(dx_); });
+  } catch (const LinearSolveError& e) {
+    linear_failure_ = e.what();
+    return false;
+  }
+  return true;
 }
 
 // Increments (12)–(15) with Δq̇ = γ′Δq, Δq̈ = β′Δq (17)–(18).
@@ -531,7 +536,7 @@ NewtonStatus AlphaRun::newton(const AlphaCoefficients& c) {
       // light body along its free directions). The next Newton correction, back-solved with
       // the factorization at hand (no new one), must be within tol_q·L on every position; it is
       // then applied. A small correction that no longer halves is round-off: accepted too.
-      solve_correction();
+      if (!solve_correction()) return NewtonStatus::kLinearSolve;
       const double inc = nq_ ? dx_.head(nq_).lpNorm<Eigen::Infinity>() / (opt_.tol_q * L_) : 0.0;
       if (!std::isfinite(inc)) return NewtonStatus::kNonFiniteCorrection;
       if (inc <= 1 || (inc > 0.5 * prev_inc && inc <= kRoundOffIncrement)) {
@@ -578,7 +583,7 @@ NewtonStatus AlphaRun::newton(const AlphaCoefficients& c) {
     NewtonStatus failure{};
     if (refactor && !factor_iteration_matrix(coeffs, failure)) return failure;
     prev_err = err;
-    solve_correction();
+    if (!solve_correction()) return NewtonStatus::kLinearSolve;
     apply_correction(c);
     ++sum_.newton_iterations;
   }
@@ -617,6 +622,9 @@ bool AlphaRun::halve_or_fail(NewtonStatus st) {
       break;
     case NewtonStatus::kNonFiniteCorrection:
       why = "non-finite Newton correction";
+      break;
+    case NewtonStatus::kLinearSolve:
+      why = "the linear solve of a Newton iteration failed: " + linear_failure_;
       break;
     case NewtonStatus::kNonFiniteMatrix:
       why = "non-finite iteration matrix (NaN or Inf) in the equations of " +
@@ -749,6 +757,12 @@ IntegratorSummary AlphaRun::finish() {
     if (final_state_) *final_state_ = prev_;
   }
   if (worker_ && !worker_->wait_idle()) sum_.aborted = true;
+  for (const SparseLU* lu : {&lu_, &lu_alt_})
+    if (const BlockAmg* amg = lu->amg()) {
+      sum_.linear_iterations += amg->counters().iterations;
+      sum_.max_linear_iterations =
+          std::max<long>(sum_.max_linear_iterations, amg->counters().max_iterations);
+    }
   sum_.wall_seconds = seconds_since(t_start_);
   return std::move(sum_);
 }

@@ -103,8 +103,11 @@ struct IntegratorSummary {
   } seconds;
   std::vector<double> halving_times;
   double k = 0, zeta = 0;
-  std::string linear_solver;  ///< the factorization the run used ("klu" or "umfpack")
-  double force_floor = 0;     ///< largest per-row round-off floor met [N] (residual_floor_N)
+  std::string linear_solver;  ///< the solver the run used ("klu", "umfpack" or "amg")
+  /// The AMG solver's GMRES iterations over all its solves, and the most one solve took (0 with
+  /// a direct LU).
+  long linear_iterations = 0, max_linear_iterations = 0;
+  double force_floor = 0;  ///< largest per-row round-off floor met [N] (residual_floor_N)
   double wall_seconds = 0;
   RunStatus status() const;
   std::string report() const;  ///< outcome and counts, one paragraph

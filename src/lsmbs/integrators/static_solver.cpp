@@ -6,6 +6,7 @@
 
 #include "lsmbs/integrators/generalized_alpha.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
+#include "lsmbs/mbs/linear_solver_setup.hpp"
 
 namespace lsmbs {
 
@@ -36,9 +37,7 @@ StaticResult solve_static(const Model& model, const ModelParams& p, State& s,
   s.a.setZero(nq);
   if (s.lambda.size() != nc) s.lambda.setZero(nc);
   SparseLU lu;
-  lu.set_solver(o.linear_solver);
-  lu.set_ordering(o.ordering);
-  lu.analyze(model.pattern());
+  analyze_model_matrix(lu, model, o.linear_solver, o.ordering);
   res.linear_solver = SparseLU::solver_name(lu.solver_used());
   std::vector<double> vals;
   const Coefficients cK{0, 0, 1};

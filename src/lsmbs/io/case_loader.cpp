@@ -619,10 +619,15 @@ struct Loader : KindReader {
                      ? SparseLU::Ordering::kAmd
                      : SparseLU::Ordering::kNestedDissection;
     {
-      const std::string ls = r.one_of("linear_solver", {"auto", "klu", "umfpack"}, "auto");
-      o.linear_solver = ls == "auto"  ? SparseLU::Solver::kAuto
-                        : ls == "klu" ? SparseLU::Solver::kKlu
-                                      : SparseLU::Solver::kUmfpack;
+      const std::string ls = r.one_of("linear_solver", {"auto", "klu", "umfpack", "amg"}, "auto");
+      if (ls == "amg" && !SparseLU::amg_available())
+        r.fail("linear_solver",
+               "\"amg\" needs a build of lsmbs with hypre (Debian's libhypre-dev: "
+               "scripts/setup-deps.sh installs it; then rebuild); this build has none");
+      o.linear_solver = ls == "auto"      ? SparseLU::Solver::kAuto
+                        : ls == "klu"     ? SparseLU::Solver::kKlu
+                        : ls == "umfpack" ? SparseLU::Solver::kUmfpack
+                                          : SparseLU::Solver::kAmg;
     }
     o.k = r.non_negative("k", 0.0);
     o.zeta = r.non_negative("zeta", 0.0);

@@ -136,6 +136,19 @@ double SparseLU::auto_fill_threshold() { return 1.0e6; }
 void SparseLU::analyze(const CscPattern& pattern) {
   auto& m = *impl_;
   m.free_numeric();
+  amg_.reset();
+  if (solver_ == Solver::kAmg) {  // no LU of the whole matrix: the split's small block only
+    m.symbolic.reset();
+    m.umf_symbolic.reset();
+    m.n = pattern.n;
+    if (static_cast<int>(amg_node_.size()) != pattern.n)
+      throw std::logic_error("SparseLU: the AMG solver needs set_amg_split() before analyze()");
+    amg_ = std::make_unique<BlockAmg>();
+    amg_->analyze(pattern, amg_node_, amg_direction_, amg_positions_);
+    used_ = Solver::kAmg;
+    ++counters_.symbolic;
+    return;
+  }
   m.symbolic.reset();
   m.umf_symbolic.reset();
   m.n = pattern.n;
@@ -187,6 +200,16 @@ double SparseLU::estimated_factor_nonzeros() const {
 }
 
 void SparseLU::share_analysis(const SparseLU& other) {
+  if (other.amg_) {
+    amg_ = std::make_unique<BlockAmg>();
+    amg_->share_analysis(*other.amg_);
+    impl_->free_numeric();
+    impl_->n = other.impl_->n;
+    solver_ = other.solver_;
+    used_ = other.used_;
+    return;
+  }
+  amg_.reset();
   const auto& o = *other.impl_;
   if (!o.symbolic)
     throw std::logic_error("SparseLU::share_analysis from an unanalyzed factorization");
@@ -210,6 +233,13 @@ void SparseLU::share_analysis(const SparseLU& other) {
 }
 
 Status SparseLU::factor(std::span<const double> values) {
+  if (amg_) {
+    singular_col_ = -1;
+    Status st = amg_->factor(values);
+    ++counters_.full_factorizations;
+    if (!st.ok()) singular_col_ = amg_->singular_unknown();
+    return st;
+  }
   auto& m = *impl_;
   if (!m.symbolic) throw std::logic_error("SparseLU::factor before analyze");
   auto* vals = const_cast<double*>(values.data());  // KLU's API is not const-correct
@@ -266,6 +296,7 @@ Status SparseLU::factor_umfpack(std::span<const double> values) {
 void SparseLU::set_pivot_tolerance(double tol) { impl_->common.tol = tol; }
 
 bool SparseLU::refactor(std::span<const double> values) {
+  if (amg_) return factor(values).ok();
   auto& m = *impl_;
   if (m.umfpack) return m.umf_symbolic && factor(values).ok();
   if (!m.symbolic || !m.numeric) return false;
@@ -276,6 +307,7 @@ bool SparseLU::refactor(std::span<const double> values) {
 }
 
 std::optional<double> SparseLU::estimate_rcond() {
+  if (amg_) return std::nullopt;  // no factors to estimate from
   auto& m = *impl_;
   if (m.umfpack) return m.umf_numeric ? std::optional<double>(rcond()) : std::nullopt;
   if (!m.numeric || !klu_rcond(m.symbolic.get(), m.numeric, &m.common)) return std::nullopt;
@@ -283,6 +315,7 @@ std::optional<double> SparseLU::estimate_rcond() {
 }
 
 std::optional<double> SparseLU::estimate_condition(std::span<const double> values) {
+  if (amg_) return std::nullopt;
   auto& m = *impl_;
   auto* vals = const_cast<double*>(values.data());
   if (m.umfpack) return std::nullopt;  // UMFPACK has no condition estimator
@@ -294,7 +327,9 @@ std::optional<double> SparseLU::estimate_condition(std::span<const double> value
 void SparseLU::solve(std::span<double> b, int nrhs) const {
   auto& m = *impl_;
   if (!factored()) throw std::logic_error("SparseLU::solve without a factorization");
-  if (m.umfpack)
+  if (amg_)
+    amg_->solve(b, nrhs, false);
+  else if (m.umfpack)
     m.umfpack_solve(UMFPACK_A, b, nrhs);
   else
     klu_solve(m.symbolic.get(), m.numeric, m.n, nrhs, b.data(), &m.common);
@@ -306,7 +341,9 @@ void SparseLU::solve(std::span<double> b, int nrhs) const {
 void SparseLU::solve_transpose(std::span<double> b, int nrhs) const {
   auto& m = *impl_;
   if (!factored()) throw std::logic_error("SparseLU::solve_transpose without a factorization");
-  if (m.umfpack)
+  if (amg_)
+    amg_->solve(b, nrhs, true);
+  else if (m.umfpack)
     m.umfpack_solve(UMFPACK_At, b, nrhs);
   else
     klu_tsolve(m.symbolic.get(), m.numeric, m.n, nrhs, b.data(), &m.common);
@@ -315,10 +352,13 @@ void SparseLU::solve_transpose(std::span<double> b, int nrhs) const {
   c.rhs += nrhs;
 }
 
-void SparseLU::reset_pivoting() { impl_->free_numeric(); }
+void SparseLU::reset_pivoting() { impl_->free_numeric(); }  // the AMG solver has no pivots
 
-bool SparseLU::factored() const { return impl_->numeric || impl_->umf_numeric; }
+bool SparseLU::factored() const {
+  return amg_ ? amg_->factored() : impl_->numeric || impl_->umf_numeric;
+}
 double SparseLU::rcond() const {
+  if (amg_) return 0;  // no factors: no estimate
   const auto& m = *impl_;
   return m.umfpack ? m.umf_info[UMFPACK_RCOND] : m.common.rcond;
 }

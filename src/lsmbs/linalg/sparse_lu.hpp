@@ -7,13 +7,18 @@
 // every planar model — and UMFPACK's multifrontal LU (dense frontal matrices through BLAS 3, a
 // fresh threshold-pivoting factorization each time), for the matrices of 3D solid meshes whose
 // factors fill ten times and more (docs/performance.md, "Linear solvers on 3D meshes").
+// A third solver is iterative (Solver::kAmg, linalg/block_amg.hpp): GMRES preconditioned by
+// hypre's BoomerAMG on the solid bodies' elastic block and KLU on the rest, solved to a relative
+// residual of 1e-12; factor() is then the AMG setup and the small LU, solve() the GMRES.
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "lsmbs/core/status.hpp"
 #include "lsmbs/core/types.hpp"
+#include "lsmbs/linalg/block_amg.hpp"
 #include "lsmbs/linalg/sparsity.hpp"
 
 namespace lsmbs {
@@ -40,15 +45,32 @@ class SparseLU {
   }
   /// Which factorization: kAuto decides at analyze() from KLU's fill estimate of the pattern
   /// (UMFPACK above auto_fill_threshold() nonzeros in L + U), kKlu and kUmfpack force one. The
-  /// decision depends only on the pattern, so the same model always gets the same solver.
-  enum class Solver { kAuto, kKlu, kUmfpack };
+  /// decision depends only on the pattern, so the same model always gets the same solver. kAmg is
+  /// never chosen by kAuto: it is asked for (set_amg_split() first; needs a build with hypre).
+  enum class Solver { kAuto, kKlu, kUmfpack, kAmg };
+  /// Whether this build has the AMG solver (hypre).
+  static bool amg_available() { return BlockAmg::available(); }
+  /// The AMG solver's split of the unknowns and the nodes' positions (BlockAmg::analyze), read
+  /// by analyze() with kAmg.
+  void set_amg_split(std::vector<int> node_of, std::vector<int> direction_of,
+                     std::vector<double> positions) {
+    amg_node_ = std::move(node_of);
+    amg_direction_ = std::move(direction_of);
+    amg_positions_ = std::move(positions);
+  }
+  /// The AMG solver after analyze() with kAmg (options, counters); nullptr otherwise.
+  BlockAmg* amg() { return amg_.get(); }
+  const BlockAmg* amg() const { return amg_.get(); }
   static double auto_fill_threshold();
   void set_solver(Solver s) { solver_ = s; }
   Solver solver() const { return solver_; }
   /// The factorization analyze() chose (kKlu or kUmfpack; kAuto before analyze()).
   Solver solver_used() const { return used_; }
   static const char* solver_name(Solver s) {
-    return s == Solver::kAuto ? "auto" : s == Solver::kKlu ? "klu" : "umfpack";
+    return s == Solver::kAuto  ? "auto"
+           : s == Solver::kKlu ? "klu"
+           : s == Solver::kAmg ? "amg"
+                               : "umfpack";
   }
   /// KLU's partial-pivoting threshold (Common.tol, default 0.001): a diagonal entry is kept as
   /// pivot down to this fraction of its column's largest entry; 1 is plain partial pivoting.
@@ -109,6 +131,9 @@ class SparseLU {
   struct Impl;
   Status factor_umfpack(std::span<const double> values);
   std::unique_ptr<Impl> impl_;
+  std::unique_ptr<BlockAmg> amg_;
+  std::vector<int> amg_node_, amg_direction_;
+  std::vector<double> amg_positions_;
   mutable Counters counters_;
   int singular_col_ = -1;
   Ordering ordering_ = Ordering::kAmd;

@@ -7,6 +7,7 @@
 #include "lsmbs/io/case.hpp"
 #include "lsmbs/io/output.hpp"
 #include "lsmbs/linalg/sparse_lu.hpp"
+#include "lsmbs/mbs/linear_solver_setup.hpp"
 #include "lsmbs/runs/simulate.hpp"
 #include "lsmbs/sensitivity/sensitivity.hpp"
 
@@ -32,9 +33,7 @@ nlohmann::json floor_seconds(const Case& cs, const BenchOptions& o, SparseLU& lu
   const double k = GeneralizedAlpha::automatic_scaling(m, m.params(), s, c);
   Vec R, x;
   std::vector<double> vals;
-  lu.set_ordering(cs.simulation.ordering);
-  lu.set_solver(cs.simulation.linear_solver);
-  lu.analyze(m.pattern());
+  analyze_model_matrix(lu, m, cs.simulation.linear_solver, cs.simulation.ordering);
   m.iteration_matrix(s, m.params(), {c.beta_p, c.gamma_p, 1}, k, k, vals);
   lu.factor(vals);
   const int n = o.repetitions;
@@ -72,6 +71,8 @@ nlohmann::json primal_json(const IntegratorSummary& primal, double t_primal, dou
           {"steps", primal.steps},
           {"newton_per_step", primal.newton_iterations / steps},
           {"factorizations_per_step", primal.factorizations / steps},
+          {"linear_iterations_per_step", primal.linear_iterations / steps},
+          {"max_linear_iterations", primal.max_linear_iterations},
           {"seconds_per_step", step},
           {"step_over_floor", step / floor},
           {"setup_seconds", ps.setup},

@@ -26,6 +26,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/core/interrupt.hpp"
+#include "lsmbs/mbs/linear_solver_setup.hpp"
 #include "lsmbs/sensitivity/method.hpp"
 #include "lsmbs/sensitivity/response_tracker.hpp"
 
@@ -129,9 +130,7 @@ class Backward {
     scalars_.setZero(static_cast<Eigen::Index>(support.scalars.size()), nr_);
     explicit_.setZero(nr_, cs.design->size());
     semi_sum_.setZero(nr_, cs.design->size());
-    lu_.set_ordering(cs.simulation.ordering);
-    lu_.set_solver(cs.simulation.linear_solver);
-    lu_.analyze(m_.pattern());
+    analyze_model_matrix(lu_, m_, cs.simulation.linear_solver, cs.simulation.ordering);
   }
 
   // w_n ∂f/∂(q, q̇, q̈, λ) of every response at grid record n, and w_n ∂f/∂p.

@@ -14,6 +14,7 @@
 
 #include "lsmbs/core/error.hpp"
 #include "lsmbs/integrators/initial_state.hpp"
+#include "lsmbs/mbs/linear_solver_setup.hpp"
 #include "lsmbs/mbs/spatial.hpp"
 #include "lsmbs/sensitivity/study.hpp"
 
@@ -181,9 +182,7 @@ void hold_given_velocities(Study& cs) {
   if (given.empty() || m.nc() == 0 || !cs.simulation.project_initial) return;
   held.resize(m.nq(), 0);
   SparseLU lu;
-  lu.set_ordering(cs.simulation.ordering);
-  lu.set_solver(cs.simulation.linear_solver);
-  lu.analyze(m.pattern());
+  analyze_model_matrix(lu, m, cs.simulation.linear_solver, cs.simulation.ordering);
   ProjectionReport rep;
   State s = cs.initial;
   const Status st =
@@ -210,9 +209,7 @@ void check_initial_placement(const Study& cs, const State& placed) {
   const Model& m = *cs.model;
   if (m.nc() == 0 || !cs.simulation.project_initial) return;
   SparseLU lu;
-  lu.set_ordering(cs.simulation.ordering);
-  lu.set_solver(cs.simulation.linear_solver);
-  lu.analyze(m.pattern());
+  analyze_model_matrix(lu, m, cs.simulation.linear_solver, cs.simulation.ordering);
   State s = placed;
   if (!project_initial_state(m, m.params(), s, lu, 1e-13 * m.length_scale()).ok()) return;
   const double L = m.length_scale(), kMove = 0.1;

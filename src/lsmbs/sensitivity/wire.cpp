@@ -92,10 +92,10 @@ ResponseSensitivity get_response(Reader& rd) {
 
 void put(Writer& w, const IntegratorSummary& s) {
   w.raw(s.ok), w.raw(s.aborted), w.str(s.message), w.raw(s.t_reached);
-  for (long v :
-       {s.steps, s.newton_iterations, s.factorizations, s.residual_evaluations,
-        s.matrix_evaluations, s.halvings, s.fresh_factor_retries, s.increment_rejections,
-        s.inverted_element_rejections, s.folded_element_rejections, s.folded_element_steps})
+  for (long v : {s.steps, s.newton_iterations, s.factorizations, s.residual_evaluations,
+                 s.matrix_evaluations, s.halvings, s.fresh_factor_retries, s.increment_rejections,
+                 s.inverted_element_rejections, s.folded_element_rejections, s.folded_element_steps,
+                 s.linear_iterations, s.max_linear_iterations})
     w.raw(v);
   w.str(s.folded_first);
   w.raw(s.seconds);
@@ -110,7 +110,8 @@ IntegratorSummary get_summary(Reader& rd) {
   for (long* v :
        {&s.steps, &s.newton_iterations, &s.factorizations, &s.residual_evaluations,
         &s.matrix_evaluations, &s.halvings, &s.fresh_factor_retries, &s.increment_rejections,
-        &s.inverted_element_rejections, &s.folded_element_rejections, &s.folded_element_steps})
+        &s.inverted_element_rejections, &s.folded_element_rejections, &s.folded_element_steps,
+        &s.linear_iterations, &s.max_linear_iterations})
     *v = rd.raw<long>();
   s.folded_first = rd.str();
   s.seconds = rd.raw<IntegratorSummary::Seconds>();
