@@ -146,10 +146,11 @@ def main():
         parts = ["%s step %.2f, peak memory %.2f" % (
             "primal" if m == "none" else m, fit(d, [r["step_" + m] for r in rows]),
             fit(d, [r["peak_mb_" + m] for r in rows])) for m in methods]
+        lu_fit = ("; LU nonzeros %.2f" % fit(d, [r["lu_nonzeros"] for r in rows])
+                  if all(r["lu_nonzeros"] > 0 for r in rows) else "")  # none with AMG
         print("fitted exponents against DOFs: " + "; ".join(parts) +
-              "; factorization + solve %.2f; LU nonzeros %.2f" % (
-                  fit(d, [r["factor_and_solve"] for r in rows]),
-                  fit(d, [r["lu_nonzeros"] for r in rows])))
+              "; factorization + solve %.2f%s" % (
+                  fit(d, [r["factor_and_solve"] for r in rows]), lu_fit))
         if a.amg:
             lu = [r["block_umfpack"]["lu"] for r in rows]
             amg = [r["block_amg"]["amg"] for r in rows]

@@ -188,7 +188,9 @@ TEST(SolidBody, AClampAndATieToAWeldedHubMoveAlike) {
       SpatialBodyOptions hub;
       hub.mass = 2, hub.inertia = Vec3(0.3, 0.2, 0.1), hub.position = Vec3(-0.3, 0.1, 0);
       b.spatial_body("hub", hub);
-      b.spatial_joint("weld", SpatialJointKind::kWeld, "ground", "hub", {hub.position, {}, {}});
+      SpatialJointOptions at_hub;
+      at_hub.at = hub.position;
+      b.spatial_joint("weld", SpatialJointKind::kWeld, "ground", "hub", at_hub);
       b.solid_connection("tie", "beam", "xmin", "hub");
     } else {
       b.solid_connection("clamp", "beam", "xmin", "ground");

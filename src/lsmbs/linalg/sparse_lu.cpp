@@ -133,20 +133,18 @@ SparseLU::~SparseLU() = default;
 // a 3D block of 15k DOFs.
 double SparseLU::auto_fill_threshold() { return 1.0e6; }
 
+// Where the AMG solver takes over (docs/performance.md, "Linear solvers on 3D meshes"): on the
+// solid block, AMG's primal step overtakes UMFPACK's near 4·10⁷ estimated nonzeros in L + U
+// (37k DOFs) and its sensitivity steps near 10⁸ (74k DOFs); past it UMFPACK's factors, n^1.44,
+// cost more time and memory than AMG's hierarchy at every size measured.
+double SparseLU::auto_amg_fill_threshold() { return 1.0e8; }
+
 void SparseLU::analyze(const CscPattern& pattern) {
   auto& m = *impl_;
   m.free_numeric();
   amg_.reset();
-  if (solver_ == Solver::kAmg) {  // no LU of the whole matrix: the split's small block only
-    m.symbolic.reset();
-    m.umf_symbolic.reset();
-    m.n = pattern.n;
-    if (static_cast<int>(amg_node_.size()) != pattern.n)
-      throw std::logic_error("SparseLU: the AMG solver needs set_amg_split() before analyze()");
-    amg_ = std::make_unique<BlockAmg>();
-    amg_->analyze(pattern, amg_node_, amg_direction_, amg_positions_);
-    used_ = Solver::kAmg;
-    ++counters_.symbolic;
+  if (solver_ == Solver::kAmg) {
+    analyze_amg(pattern);
     return;
   }
   m.symbolic.reset();
@@ -167,6 +165,10 @@ void SparseLU::analyze(const CscPattern& pattern) {
                              std::to_string(m.common.status) + ")");
   m.symbolic.reset(sym, SymbolicDeleter{});
   ++counters_.symbolic;
+  if (solver_ == Solver::kAuto && amg_suits(pattern.n)) {
+    analyze_amg(pattern);
+    return;
+  }
   used_ = solver_ != Solver::kAuto                              ? solver_
           : estimated_factor_nonzeros() > auto_fill_threshold() ? Solver::kUmfpack
                                                                 : Solver::kKlu;
@@ -192,6 +194,30 @@ void SparseLU::analyze(const CscPattern& pattern) {
                              ")");
   m.umf_symbolic.reset(us, UmfpackSymbolicDeleter{});
   m.umfpack_workspace();
+}
+
+// The automatic choice of the AMG solver: a build with hypre, a split given, an AMG block of at
+// least half the unknowns (a solid mesh, not a few nodes on a mechanism), and factors that would
+// fill past auto_amg_fill_threshold() — where UMFPACK's time and memory grow as n^1.5 and more
+// (docs/performance.md, "Linear solvers on 3D meshes").
+bool SparseLU::amg_suits(int n) const {
+  if (!amg_available() || static_cast<int>(amg_node_.size()) != n) return false;
+  const long block =
+      std::count_if(amg_node_.begin(), amg_node_.end(), [](int k) { return k >= 0; });
+  return 2 * block >= n && estimated_factor_nonzeros() > auto_amg_fill_threshold();
+}
+
+void SparseLU::analyze_amg(const CscPattern& pattern) {
+  auto& m = *impl_;
+  m.symbolic.reset();  // no LU of the whole matrix: the split's small block only
+  m.umf_symbolic.reset();
+  m.n = pattern.n;
+  if (static_cast<int>(amg_node_.size()) != pattern.n)
+    throw std::logic_error("SparseLU: the AMG solver needs set_amg_split() before analyze()");
+  amg_ = std::make_unique<BlockAmg>();
+  amg_->analyze(pattern, amg_node_, amg_direction_, amg_positions_);
+  used_ = Solver::kAmg;
+  ++counters_.symbolic;
 }
 
 double SparseLU::estimated_factor_nonzeros() const {

@@ -45,9 +45,11 @@ class SparseLU {
   }
   /// Which factorization: kAuto decides at analyze() from KLU's fill estimate of the pattern
   /// (UMFPACK above auto_fill_threshold() nonzeros in L + U), kKlu and kUmfpack force one. The
-  /// decision depends only on the pattern, so the same model always gets the same solver. kAmg is
-  /// never chosen by kAuto: it is asked for (set_amg_split() first; needs a build with hypre).
+  /// decision depends only on the pattern, so the same model always gets the same solver. kAmg
+  /// (set_amg_split() first; needs a build with hypre) is kAuto's choice when the split's AMG block
+  /// holds at least half the unknowns and the estimated fill passes auto_amg_fill_threshold().
   enum class Solver { kAuto, kKlu, kUmfpack, kAmg };
+  static double auto_amg_fill_threshold();
   /// Whether this build has the AMG solver (hypre).
   static bool amg_available() { return BlockAmg::available(); }
   /// The AMG solver's split of the unknowns and the nodes' positions (BlockAmg::analyze), read
@@ -130,6 +132,8 @@ class SparseLU {
  private:
   struct Impl;
   Status factor_umfpack(std::span<const double> values);
+  bool amg_suits(int n) const;
+  void analyze_amg(const CscPattern& pattern);
   std::unique_ptr<Impl> impl_;
   std::unique_ptr<BlockAmg> amg_;
   std::vector<int> amg_node_, amg_direction_;

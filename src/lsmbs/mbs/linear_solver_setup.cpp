@@ -31,7 +31,9 @@ void analyze_model_matrix(SparseLU& lu, const Model& m, SparseLU::Solver solver,
                           SparseLU::Ordering ordering) {
   lu.set_ordering(ordering);
   lu.set_solver(solver);
-  if (solver == SparseLU::Solver::kAmg) {
+  if (solver == SparseLU::Solver::kAmg ||
+      (solver == SparseLU::Solver::kAuto && SparseLU::amg_available() &&
+       !m.solid_bodies().empty())) {
     std::vector<int> node_of, direction_of;
     std::vector<double> positions;
     amg_split(m, node_of, direction_of, positions);

@@ -172,7 +172,12 @@ void ModelBuilder::spatial_joint(const std::string& name, SpatialJointKind kind,
   if (!ba && !bb) fail(e, "", "both bodies are ground");
   if (ba == bb) fail(e, "b", "a joint cannot connect a body to itself");
   check(e, o.validate(kind));
-  SpatialJointInfo info{kind, a, b, SpatialJointFrame::about(o.at, o.axis), -1};
+  // spherical and weld joints take no axis (SpatialJointOptions): their frame is the one about
+  // z, whatever `axis` holds — a weld locks the orientation both sides share at assembly, in any
+  // orthonormal frame; reading an unset axis made the weld's frame garbage
+  const bool uses_axis = kind != SpatialJointKind::kSpherical && kind != SpatialJointKind::kWeld;
+  SpatialJointInfo info{kind, a, b,
+                        SpatialJointFrame::about(o.at, uses_axis ? o.axis : Vec3::UnitZ()), -1};
   if (kind == SpatialJointKind::kUniversal) {  // x1: the axis on a, x2: the axis on b
     info.frame.axes.col(0) = o.axis.normalized();
     info.frame.axes.col(1) = o.axis_b->normalized();

@@ -16,6 +16,9 @@ using namespace lsmbs;
 
 namespace {
 
+// a grid of nodes whose factors would fill past SparseLU::auto_amg_fill_threshold()
+constexpr int kLargeSide = 40;
+
 struct SaddlePoint {
   CscPattern pattern;
   std::vector<double> values;
@@ -187,4 +190,26 @@ TEST(BlockAmg, ASingularDirectBlockNamesItsUnknown) {
   EXPECT_FALSE(st.ok());
   EXPECT_GE(amg.singular_column(), 0);
   EXPECT_LT(amg.singular_column(), s.n);
+}
+
+TEST(BlockAmg, AutomaticChoiceTakesItWhereTheFactorsWouldFillPastTheThreshold) {
+  if (!SparseLU::amg_available()) GTEST_SKIP() << "this build has no hypre";
+  // KLU's own fill estimate decides, on the pattern alone: a small solid grid stays with an LU, a
+  // large one (its AMD-ordered factors past SparseLU::auto_amg_fill_threshold()) goes to AMG; an
+  // LU estimate is printed with each
+  for (int side : {8, kLargeSide}) {
+    const SaddlePoint s = make(side, side, side);
+    SparseLU klu;
+    klu.set_solver(SparseLU::Solver::kKlu);
+    klu.analyze(s.pattern);
+    const double fill = klu.estimated_factor_nonzeros();
+    SparseLU lu;
+    lu.set_amg_split(s.node_of, s.direction_of, s.positions);
+    lu.analyze(s.pattern);
+    std::printf("%d³ nodes, %d unknowns: estimated fill %.3g, automatic choice %s\n", side, s.n,
+                fill, SparseLU::solver_name(lu.solver_used()));
+    EXPECT_EQ(lu.solver_used() == SparseLU::Solver::kAmg,
+              fill > SparseLU::auto_amg_fill_threshold());
+    EXPECT_EQ(lu.solver_used() == SparseLU::Solver::kAmg, side == kLargeSide);
+  }
 }
