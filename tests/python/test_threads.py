@@ -6,6 +6,7 @@ instead of 0.269081 kg). Runs on one case now take turns (Study::evaluation_mute
 import threading
 
 import numpy as np
+import pytest
 
 import lsmbs
 from conftest import ROOT, SPRING
@@ -46,6 +47,17 @@ def in_two_threads(run, points):
     return out
 
 
+def same_in_two_threads(run, points):
+    """run(point) -> (values, gradients) for every point, one after the other and in two threads:
+    bit for bit the same. Returns the sequential results."""
+    sequential = [run(p) for p in points]
+    parallel = in_two_threads(run, points)
+    for (v0, g0), (v1, g1) in zip(sequential, parallel):
+        assert_same(v0, v1)
+        assert_same(g0, g1)
+    return sequential
+
+
 def test_two_threads_sharing_a_case_get_their_own_sensitivities():
     case = lsmbs.load_case(str(SPRING))
     points = designs(case, 10)
@@ -55,11 +67,7 @@ def test_two_threads_sharing_a_case_get_their_own_sensitivities():
         assert r.status == "complete"
         return r.values, r.gradients
 
-    sequential = [run(p) for p in points]
-    parallel = in_two_threads(run, points)
-    for (v0, g0), (v1, g1) in zip(sequential, parallel):
-        assert_same(v0, v1)
-        assert_same(g0, g1)
+    sequential = same_in_two_threads(run, points)
     # the designs differ, so a run on another's design could not pass the comparison above
     assert len({v["energy_integral"] for v, _ in sequential}) == len(points)
 
@@ -93,3 +101,32 @@ def test_two_threads_sharing_a_design_problem_evaluate_their_own_points(spring_d
     sequential = [reference.evaluate(p)["objective"] for p in points]
     parallel = in_two_threads(lambda p: prob.evaluate(p)["objective"], points)
     assert parallel == sequential
+
+
+def test_amg_runs_in_two_threads_give_the_runs_one_after_the_other():
+    """The AMG solver (hypre, whose global state every call reaches under one process-wide lock)
+    in two threads at once: each thread runs its own case of the solid arm, so the runs overlap,
+    and each run's direct sensitivities solve on two threads of their own. Every response and
+    gradient is bit for bit the run's one after the other."""
+    solid_arm = ROOT / "data" / "spatial" / "solid_arm.json"
+    cases = [lsmbs.load_case(str(solid_arm)) for _ in range(2)]
+    try:
+        for c in cases:
+            c.simulation.linear_solver = "amg"
+    except ValueError:
+        pytest.skip("this build of lsmbs has no hypre")
+    for c in cases:
+        c.simulation.t_end = 5 * c.simulation.h
+    # point k runs on case k % 2: in_two_threads gives the even points to one thread
+    points = [(k % 2, p) for k, p in enumerate(designs(cases[0], 4))]
+
+    def run(point):
+        k, p = point
+        r = lsmbs.sensitivity(cases[k], design=p)
+        assert r.status == "complete", r.message
+        assert r.summary["primal"]["linear_solver"] == "amg"
+        assert r.summary["primal"]["linear_iterations"] > 0
+        return r.values, r.gradients
+
+    sequential = same_in_two_threads(run, points)
+    assert len({v["plate_mass"] for v, _ in sequential}) == len(points)

@@ -181,6 +181,8 @@ def run_seed(seed, a):
     except Exception as e:  # a generator bug: report it as such
         rec.update({"status": "generator_error", "message": "%s: %s" % (type(e).__name__, e)})
         return rec
+    if a.linear_solver:
+        case["simulation"]["linear_solver"] = a.linear_solver
     rec["family"] = case["_generator"]["family"]
     rec["description"] = case["description"]
     cf = os.path.join(d, "case.json")
@@ -540,6 +542,9 @@ def main(argv=None):
     ap.add_argument("--solid", action="store_true",
                     help="spatial mechanisms with a flexible 3D solid body (gen_spatial.py --solid: "
                          "cantilevers, arms with a drilled plate, pendulums)")
+    ap.add_argument("--linear-solver", choices=["auto", "klu", "umfpack", "amg"],
+                    help="every case's \"simulation\": {\"linear_solver\"} (default: the "
+                         "generator's, i.e. auto)")
     ap.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
     a = ap.parse_args(argv)
     a.lsmbs = os.path.abspath(a.lsmbs)

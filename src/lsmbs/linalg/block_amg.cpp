@@ -1,5 +1,6 @@
 #include "lsmbs/linalg/block_amg.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -19,6 +20,8 @@
 #include <HYPRE_parcsr_ls.h>
 #include <_hypre_parcsr_mv.h>
 #include <mpi.h>
+
+#include "lsmbs/linalg/boomer_amg.hpp"
 #endif
 
 namespace lsmbs {
@@ -31,6 +34,7 @@ struct BlockAmg::Split {
   CscPattern full;                      // S's pattern (the products)
   std::vector<int> f_global, c_global;  // local index → global unknown
   std::vector<double> rotations;        // 3 rigid-body rotations on the AMG block (3 × nf)
+  double layers = 0;                    // elements across the block (Counters::layers)
   std::vector<int> ff_row_ptr, ff_col, ff_src;
   CscPattern cc;
   std::vector<int> cc_src;
@@ -90,11 +94,13 @@ struct BlockAmg::Numeric {
   std::vector<double> cc_values;
   HYPRE_IJMatrix A = nullptr;
   HYPRE_ParCSRMatrix pA = nullptr;
+  std::vector<int> diag_src;  // hypre's storage of A_ff (diagonal first in each row) ← S's values
   HYPRE_IJVector B = nullptr, X = nullptr;
   HYPRE_ParVector pb = nullptr, px = nullptr;
   HYPRE_IJVector R[3] = {nullptr, nullptr, nullptr};  // the rotations (AMG keeps pointers)
   HYPRE_ParVector pr[3] = {nullptr, nullptr, nullptr};
   std::vector<double> row_scale, col_scale;  // equilibration of S and of Sᵀ
+  double norm_s = 0, norm_st = 0;            // ‖D S‖∞, ‖D' Sᵀ‖∞
   HYPRE_Solver amg = nullptr;
   // GMRES and preconditioner workspace (sized once per analysis)
   mutable std::vector<double> V, H, cs, sn, g, y, r, w, z, zc, sz, bs, vs;
@@ -127,6 +133,64 @@ struct BlockAmg::Numeric {
 bool BlockAmg::available() { return false; }
 
 #endif
+
+namespace {
+
+// How many elements thick a block of nodes is (Counters::layers): per connected part of the node
+// graph (row_ptr, col: 3 unknowns per node, x y z consecutive), the extent of its nodes across
+// their thinnest principal direction e (the covariance's smallest eigenvector) over the median
+// of the nodes' largest neighbour spacing along e — the element size across; the thinnest
+// part's figure. On nx × ny × nz bricks it is min(nx, ny, nz).
+double element_layers(const std::vector<int>& row_ptr, const std::vector<int>& col,
+                      const std::vector<double>& X) {
+  const int nodes = static_cast<int>(X.size() / 3);
+  if (nodes == 0) return 0;
+  std::vector<int> parent(nodes);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (int a = 0; a < nodes; ++a)
+    for (int p = row_ptr[3 * a]; p < row_ptr[3 * a + 1]; ++p) {
+      const int ra = find(a), rb = find(col[p] / 3);
+      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    }
+  std::vector<int> part(nodes), members;
+  double thinnest = std::numeric_limits<double>::infinity();
+  std::vector<double> spacing;
+  for (int a = 0; a < nodes; ++a) part[a] = find(a);
+  for (int root = 0; root < nodes; ++root) {
+    if (part[root] != root) continue;
+    members.clear();
+    for (int a = root; a < nodes; ++a)
+      if (part[a] == root) members.push_back(a);
+    auto at = [&](int a) { return Eigen::Vector3d(X[3 * a], X[3 * a + 1], X[3 * a + 2]); };
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int a : members) mean += at(a);
+    mean /= static_cast<double>(members.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (int a : members) cov += (at(a) - mean) * (at(a) - mean).transpose();
+    const Eigen::Vector3d e =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+    double lo = INFINITY, hi = -INFINITY;
+    spacing.clear();
+    for (int a : members) {
+      const double pa = e.dot(at(a));
+      lo = std::min(lo, pa), hi = std::max(hi, pa);
+      double h = 0;
+      for (int p = row_ptr[3 * a]; p < row_ptr[3 * a + 1]; ++p)
+        h = std::max(h, std::abs(e.dot(at(col[p] / 3)) - pa));
+      spacing.push_back(h);
+    }
+    std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
+    const double h = spacing[spacing.size() / 2];
+    thinnest = std::min(thinnest, h > 0 ? (hi - lo) / h : 0.0);
+  }
+  return thinnest;
+}
+
+}  // namespace
 
 BlockAmg::BlockAmg() = default;
 BlockAmg::~BlockAmg() = default;
@@ -233,11 +297,13 @@ void BlockAmg::analyze(const CscPattern& P, std::span<const int> node_of,
     s->cc_lu.set_solver(SparseLU::Solver::kKlu);
     s->cc_lu.analyze(s->cc);
   }
+  std::vector<double> block_positions(3 * order.size());
+  for (size_t a = 0; a < order.size(); ++a)
+    std::copy_n(positions.data() + 3 * static_cast<size_t>(order[a]), 3, &block_positions[3 * a]);
+  s->layers = element_layers(s->ff_row_ptr, s->ff_col, block_positions);
   split_ = std::move(s);
   num_.reset();
-  counters_ = Counters{};
-  counters_.block_unknowns = split_->nf;
-  counters_.direct_unknowns = split_->nc;
+  reset_counters();
 }
 
 void BlockAmg::share_analysis(const BlockAmg& other) {
@@ -245,23 +311,24 @@ void BlockAmg::share_analysis(const BlockAmg& other) {
   split_ = other.split_;
   options = other.options;
   num_.reset();
+  reset_counters();
+}
+
+void BlockAmg::reset_counters() {
   counters_ = Counters{};
   counters_.block_unknowns = split_->nf;
   counters_.direct_unknowns = split_->nc;
+  counters_.layers = split_->layers;
+  fell_back_ = false;
 }
 
 bool BlockAmg::factored() const { return num_ != nullptr; }
 
 #ifdef LSMBS_HAVE_HYPRE
 
-namespace {
-
-// BoomerAMG for 3D elasticity in nodal coordinates, one V-cycle per application: systems AMG
-// (3 functions per node) with nodal coarsening and the rigid-body rotations as interpolation
-// vectors (GM variant 2), as hypre's elasticity examples and MFEM's SetElasticityOptions do.
 // Without the rotations a thin plate (solid_arm.json, 2 bricks through 10 mm) took 149 CG
 // iterations, with them 57; a chunky block 28 against 19 (docs/performance.md).
-HYPRE_Solver make_amg(HYPRE_ParVector* rotations) {
+HYPRE_Solver make_elasticity_amg(const ElasticityAmg& variant) {
   HYPRE_Solver amg = nullptr;
   HYPRE_BoomerAMGCreate(&amg);
   HYPRE_BoomerAMGSetNumFunctions(amg, 3);       // x, y, z of each node (the systems approach)
@@ -269,22 +336,22 @@ HYPRE_Solver make_amg(HYPRE_ParVector* rotations) {
   HYPRE_BoomerAMGSetCoarsenType(amg, 10);       // HMIS
   HYPRE_BoomerAMGSetInterpType(amg, 6);         // extended+i
   HYPRE_BoomerAMGSetPMaxElmts(amg, 4);
-  HYPRE_BoomerAMGSetAggNumLevels(amg, 0);
+  HYPRE_BoomerAMGSetAggNumLevels(amg, variant.aggressive ? 1 : 0);
   HYPRE_BoomerAMGSetRelaxType(amg, 6);  // symmetric hybrid Gauss–Seidel: a symmetric V-cycle
   HYPRE_BoomerAMGSetNumSweeps(amg, 1);
-  HYPRE_BoomerAMGSetNodal(amg, 4);  // strength between nodes by the row-sum norm of blocks
-  HYPRE_BoomerAMGSetNodalDiag(amg, 1);
-  HYPRE_BoomerAMGSetCycleRelaxType(amg, 8, 3);  // l1 Gauss–Seidel on the coarsest level
-  HYPRE_BoomerAMGSetInterpVecVariant(amg, 2);
-  HYPRE_BoomerAMGSetInterpVecQMax(amg, 4);
-  HYPRE_BoomerAMGSetInterpVectors(amg, 3, rotations);
+  if (variant.rotations) {
+    HYPRE_BoomerAMGSetNodal(amg, 4);  // strength between nodes by the row-sum norm of blocks
+    HYPRE_BoomerAMGSetNodalDiag(amg, 1);
+    HYPRE_BoomerAMGSetCycleRelaxType(amg, 8, 3);  // l1 Gauss–Seidel on the coarsest level
+    HYPRE_BoomerAMGSetInterpVecVariant(amg, 2);
+    HYPRE_BoomerAMGSetInterpVecQMax(amg, 4);
+    HYPRE_BoomerAMGSetInterpVectors(amg, 3, variant.rotations);
+  }
   HYPRE_BoomerAMGSetMaxIter(amg, 1);
   HYPRE_BoomerAMGSetTol(amg, 0.0);
   HYPRE_BoomerAMGSetPrintLevel(amg, 0);
   return amg;
 }
-
-}  // namespace
 
 Status BlockAmg::factor(std::span<const double> values) {
   if (!split_) throw std::logic_error("BlockAmg::factor before analyze");
@@ -304,9 +371,14 @@ Status BlockAmg::factor(std::span<const double> values) {
     num_->sz.assign(s.n, 0.0), num_->bs.assign(s.n, 0.0), num_->vs.assign(s.n, 0.0);
     num_->row_scale.assign(s.n, 1.0), num_->col_scale.assign(s.n, 1.0);
     num_->cc_values.assign(s.cc_src.size(), 0.0);
+    num_->values.assign(s.full.row_ind.size(), 0.0);
+    bulky_ = !fell_back_ &&
+             (options.shape == Options::Shape::kBulky ||
+              (options.shape == Options::Shape::kAuto && s.layers >= options.bulky_layers));
+    if (s.nf > 0) create_block(*num_, s);
   }
   Numeric& nm = *num_;
-  nm.values.assign(values.begin(), values.end());
+  std::copy(values.begin(), values.end(), nm.values.begin());
   // equilibration: each row's and each column's largest entry
   std::fill(nm.row_scale.begin(), nm.row_scale.end(), 0.0);
   std::fill(nm.col_scale.begin(), nm.col_scale.end(), 0.0);
@@ -318,6 +390,19 @@ Status BlockAmg::factor(std::span<const double> values) {
     }
   for (auto* sc : {&nm.row_scale, &nm.col_scale})
     for (double& d : *sc) d = d > 0 && options.equilibrate ? 1 / d : 1.0;
+  // ‖D S‖∞ and ‖D' Sᵀ‖∞ (the backward error's scale): the largest scaled row (column) sum
+  std::fill(nm.sz.begin(), nm.sz.end(), 0.0);
+  nm.norm_st = 0;
+  for (int j = 0; j < s.n; ++j) {
+    double column = 0;
+    for (int p = s.full.col_ptr[j]; p < s.full.col_ptr[j + 1]; ++p) {
+      const double a = std::abs(values[p]);
+      nm.sz[s.full.row_ind[p]] += a * nm.row_scale[s.full.row_ind[p]];
+      column += a;
+    }
+    nm.norm_st = std::max(nm.norm_st, column * nm.col_scale[j]);
+  }
+  nm.norm_s = *std::max_element(nm.sz.begin(), nm.sz.end());
   for (size_t k = 0; k < s.cc_src.size(); ++k) nm.cc_values[k] = values[s.cc_src[k]];
   if (s.nc > 0) {
     const Status st = nm.cc_lu.factor(nm.cc_values);
@@ -328,45 +413,75 @@ Status BlockAmg::factor(std::span<const double> values) {
                           "singular iteration matrix (column " + std::to_string(singular_) + ")");
     }
   }
-  nm.release();
   if (s.nf > 0) {
-    std::lock_guard<std::mutex> lock(hypre_mutex());
-    const int nf = s.nf;
-    HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, nf - 1, 0, nf - 1, &nm.A);
-    HYPRE_IJMatrixSetObjectType(nm.A, HYPRE_PARCSR);
-    std::vector<HYPRE_Int> sizes(nf);
-    std::vector<HYPRE_BigInt> rows(nf), cols(s.ff_col.begin(), s.ff_col.end());
-    for (int i = 0; i < nf; ++i) sizes[i] = s.ff_row_ptr[i + 1] - s.ff_row_ptr[i], rows[i] = i;
-    std::vector<double> vals(s.ff_src.size());
-    for (size_t k = 0; k < vals.size(); ++k) vals[k] = values[s.ff_src[k]];
-    HYPRE_IJMatrixSetRowSizes(nm.A, sizes.data());
-    HYPRE_IJMatrixInitialize(nm.A);
-    HYPRE_IJMatrixSetValues(nm.A, nf, sizes.data(), rows.data(), cols.data(), vals.data());
-    HYPRE_IJMatrixAssemble(nm.A);
-    HYPRE_IJMatrixGetObject(nm.A, reinterpret_cast<void**>(&nm.pA));
-    for (auto* V : {&nm.B, &nm.X}) {
-      HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, nf - 1, V);
-      HYPRE_IJVectorSetObjectType(*V, HYPRE_PARCSR);
-      HYPRE_IJVectorInitialize(*V);
-      HYPRE_IJVectorAssemble(*V);
-    }
-    HYPRE_IJVectorGetObject(nm.B, reinterpret_cast<void**>(&nm.pb));
-    HYPRE_IJVectorGetObject(nm.X, reinterpret_cast<void**>(&nm.px));
-    std::fill_n(data_of(nm.pb), nf, 0.0);
-    std::fill_n(data_of(nm.px), nf, 0.0);
-    for (int r = 0; r < 3; ++r) {
-      HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, nf - 1, &nm.R[r]);
-      HYPRE_IJVectorSetObjectType(nm.R[r], HYPRE_PARCSR);
-      HYPRE_IJVectorInitialize(nm.R[r]);
-      HYPRE_IJVectorAssemble(nm.R[r]);
-      HYPRE_IJVectorGetObject(nm.R[r], reinterpret_cast<void**>(&nm.pr[r]));
-      std::copy_n(s.rotations.data() + static_cast<size_t>(r) * nf, nf, data_of(nm.pr[r]));
-    }
-    nm.amg = make_amg(nm.pr);
-    HYPRE_BoomerAMGSetup(nm.amg, nm.pA, nm.pb, nm.px);
+    double* a = hypre_CSRMatrixData(hypre_ParCSRMatrixDiag(nm.pA));
+    for (size_t k = 0; k < nm.diag_src.size(); ++k) a[k] = values[nm.diag_src[k]];
+    setup_amg();
   }
   ++counters_.setups;
   return Status::Ok();
+}
+
+// hypre's objects of a factorization, made once (the matrix's values are then written in place):
+// A_ff from its rows, the two vectors of the V-cycle, the rotations; and where each entry of
+// hypre's storage of A_ff (one process: all in the "diagonal" part, the diagonal entry first in
+// each row) takes its value from S.
+void BlockAmg::create_block(Numeric& nm, const Split& s) {
+  std::lock_guard<std::mutex> lock(hypre_mutex());
+  const int nf = s.nf;
+  HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, nf - 1, 0, nf - 1, &nm.A);
+  HYPRE_IJMatrixSetObjectType(nm.A, HYPRE_PARCSR);
+  std::vector<HYPRE_Int> sizes(nf);
+  std::vector<HYPRE_BigInt> rows(nf), cols(s.ff_col.begin(), s.ff_col.end());
+  for (int i = 0; i < nf; ++i) sizes[i] = s.ff_row_ptr[i + 1] - s.ff_row_ptr[i], rows[i] = i;
+  std::vector<double> zeros(s.ff_col.size(), 0.0);
+  HYPRE_IJMatrixSetRowSizes(nm.A, sizes.data());
+  HYPRE_IJMatrixInitialize(nm.A);
+  HYPRE_IJMatrixSetValues(nm.A, nf, sizes.data(), rows.data(), cols.data(), zeros.data());
+  HYPRE_IJMatrixAssemble(nm.A);
+  HYPRE_IJMatrixGetObject(nm.A, reinterpret_cast<void**>(&nm.pA));
+  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(nm.pA);
+  const HYPRE_Int* I = hypre_CSRMatrixI(diag);
+  const HYPRE_Int* J = hypre_CSRMatrixJ(diag);
+  if (hypre_CSRMatrixNumNonzeros(diag) != static_cast<HYPRE_Int>(s.ff_col.size()) ||
+      hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixOffd(nm.pA)) != 0)
+    throw std::logic_error("BlockAmg: hypre stored A_ff with other entries than given");
+  nm.diag_src.resize(s.ff_col.size());
+  for (int i = 0; i < nf; ++i)
+    for (HYPRE_Int k = I[i]; k < I[i + 1]; ++k) {
+      const auto b = s.ff_col.begin() + s.ff_row_ptr[i], e = s.ff_col.begin() + s.ff_row_ptr[i + 1];
+      const auto it = std::lower_bound(b, e, static_cast<int>(J[k]));
+      if (it == e || *it != J[k]) throw std::logic_error("BlockAmg: an entry hypre added");
+      nm.diag_src[k] = s.ff_src[it - s.ff_col.begin()];
+    }
+  for (auto* V : {&nm.B, &nm.X}) {
+    HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, nf - 1, V);
+    HYPRE_IJVectorSetObjectType(*V, HYPRE_PARCSR);
+    HYPRE_IJVectorInitialize(*V);
+    HYPRE_IJVectorAssemble(*V);
+  }
+  HYPRE_IJVectorGetObject(nm.B, reinterpret_cast<void**>(&nm.pb));
+  HYPRE_IJVectorGetObject(nm.X, reinterpret_cast<void**>(&nm.px));
+  std::fill_n(data_of(nm.pb), nf, 0.0);
+  std::fill_n(data_of(nm.px), nf, 0.0);
+  for (int r = 0; r < 3; ++r) {
+    HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, nf - 1, &nm.R[r]);
+    HYPRE_IJVectorSetObjectType(nm.R[r], HYPRE_PARCSR);
+    HYPRE_IJVectorInitialize(nm.R[r]);
+    HYPRE_IJVectorAssemble(nm.R[r]);
+    HYPRE_IJVectorGetObject(nm.R[r], reinterpret_cast<void**>(&nm.pr[r]));
+    std::copy_n(s.rotations.data() + static_cast<size_t>(r) * nf, nf, data_of(nm.pr[r]));
+  }
+}
+
+// BoomerAMG's hierarchy for A_ff's current values, with the preconditioner of the block's shape.
+void BlockAmg::setup_amg() const {
+  Numeric& nm = *num_;
+  std::lock_guard<std::mutex> lock(hypre_mutex());
+  if (nm.amg) HYPRE_BoomerAMGDestroy(nm.amg);
+  nm.amg = make_elasticity_amg({nm.pr, bulky_});
+  HYPRE_BoomerAMGSetup(nm.amg, nm.pA, nm.pb, nm.px);
+  counters_.bulky = bulky_;
 }
 
 namespace {
@@ -379,10 +494,11 @@ double dot(const double* a, const double* b, int n) {
 
 }  // namespace
 
-// z = P⁻¹ v for S (or for Sᵀ, with its blocks): a symmetric block Gauss–Seidel sweep F, C, F —
-// one V-cycle on the AMG block, the direct block's LU with the AMG block's update, and a second
-// V-cycle on the AMG block's remaining residual, which carries the direct block's correction
-// (a rigid body's motion) into the flexible body's interior.
+// z = P⁻¹ v for S (or for Sᵀ, with its blocks). Thin: a symmetric block Gauss–Seidel sweep
+// F, C, F — one V-cycle on the AMG block, the direct block's LU with the AMG block's update, and a
+// second V-cycle on the AMG block's remaining residual, which carries the direct block's
+// correction (a rigid body's motion) into the flexible body's interior. Bulky: C, F — the direct
+// block's LU, then one V-cycle on the AMG block's residual after that correction.
 void BlockAmg::precondition(const double* v, double* z, bool transpose) const {
   const Split& s = *split_;
   Numeric& nm = *num_;
@@ -394,6 +510,24 @@ void BlockAmg::precondition(const double* v, double* z, bool transpose) const {
     HYPRE_BoomerAMGSolve(nm.amg, nm.pA, nm.pb, nm.px);
   };
   std::fill_n(z, s.n, 0.0);
+  if (bulky_) {
+    if (s.nc > 0) {
+      for (int k = 0; k < s.nc; ++k) nm.zc[k] = v[s.c_global[k]];
+      auto zc = std::span<double>(nm.zc.data(), nm.zc.size());
+      transpose ? nm.cc_lu.solve_transpose(zc) : nm.cc_lu.solve(zc);
+      for (int k = 0; k < s.nc; ++k) z[s.c_global[k]] = nm.zc[k];
+    }
+    if (s.nf > 0) {
+      for (int k = 0; k < s.nf; ++k) bf[k] = v[s.f_global[k]];
+      if (!transpose)  // − A_fc z_c
+        for (const auto& e : s.fc) bf[e.row_f] -= nm.values[e.src] * nm.zc[e.col_c];
+      else  // − (Sᵀ)_fc z_c = − A_cfᵀ z_c
+        for (const auto& e : s.cf) bf[e.col_f] -= nm.values[e.src] * nm.zc[e.row_c];
+      v_cycle();
+      for (int k = 0; k < s.nf; ++k) z[s.f_global[k]] = xf[k];
+    }
+    return;
+  }
   if (s.nf > 0) {
     for (int k = 0; k < s.nf; ++k) bf[k] = v[s.f_global[k]];
     v_cycle();
@@ -443,7 +577,9 @@ void BlockAmg::multiply(const double* x, double* y, bool transpose) const {
 // residual, and a solve ends only when, for the x it returns, ‖D(b − S x)‖ ≤ rtol ‖D b‖; or, once
 // round-off stops the residual from falling (a restart cycle gains less than a factor 2), when it
 // is at most `attainable` ‖D b‖ — on the solid arm the LU's own residual is 5e-11 ‖b‖.
-void BlockAmg::solve_one(double* b, bool transpose) const {
+//
+// Returns the iterations; the solution is left in the workspace w, b is not changed.
+BlockAmg::Outcome BlockAmg::gmres(const double* b, bool transpose, int max_iterations) const {
   const Split& s = *split_;
   Numeric& nm = *num_;
   const int n = s.n, m = options.restart;
@@ -452,10 +588,11 @@ void BlockAmg::solve_one(double* b, bool transpose) const {
   std::fill_n(x, n, 0.0);
   for (int i = 0; i < n; ++i) nm.bs[i] = D[i] * b[i];
   const double bnorm = std::sqrt(dot(nm.bs.data(), nm.bs.data(), n));
-  if (bnorm == 0) {
-    std::fill_n(b, n, 0.0);
-    return;
-  }
+  Outcome o;
+  if (bnorm == 0) return o;
+  double binf = 0;
+  for (int i = 0; i < n; ++i) binf = std::max(binf, std::abs(nm.bs[i]));
+  const double anorm = transpose ? nm.norm_st : nm.norm_s;
   const double target = options.rtol * bnorm;
   auto V = [&](int j) { return nm.V.data() + static_cast<size_t>(j) * n; };
   auto H = [&](int i, int j) -> double& { return nm.H[static_cast<size_t>(j) * (m + 1) + i]; };
@@ -465,21 +602,25 @@ void BlockAmg::solve_one(double* b, bool transpose) const {
     precondition(nm.vs.data(), z, transpose);
   };
   int its = 0;
-  double rel = 1, previous = INFINITY;
-  bool stalled = false;
+  double previous = INFINITY;
   for (;;) {
     multiply(x, nm.r.data(), transpose);
     for (int i = 0; i < n; ++i) nm.r[i] = D[i] * (b[i] - nm.r[i]);
     const double beta = std::sqrt(dot(nm.r.data(), nm.r.data(), n));
-    rel = beta / bnorm;
-    stalled = beta > 0.5 * previous && rel <= options.attainable;
+    double rinf = 0, xinf = 0;
+    for (int i = 0; i < n; ++i)
+      rinf = std::max(rinf, std::abs(nm.r[i])), xinf = std::max(xinf, std::abs(x[i]));
+    o.rel = beta / bnorm;
+    o.eta = rinf / (anorm * xinf + binf);
+    o.stalled = beta > 0.5 * previous && o.rel <= options.attainable;
+    o.converged = o.rel <= options.rtol || o.eta <= options.backward_error || o.stalled;
     previous = beta;
-    if (beta <= target || stalled || !std::isfinite(beta) || its >= options.max_iterations) break;
+    if (o.converged || !std::isfinite(beta) || its >= max_iterations) break;
     for (int i = 0; i < n; ++i) V(0)[i] = nm.r[i] / beta;
     std::fill(nm.g.begin(), nm.g.end(), 0.0);
     nm.g[0] = beta;
     int k = 0;
-    while (k < m && its < options.max_iterations) {
+    while (k < m && its < max_iterations) {
       precondition_scaled(V(k), nm.z.data());
       double* w = V(k + 1);
       multiply(nm.z.data(), w, transpose);
@@ -524,18 +665,37 @@ void BlockAmg::solve_one(double* b, bool transpose) const {
     precondition_scaled(nm.r.data(), nm.z.data());
     for (int l = 0; l < n; ++l) x[l] += nm.z[l];
   }
+  o.iterations = its;
+  return o;
+}
+
+// One solve: GMRES with the block's preconditioner; a bulky one that has not converged after
+// fallback_iterations starts again from zero with the thin one, kept from then on.
+void BlockAmg::solve_one(double* b, bool transpose) const {
+  Outcome o = gmres(b, transpose,
+                    bulky_ ? std::min(options.fallback_iterations, options.max_iterations)
+                           : options.max_iterations);
+  int its = o.iterations;
+  if (bulky_ && !o.converged) {
+    bulky_ = false, fell_back_ = true;
+    ++counters_.fallbacks;
+    setup_amg();
+    o = gmres(b, transpose, options.max_iterations);
+    its += o.iterations;
+  }
   counters_.iterations += its;
   counters_.max_iterations = std::max(counters_.max_iterations, its);
-  counters_.worst_residual = std::max(counters_.worst_residual, rel);
-  if (!(rel <= options.rtol || stalled)) {
-    char msg[300];
+  counters_.worst_residual = std::max(counters_.worst_residual, o.rel);
+  if (!o.converged) {
+    char msg[400];
     std::snprintf(msg, sizeof msg,
                   "the AMG-preconditioned GMRES stopped after %d iterations at a relative "
-                  "residual of %.3g (tolerance %.3g, or %.3g where round-off stalls it)",
-                  its, rel, options.rtol, options.attainable);
+                  "residual of %.3g and a backward error of %.3g (tolerance %.3g, or a backward "
+                  "error of %.3g, or %.3g where round-off stalls the residual)",
+                  its, o.rel, o.eta, options.rtol, options.backward_error, options.attainable);
     throw LinearSolveError(msg);
   }
-  std::copy_n(x, n, b);
+  std::copy_n(num_->w.data(), split_->n, b);
 }
 
 void BlockAmg::solve(std::span<double> b, int nrhs, bool transpose) const {

@@ -14,6 +14,8 @@
 // the second V-cycle carrying the direct block's correction (a rigid body's motion) into the
 // flexible body: a payload hanging on a thin plate (solid_arm.json) took 205 GMRES(60) iterations
 // with the first two steps alone, 58 with all three. For Sᵀ the same sweep on Sᵀ's blocks.
+// Where the block is several elements thick across (Options::Shape), the sweep is C, F instead
+// — z_c = A_cc⁻¹ r_c, z_f = AMG(r_f − A_fc z_c) — with aggressive coarsening: one cheaper V-cycle.
 // GMRES iterates on the true (equilibrated) matrix, so the solution is S⁻¹b to the tolerance
 // whatever the quality of the preconditioner: a relative residual of `rtol` (1e-12) on the
 // equilibrated system, or of `attainable` (1e-10) where round-off stalls it above rtol, as it
@@ -40,9 +42,25 @@ class BlockAmg {
     double rtol = 1e-12;  ///< ‖D(b − S x)‖ ≤ rtol ‖D b‖, D the equilibration
     /// or, where round-off stalls the residual above rtol, ≤ attainable ‖D b‖
     double attainable = 1e-10;
+    /// or the normwise backward error ‖D(b − S x)‖∞ / (‖D S‖∞ ‖x‖∞ + ‖D b‖∞) is at most this,
+    /// as a stable direct solver's: where b nearly cancels against S x (a sensitivity's
+    /// right-hand side 1e-9 of ‖S‖‖x‖), round-off holds the relative residual far above rtol
+    double backward_error = 1e-14;
     int restart = 60;  ///< GMRES(m) Krylov basis size
     bool equilibrate = true;
     int max_iterations = 2000;
+    /// The AMG block's shape, which sets the preconditioner (kAuto: kBulky where the block is at
+    /// least `bulky_layers` elements thick, kThin elsewhere). kThin: standard coarsening and the
+    /// sweep F, C, F (two V-cycles); kBulky: aggressive coarsening on the first level and the
+    /// sweep C, F (one V-cycle), about half the cost on meshes several elements thick, but slow
+    /// or divergent on plates one or two elements thick (docs/performance.md).
+    enum class Shape { kAuto, kThin, kBulky };
+    Shape shape = Shape::kAuto;
+    double bulky_layers = 4;
+    /// A solve with the bulky preconditioner that has not converged after this many iterations
+    /// starts again from zero with the thin one, which the solver keeps until the next analysis
+    /// (a curved shell that looks bulky from afar).
+    int fallback_iterations = 150;
   };
   /// Counts since analyze(), for summaries and the benchmarks.
   struct Counters {
@@ -50,6 +68,13 @@ class BlockAmg {
     int max_iterations = 0;     ///< the most GMRES iterations one solve took
     double worst_residual = 0;  ///< the largest final relative residual of a solve
     int block_unknowns = 0, direct_unknowns = 0;
+    /// How many elements thick the AMG block is: per connected part of its node graph, the
+    /// extent across the thinnest principal direction of its nodes over the median of the nodes'
+    /// largest neighbour spacing along it; the thinnest part's figure (nx × ny × nz bricks:
+    /// min(nx, ny, nz)).
+    double layers = 0;
+    bool bulky = false;  ///< the preconditioner in use (Options::Shape)
+    int fallbacks = 0;   ///< bulky solves that started again as thin
   };
 
   BlockAmg();
@@ -87,10 +112,20 @@ class BlockAmg {
   void precondition(const double* v, double* z, bool transpose) const;
   void multiply(const double* x, double* y, bool transpose) const;
   void solve_one(double* b, bool transpose) const;
+  struct Outcome {
+    int iterations = 0;
+    double rel = 0, eta = 0;  // relative residual (2-norm), normwise backward error (∞-norms)
+    bool stalled = false, converged = true;
+  };
+  Outcome gmres(const double* b, bool transpose, int max_iterations) const;
+  void setup_amg() const;
+  static void create_block(Numeric& nm, const Split& s);
+  void reset_counters();
   std::shared_ptr<const Split> split_;
   std::unique_ptr<Numeric> num_;
   mutable Counters counters_;
   int singular_ = -1;
+  mutable bool bulky_ = false, fell_back_ = false;
 };
 
 /// An iterative solve that missed its tolerance: a numerical failure (exit code 1, the results

@@ -154,6 +154,13 @@ nlohmann::json run_bench(const std::string& file, const BenchOptions& o) {
                 {"ordering", SparseLU::ordering_name(lu.ordering())},
                 {"linear_solver", SparseLU::solver_name(lu.solver_used())},
                 {"lu_nonzeros", lu.factor_nonzeros()}};
+  if (const BlockAmg* amg = lu.amg()) {  // the floor's solver: the AMG block and its shape
+    const auto& c = amg->counters();
+    J["model"]["amg_block"] = {{"unknowns", c.block_unknowns},
+                               {"direct_unknowns", c.direct_unknowns},
+                               {"element_layers", c.layers},
+                               {"preconditioner", c.bulky ? "bulky" : "thin"}};
+  }
   J["floor_seconds"] = floor_json;
   J["primal"] = primal_json(primal, t_primal, floor);
   J["sensitivities"] = sensitivity_seconds(cs, o, t_primal);

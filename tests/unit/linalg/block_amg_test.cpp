@@ -94,46 +94,110 @@ SaddlePoint make(int nx, int ny, int nz, double skew = 0) {
 
 double relative_difference(const Mat& a, const Mat& b) { return (a - b).norm() / b.norm(); }
 
+// KLU factorized on s (the reference) and the AMG solver analyzed, not yet factorized (its
+// options are set between the two)
+void reference_and_amg(const SaddlePoint& s, SparseLU& klu, SparseLU& amg) {
+  klu.set_solver(SparseLU::Solver::kKlu);
+  klu.analyze(s.pattern);
+  ASSERT_TRUE(klu.factor(s.values).ok());
+  amg.set_solver(SparseLU::Solver::kAmg);
+  amg.set_amg_split(s.node_of, s.direction_of, s.positions);
+  amg.analyze(s.pattern);
+}
+
 }  // namespace
 
 TEST(BlockAmg, SolvesTheSaddlePointAsTheLUDoesForSAndItsTranspose) {
   if (!SparseLU::amg_available()) GTEST_SKIP() << "this build has no hypre";
-  for (double skew : {0.0, 0.05}) {
-    const SaddlePoint s = make(12, 6, 5, skew);
-    SparseLU klu, amg;
-    klu.set_solver(SparseLU::Solver::kKlu);
-    klu.analyze(s.pattern);
-    ASSERT_TRUE(klu.factor(s.values).ok());
-    amg.set_solver(SparseLU::Solver::kAmg);
-    amg.set_amg_split(s.node_of, s.direction_of, s.positions);
-    amg.analyze(s.pattern);
-    EXPECT_EQ(amg.solver_used(), SparseLU::Solver::kAmg);
-    ASSERT_TRUE(amg.factor(s.values).ok());
-    EXPECT_EQ(amg.amg()->counters().block_unknowns, 3 * s.free_nodes);
-    EXPECT_EQ(amg.amg()->counters().direct_unknowns, s.n - 3 * s.free_nodes);
+  using Shape = BlockAmg::Options::Shape;
+  for (Shape shape : {Shape::kThin, Shape::kBulky})
+    for (double skew : {0.0, 0.05}) {
+      const SaddlePoint s = make(12, 6, 5, skew);
+      SparseLU klu, amg;
+      reference_and_amg(s, klu, amg);
+      EXPECT_EQ(amg.solver_used(), SparseLU::Solver::kAmg);
+      amg.amg()->options.shape = shape;
+      ASSERT_TRUE(amg.factor(s.values).ok());
+      EXPECT_EQ(amg.amg()->counters().bulky, shape == Shape::kBulky);
+      EXPECT_EQ(amg.amg()->counters().block_unknowns, 3 * s.free_nodes);
+      EXPECT_EQ(amg.amg()->counters().direct_unknowns, s.n - 3 * s.free_nodes);
 
-    std::mt19937 g(7);
-    std::normal_distribution<double> u;
-    Mat B(s.n, 5);
-    for (int i = 0; i < B.size(); ++i) B(i) = u(g);
-    Mat X = B, Xr = B;
-    amg.solve(X);
-    klu.solve(Xr);
-    const double d = relative_difference(X, Xr);
-    Mat Y = B, Yr = B;
-    amg.solve_transpose(std::span<double>(Y.data(), Y.size()), 5);
-    klu.solve_transpose(std::span<double>(Yr.data(), Yr.size()), 5);
-    const double dt = relative_difference(Y, Yr);
-    const auto& c = amg.amg()->counters();
-    std::printf(
-        "skew %.2f: AMG-GMRES against KLU %.2e (S), %.2e (Sᵀ); %ld solves, at most %d "
-        "iterations, worst residual %.1e\n",
-        skew, d, dt, c.solves, c.max_iterations, c.worst_residual);
-    EXPECT_LT(d, 1e-9);
-    EXPECT_LT(dt, 1e-9);
-    EXPECT_LE(c.worst_residual, amg.amg()->options.rtol);
-    EXPECT_EQ(c.solves, 10);
-  }
+      std::mt19937 g(7);
+      std::normal_distribution<double> u;
+      Mat B(s.n, 5);
+      for (int i = 0; i < B.size(); ++i) B(i) = u(g);
+      Mat X = B, Xr = B;
+      amg.solve(X);
+      klu.solve(Xr);
+      const double d = relative_difference(X, Xr);
+      Mat Y = B, Yr = B;
+      amg.solve_transpose(std::span<double>(Y.data(), Y.size()), 5);
+      klu.solve_transpose(std::span<double>(Yr.data(), Yr.size()), 5);
+      const double dt = relative_difference(Y, Yr);
+      const auto& c = amg.amg()->counters();
+      std::printf(
+          "%s, skew %.2f: AMG-GMRES against KLU %.2e (S), %.2e (Sᵀ); %ld solves, at most %d "
+          "iterations, worst residual %.1e\n",
+          shape == Shape::kBulky ? "bulky" : "thin", skew, d, dt, c.solves, c.max_iterations,
+          c.worst_residual);
+      EXPECT_EQ(c.fallbacks, 0);
+      EXPECT_LT(d, 1e-9);
+      EXPECT_LT(dt, 1e-9);
+      EXPECT_LE(c.worst_residual, amg.amg()->options.rtol);
+      EXPECT_EQ(c.solves, 10);
+    }
+}
+
+TEST(BlockAmg, TheBlockIsAsManyElementsThickAsItsThinnestSideInAnyOrientation) {
+  if (!SparseLU::amg_available()) GTEST_SKIP() << "this build has no hypre";
+  // the free nodes of make(nx, ny, nz) span (nx − 2) × (ny − 1) × (nz − 1) unit cells; turned
+  // about an arbitrary axis, the count is the same (principal directions, not coordinate axes)
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  struct Grid {
+    int nx, ny, nz;
+    double layers;
+  };
+  for (const Grid g : {Grid{12, 6, 5, 4}, Grid{12, 6, 2, 1}, Grid{5, 9, 8, 3}})
+    for (bool turned : {false, true}) {
+      SaddlePoint s = make(g.nx, g.ny, g.nz);
+      if (turned)
+        for (size_t a = 0; a < s.positions.size(); a += 3) {
+          Eigen::Map<Eigen::Vector3d> X(&s.positions[a]);
+          X = R * Eigen::Vector3d(X);
+        }
+      SparseLU amg;
+      amg.set_solver(SparseLU::Solver::kAmg);
+      amg.set_amg_split(s.node_of, s.direction_of, s.positions);
+      amg.analyze(s.pattern);
+      EXPECT_NEAR(amg.amg()->counters().layers, g.layers, 1e-9)
+          << g.nx << "×" << g.ny << "×" << g.nz << (turned ? " turned" : "");
+      ASSERT_TRUE(amg.factor(s.values).ok());
+      EXPECT_EQ(amg.amg()->counters().bulky, g.layers >= amg.amg()->options.bulky_layers);
+    }
+}
+
+TEST(BlockAmg, ABulkySolveThatDoesNotConvergeStartsAgainAsThinAndKeepsIt) {
+  if (!SparseLU::amg_available()) GTEST_SKIP() << "this build has no hypre";
+  const SaddlePoint s = make(12, 6, 5);
+  SparseLU klu, amg;
+  reference_and_amg(s, klu, amg);
+  amg.amg()->options.shape = BlockAmg::Options::Shape::kBulky;
+  amg.amg()->options.fallback_iterations = 1;  // no solve converges in one iteration
+  ASSERT_TRUE(amg.factor(s.values).ok());
+  Vec b = Vec::LinSpaced(s.n, -1, 2), x = b, xr = b;
+  amg.solve(x);
+  klu.solve(xr);
+  EXPECT_LT((x - xr).norm() / xr.norm(), 1e-9);
+  EXPECT_EQ(amg.amg()->counters().fallbacks, 1);
+  EXPECT_FALSE(amg.amg()->counters().bulky);
+  // kept through the next factorization and solve
+  ASSERT_TRUE(amg.factor(s.values).ok());
+  x = b;
+  amg.solve(x);
+  EXPECT_LT((x - xr).norm() / xr.norm(), 1e-9);
+  EXPECT_EQ(amg.amg()->counters().fallbacks, 1);
+  EXPECT_FALSE(amg.amg()->counters().bulky);
 }
 
 TEST(BlockAmg, AnAllDirectSplitIsTheLUAndSharedAnalysesSolveTheirOwnValues) {
