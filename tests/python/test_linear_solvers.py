@@ -68,6 +68,8 @@ def test_amg_and_klu_give_the_same_responses_and_gradients_on_a_solid(method):
     amg = run(SOLID_ARM, "amg", method, t_end=0.02)
     d = relative_difference(amg, klu)
     print("solid arm, %s: AMG-GMRES against KLU %.2e" % (method, d))
+    assert amg.summary["primal"]["linear_preconditioner"] == "thin"  # a plate 2 bricks thick
+    assert klu.summary["primal"]["linear_preconditioner"] == ""
     assert d < 1e-8
 
 
@@ -86,12 +88,22 @@ def test_amg_on_a_bulky_block_gives_the_lu_results_with_its_one_v_cycle_precondi
         pytest.skip("this build of lsmbs has no hypre")
     b, _ = bench(tmp_path, cf, "bulky_amg", "/simulation/linear_solver=amg")
     assert b["model"]["amg_block"]["preconditioner"] == "bulky", b["model"]
-    assert b["model"]["amg_block"]["element_layers"] == pytest.approx(4, rel=1e-12)
+    assert b["model"]["amg_block"]["element_layers"] == 4  # snapped to the integer
+    # the box shifted far from the origin: round-off in the positions, the same count
+    far = json.loads(cf.read_text())
+    far["bodies"][0]["mesh"]["origin"] = [123.4, -56.7, 8.9]
+    far["design"]["geometry"][0]["features"][0].update(cx=123.55, cy=-56.625, cz=8.95)
+    ff = tmp_path / "bulky_far.json"
+    ff.write_text(json.dumps(far))
+    b, _ = bench(tmp_path, ff, "bulky_far_amg", "/simulation/linear_solver=amg")
+    assert b["model"]["amg_block"]["element_layers"] == 4, b["model"]
+    assert b["model"]["amg_block"]["preconditioner"] == "bulky"
     for method in ("direct-analytic", "adjoint"):
         klu = run(cf, "klu", method)
         amg = run(cf, "amg", method)
         d = relative_difference(amg, klu)
         print("bulky block, %s: AMG-GMRES against KLU %.2e" % (method, d))
+        assert amg.summary["primal"]["linear_preconditioner"] == "bulky"
         assert d < 1e-8
         assert np.abs(np.asarray(amg.gradients["tip_z"])).max() > 0
 

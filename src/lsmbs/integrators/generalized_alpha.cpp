@@ -762,6 +762,9 @@ IntegratorSummary AlphaRun::finish() {
       sum_.linear_iterations += amg->counters().iterations;
       sum_.max_linear_iterations =
           std::max<long>(sum_.max_linear_iterations, amg->counters().max_iterations);
+      const auto& c = amg->counters();
+      const std::string used = c.fallbacks > 0 ? "bulky, then thin" : c.bulky ? "bulky" : "thin";
+      if (sum_.linear_preconditioner.empty() || c.fallbacks > 0) sum_.linear_preconditioner = used;
     }
   sum_.wall_seconds = seconds_since(t_start_);
   return std::move(sum_);

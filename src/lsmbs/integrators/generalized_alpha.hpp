@@ -107,6 +107,9 @@ struct IntegratorSummary {
   /// The AMG solver's GMRES iterations over all its solves, and the most one solve took (0 with
   /// a direct LU).
   long linear_iterations = 0, max_linear_iterations = 0;
+  /// The AMG solver's preconditioner (BlockAmg::Options::Shape): "bulky" or "thin", "bulky, then
+  /// thin" when a bulky solve did not converge and started again as thin; "" with a direct LU.
+  std::string linear_preconditioner;
   double force_floor = 0;  ///< largest per-row round-off floor met [N] (residual_floor_N)
   double wall_seconds = 0;
   RunStatus status() const;

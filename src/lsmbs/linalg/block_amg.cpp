@@ -136,58 +136,71 @@ bool BlockAmg::available() { return false; }
 
 namespace {
 
-// How many elements thick a block of nodes is (Counters::layers): per connected part of the node
-// graph (row_ptr, col: 3 unknowns per node, x y z consecutive), the extent of its nodes across
-// their thinnest principal direction e (the covariance's smallest eigenvector) over the median
-// of the nodes' largest neighbour spacing along e — the element size across; the thinnest
-// part's figure. On nx × ny × nz bricks it is min(nx, ny, nz).
-double element_layers(const std::vector<int>& row_ptr, const std::vector<int>& col,
-                      const std::vector<double>& X) {
-  const int nodes = static_cast<int>(X.size() / 3);
-  if (nodes == 0) return 0;
-  std::vector<int> parent(nodes);
-  std::iota(parent.begin(), parent.end(), 0);
+// How many elements thick the solids are (Counters::layers): per connected part of the graph of
+// solid nodes (node_of, any direction: the AMG block's and the held ones, coupled through S's
+// pattern), the extent of its nodes across their thinnest principal direction e (the covariance's
+// smallest eigenvector) over the median of the nodes' largest neighbour spacing along e — the
+// element size across; the thinnest part's figure, snapped to an integer within 1e-6 (a box's
+// round-off). On nx × ny × nz bricks it is min(nx, ny, nz).
+double element_layers(const CscPattern& P, std::span<const int> node_of,
+                      std::span<const double> positions) {
+  const int nodes = static_cast<int>(positions.size() / 3);
+  std::vector<int> parent(nodes, -1);  // −1: no unknown of the node in the split
+  for (int i = 0; i < P.n; ++i)
+    if (node_of[i] >= 0) parent[node_of[i]] = node_of[i];
   auto find = [&](int a) {
     while (parent[a] != a) a = parent[a] = parent[parent[a]];
     return a;
   };
+  for (int j = 0; j < P.n; ++j)
+    for (int p = P.col_ptr[j]; p < P.col_ptr[j + 1]; ++p)
+      if (node_of[j] >= 0 && node_of[P.row_ind[p]] >= 0) {
+        const int ra = find(node_of[j]), rb = find(node_of[P.row_ind[p]]);
+        if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+      }
+  auto at = [&](int a) {
+    return Eigen::Vector3d(positions[3 * a], positions[3 * a + 1], positions[3 * a + 2]);
+  };
+  // per part (by its root): the thinnest direction, the extent across it
+  std::vector<int> part(nodes, -1), count(nodes, 0);
+  std::vector<Eigen::Vector3d> mean(nodes, Eigen::Vector3d::Zero()), dir(nodes);
+  std::vector<Eigen::Matrix3d> cov(nodes, Eigen::Matrix3d::Zero());
   for (int a = 0; a < nodes; ++a)
-    for (int p = row_ptr[3 * a]; p < row_ptr[3 * a + 1]; ++p) {
-      const int ra = find(a), rb = find(col[p] / 3);
-      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    if (parent[a] >= 0) part[a] = find(a), mean[part[a]] += at(a), ++count[part[a]];
+  for (int r = 0; r < nodes; ++r)
+    if (count[r] > 0) mean[r] /= count[r];
+  for (int a = 0; a < nodes; ++a)
+    if (part[a] >= 0) cov[part[a]] += (at(a) - mean[part[a]]) * (at(a) - mean[part[a]]).transpose();
+  std::vector<double> lo(nodes, INFINITY), hi(nodes, -INFINITY), spacing(nodes, 0.0);
+  for (int r = 0; r < nodes; ++r)
+    if (count[r] > 0)
+      dir[r] = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov[r]).eigenvectors().col(0);
+  for (int a = 0; a < nodes; ++a)
+    if (part[a] >= 0) {
+      const double pa = dir[part[a]].dot(at(a));
+      lo[part[a]] = std::min(lo[part[a]], pa), hi[part[a]] = std::max(hi[part[a]], pa);
     }
-  std::vector<int> part(nodes), members;
-  double thinnest = std::numeric_limits<double>::infinity();
-  std::vector<double> spacing;
-  for (int a = 0; a < nodes; ++a) part[a] = find(a);
-  for (int root = 0; root < nodes; ++root) {
-    if (part[root] != root) continue;
-    members.clear();
-    for (int a = root; a < nodes; ++a)
-      if (part[a] == root) members.push_back(a);
-    auto at = [&](int a) { return Eigen::Vector3d(X[3 * a], X[3 * a + 1], X[3 * a + 2]); };
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int a : members) mean += at(a);
-    mean /= static_cast<double>(members.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int a : members) cov += (at(a) - mean) * (at(a) - mean).transpose();
-    const Eigen::Vector3d e =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
-    double lo = INFINITY, hi = -INFINITY;
-    spacing.clear();
-    for (int a : members) {
-      const double pa = e.dot(at(a));
-      lo = std::min(lo, pa), hi = std::max(hi, pa);
-      double h = 0;
-      for (int p = row_ptr[3 * a]; p < row_ptr[3 * a + 1]; ++p)
-        h = std::max(h, std::abs(e.dot(at(col[p] / 3)) - pa));
-      spacing.push_back(h);
+  for (int j = 0; j < P.n; ++j)
+    for (int p = P.col_ptr[j]; p < P.col_ptr[j + 1]; ++p) {
+      const int a = node_of[j], b = node_of[P.row_ind[p]];
+      if (a >= 0 && b >= 0)
+        spacing[a] = std::max(spacing[a], std::abs(dir[part[a]].dot(at(b) - at(a))));
     }
-    std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
-    const double h = spacing[spacing.size() / 2];
-    thinnest = std::min(thinnest, h > 0 ? (hi - lo) / h : 0.0);
+  double thinnest = INFINITY;
+  std::vector<double> h;
+  for (int r = 0; r < nodes; ++r) {
+    if (count[r] == 0) continue;
+    h.clear();
+    for (int a = 0; a < nodes; ++a)
+      if (part[a] == r) h.push_back(spacing[a]);
+    std::nth_element(h.begin(), h.begin() + h.size() / 2, h.end());
+    const double median = h[h.size() / 2];
+    const double layers = median > 0 ? (hi[r] - lo[r]) / median : 0.0;
+    const double whole = std::round(layers);
+    thinnest = std::min(thinnest,
+                        std::abs(layers - whole) <= 1e-6 * std::max(1.0, whole) ? whole : layers);
   }
-  return thinnest;
+  return std::isfinite(thinnest) ? thinnest : 0.0;
 }
 
 }  // namespace
@@ -297,10 +310,7 @@ void BlockAmg::analyze(const CscPattern& P, std::span<const int> node_of,
     s->cc_lu.set_solver(SparseLU::Solver::kKlu);
     s->cc_lu.analyze(s->cc);
   }
-  std::vector<double> block_positions(3 * order.size());
-  for (size_t a = 0; a < order.size(); ++a)
-    std::copy_n(positions.data() + 3 * static_cast<size_t>(order[a]), 3, &block_positions[3 * a]);
-  s->layers = element_layers(s->ff_row_ptr, s->ff_col, block_positions);
+  s->layers = element_layers(P, node_of, positions);
   split_ = std::move(s);
   num_.reset();
   reset_counters();
@@ -576,7 +586,11 @@ void BlockAmg::multiply(const double* x, double* y, bool transpose) const {
 // and a node's mass row then weigh alike in the residual's norm). Each restart starts from the true
 // residual, and a solve ends only when, for the x it returns, ‖D(b − S x)‖ ≤ rtol ‖D b‖; or, once
 // round-off stops the residual from falling (a restart cycle gains less than a factor 2), when it
-// is at most `attainable` ‖D b‖ — on the solid arm the LU's own residual is 5e-11 ‖b‖.
+// is at most `attainable` ‖D b‖ — on the solid arm the LU's own residual is 5e-11 ‖b‖ — or its
+// normwise backward error is at most `backward_error` (b nearly cancelling against S x). Stalled
+// solves end at backward errors of 1e-17 to 5e-16; the backward error is not a reason to stop
+// earlier (on the solid arm, stopping at 1e-14 whenever reached doubled the gradients' distance
+// from the LU's).
 //
 // Returns the iterations; the solution is left in the workspace w, b is not changed.
 BlockAmg::Outcome BlockAmg::gmres(const double* b, bool transpose, int max_iterations) const {
@@ -612,8 +626,11 @@ BlockAmg::Outcome BlockAmg::gmres(const double* b, bool transpose, int max_itera
       rinf = std::max(rinf, std::abs(nm.r[i])), xinf = std::max(xinf, std::abs(x[i]));
     o.rel = beta / bnorm;
     o.eta = rinf / (anorm * xinf + binf);
-    o.stalled = beta > 0.5 * previous && o.rel <= options.attainable;
-    o.converged = o.rel <= options.rtol || o.eta <= options.backward_error || o.stalled;
+    // stalled: a restart cycle gained less than a factor 2 — round-off's floor, where the
+    // residual is judged by what a direct solver would leave
+    o.stalled = beta > 0.5 * previous;
+    o.converged = o.rel <= options.rtol ||
+                  (o.stalled && (o.rel <= options.attainable || o.eta <= options.backward_error));
     previous = beta;
     if (o.converged || !std::isfinite(beta) || its >= max_iterations) break;
     for (int i = 0; i < n; ++i) V(0)[i] = nm.r[i] / beta;

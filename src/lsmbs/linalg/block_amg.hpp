@@ -18,7 +18,8 @@
 // — z_c = A_cc⁻¹ r_c, z_f = AMG(r_f − A_fc z_c) — with aggressive coarsening: one cheaper V-cycle.
 // GMRES iterates on the true (equilibrated) matrix, so the solution is S⁻¹b to the tolerance
 // whatever the quality of the preconditioner: a relative residual of `rtol` (1e-12) on the
-// equilibrated system, or of `attainable` (1e-10) where round-off stalls it above rtol, as it
+// equilibrated system, or of `attainable` (1e-10) — or a backward error of 1e-14 — where
+// round-off stalls it above rtol, as it
 // stalls a direct LU's (docs/performance.md, "Linear solvers on 3D meshes").
 //
 // hypre is a Debian package (libhypre-dev) built with MPI: available() is false in a build without
@@ -42,9 +43,10 @@ class BlockAmg {
     double rtol = 1e-12;  ///< ‖D(b − S x)‖ ≤ rtol ‖D b‖, D the equilibration
     /// or, where round-off stalls the residual above rtol, ≤ attainable ‖D b‖
     double attainable = 1e-10;
-    /// or the normwise backward error ‖D(b − S x)‖∞ / (‖D S‖∞ ‖x‖∞ + ‖D b‖∞) is at most this,
-    /// as a stable direct solver's: where b nearly cancels against S x (a sensitivity's
-    /// right-hand side 1e-9 of ‖S‖‖x‖), round-off holds the relative residual far above rtol
+    /// or, stalled, the normwise backward error ‖D(b − S x)‖∞ / (‖D S‖∞ ‖x‖∞ + ‖D b‖∞) is at
+    /// most this, as a stable direct solver's: where b nearly cancels against S x (a
+    /// sensitivity's right-hand side 1e-9 of ‖S‖‖x‖), round-off stalls the relative residual
+    /// far above rtol (1e-8) at a backward error near 1e-17
     double backward_error = 1e-14;
     int restart = 60;  ///< GMRES(m) Krylov basis size
     bool equilibrate = true;
@@ -68,10 +70,10 @@ class BlockAmg {
     int max_iterations = 0;     ///< the most GMRES iterations one solve took
     double worst_residual = 0;  ///< the largest final relative residual of a solve
     int block_unknowns = 0, direct_unknowns = 0;
-    /// How many elements thick the AMG block is: per connected part of its node graph, the
-    /// extent across the thinnest principal direction of its nodes over the median of the nodes'
-    /// largest neighbour spacing along it; the thinnest part's figure (nx × ny × nz bricks:
-    /// min(nx, ny, nz)).
+    /// How many elements thick the solids are (the AMG block's nodes and the held ones): per
+    /// connected part of their node graph, the extent across the thinnest principal direction of
+    /// its nodes over the median of the nodes' largest neighbour spacing along it; the thinnest
+    /// part's figure, which decides for the whole block (nx × ny × nz bricks: min(nx, ny, nz)).
     double layers = 0;
     bool bulky = false;  ///< the preconditioner in use (Options::Shape)
     int fallbacks = 0;   ///< bulky solves that started again as thin
@@ -88,6 +90,9 @@ class BlockAmg {
   /// The split: `node_of[i]` is the solid node (any numbering that gives each node its own
   /// number) whose coordinate unknown i is, with `direction_of[i]` ∈ {0, 1, 2}; −1 for an unknown
   /// the direct block takes. A node enters the AMG block only with its three coordinates.
+  /// `direction_of[i]` = 3 + d marks coordinate d of a solid node that a constraint holds: the
+  /// direct block takes it, and it counts in the solids' shape (Counters::layers: a face clamped
+  /// across a block's thinnest direction is one of its element layers).
   /// `positions` holds each node's reference position (3 per node number): the rotations that
   /// AMG's interpolation must reproduce. Throws std::logic_error when hypre is not available.
   void analyze(const CscPattern& pattern, std::span<const int> node_of,

@@ -202,8 +202,9 @@ void SparseLU::analyze(const CscPattern& pattern) {
 // (docs/performance.md, "Linear solvers on 3D meshes").
 bool SparseLU::amg_suits(int n) const {
   if (!amg_available() || static_cast<int>(amg_node_.size()) != n) return false;
-  const long block =
-      std::count_if(amg_node_.begin(), amg_node_.end(), [](int k) { return k >= 0; });
+  long block = 0;  // coordinates of the AMG block (a held node's are marked 3 + d)
+  for (int i = 0; i < n; ++i)
+    block += amg_node_[i] >= 0 && amg_direction_[i] >= 0 && amg_direction_[i] < 3;
   return 2 * block >= n && estimated_factor_nonzeros() > auto_amg_fill_threshold();
 }
 

@@ -19,10 +19,11 @@ void amg_split(const Model& m, std::vector<int>& node_of, std::vector<int>& dire
     for (int k = 0; k < body->mesh.num_nodes(); ++k, ++next) {
       const int d0 = body->node_dof(k);
       for (int d = 0; d < 3; ++d) positions.push_back(body->mesh.nodes[k][d]);
-      if (held[d0] || held[d0 + 1] || held[d0 + 2]) continue;
+      // a held node goes to the direct block (3 + d) and counts in the solid's shape
+      const bool held_node = held[d0] || held[d0 + 1] || held[d0 + 2];
       for (int d = 0; d < 3; ++d) {
         node_of[d0 + d] = next;
-        direction_of[d0 + d] = d;
+        direction_of[d0 + d] = held_node ? 3 + d : d;
       }
     }
 }

@@ -12,8 +12,9 @@ namespace lsmbs {
 /// The AMG solver's split (BlockAmg::analyze): the three coordinates of every solid-body node that
 /// no constraint row touches go to the AMG block (node_of: a number of the node's own,
 /// direction_of: 0, 1, 2); every other unknown — multipliers, rigid bodies, planar bodies, nodes
-/// tied by rigid connections or joints — to the direct block (−1). `positions`: each node's
-/// position at t = 0.
+/// tied by rigid connections or joints — to the direct block (−1; a tied node's coordinates keep
+/// their node number with direction 3 + d, to count in the solid's shape). `positions`: each
+/// node's position at t = 0.
 void amg_split(const Model& m, std::vector<int>& node_of, std::vector<int>& direction_of,
                std::vector<double>& positions);
 

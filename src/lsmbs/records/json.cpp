@@ -51,6 +51,7 @@ void to_json(nlohmann::json& j, const IntegratorSummary& s) {
        {"k", s.k},
        {"zeta", s.zeta},
        {"linear_solver", s.linear_solver},
+       {"linear_preconditioner", s.linear_preconditioner},
        {"linear_iterations", s.linear_iterations},
        {"max_linear_iterations", s.max_linear_iterations},
        {"residual_floor_N", s.force_floor},

@@ -102,6 +102,7 @@ void put(Writer& w, const IntegratorSummary& s) {
   w.vec(s.halving_times);
   w.raw(s.k), w.raw(s.zeta), w.raw(s.force_floor), w.raw(s.wall_seconds);
   w.str(s.linear_solver);
+  w.str(s.linear_preconditioner);
 }
 IntegratorSummary get_summary(Reader& rd) {
   IntegratorSummary s;
@@ -119,6 +120,7 @@ IntegratorSummary get_summary(Reader& rd) {
   s.k = rd.raw<double>(), s.zeta = rd.raw<double>(), s.force_floor = rd.raw<double>();
   s.wall_seconds = rd.raw<double>();
   s.linear_solver = rd.str();
+  s.linear_preconditioner = rd.str();
   return s;
 }
 

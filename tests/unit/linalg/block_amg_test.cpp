@@ -154,13 +154,24 @@ TEST(BlockAmg, TheBlockIsAsManyElementsThickAsItsThinnestSideInAnyOrientation) {
   // about an arbitrary axis, the count is the same (principal directions, not coordinate axes)
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  // with the tied face's nodes marked held (direction 3 + d), the x = 0 layer counts: 5 × 9 × 8
+  // nodes are 4 cells across x, its thinnest side
   struct Grid {
     int nx, ny, nz;
+    bool held;
     double layers;
   };
-  for (const Grid g : {Grid{12, 6, 5, 4}, Grid{12, 6, 2, 1}, Grid{5, 9, 8, 3}})
+  for (const Grid g : {Grid{12, 6, 5, false, 4}, Grid{12, 6, 2, false, 1}, Grid{5, 9, 8, false, 3},
+                       Grid{5, 9, 8, true, 4}})
     for (bool turned : {false, true}) {
       SaddlePoint s = make(g.nx, g.ny, g.nz);
+      if (g.held)
+        for (int k = 0; k < g.nz; ++k)
+          for (int j = 0; j < g.ny; ++j)
+            for (int r = 0; r < 3; ++r) {
+              const int a = (k * g.ny + j) * g.nx, i = 3 * a + r;
+              s.node_of[i] = a, s.direction_of[i] = 3 + r;
+            }
       if (turned)
         for (size_t a = 0; a < s.positions.size(); a += 3) {
           Eigen::Map<Eigen::Vector3d> X(&s.positions[a]);
@@ -170,8 +181,10 @@ TEST(BlockAmg, TheBlockIsAsManyElementsThickAsItsThinnestSideInAnyOrientation) {
       amg.set_solver(SparseLU::Solver::kAmg);
       amg.set_amg_split(s.node_of, s.direction_of, s.positions);
       amg.analyze(s.pattern);
-      EXPECT_NEAR(amg.amg()->counters().layers, g.layers, 1e-9)
-          << g.nx << "×" << g.ny << "×" << g.nz << (turned ? " turned" : "");
+      EXPECT_EQ(amg.amg()->counters().layers, g.layers)  // snapped: exactly the integer
+          << g.nx << "×" << g.ny << "×" << g.nz << (g.held ? " held face" : "")
+          << (turned ? " turned" : "");
+      EXPECT_EQ(amg.amg()->counters().block_unknowns, 3 * s.free_nodes);
       ASSERT_TRUE(amg.factor(s.values).ok());
       EXPECT_EQ(amg.amg()->counters().bulky, g.layers >= amg.amg()->options.bulky_layers);
     }
